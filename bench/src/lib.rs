@@ -1,0 +1,1 @@
+//! ddastep virtual bench (placeholder until the modules land).
