@@ -1,0 +1,411 @@
+//! The step engine: what the TIM2 interrupt does, one tick at a time.
+//!
+//! Who uses it: the firmware's TIM2 handler (one call per update event) and host tests.
+//!
+//! Contract of one tick. At each timer update event the handler first stores
+//! [`Engine::word`] into the step port's BSRR (the rising step edges and any direction change,
+//! all precomputed, so the edge time never depends on which axes step), then calls
+//! [`Engine::tick`], which computes the word for the *next* update event and returns the ARR
+//! value to preload now (TIM2's ARR is buffered, so it takes effect at the next update and sets
+//! the gap after it). Falling edges come from a compare event `pulse_ticks` after each update,
+//! where the handler stores [`PinMap::step_off`]. Periods longer than 65 536 ticks
+//! (< 1.1 kHz) are split into filler events whose word is 0 (period extension; the prescaler
+//! stays 0, so pulse width and resolution never change).
+//!
+//! Invariants: every move emits exactly its step counts (the ramp only sets periods); each
+//! axis's position counter counts every step word the engine hands out, so it equals the pulses
+//! emitted once that word is written at the next edge; a direction change is written alone
+//! and followed by at least `dir_setup_ticks` before the next step; the ramp index moves by one
+//! entry per millisecond of timer time (at most one boundary per tick, since a tick is ≤ 65 536
+//! ticks < 72 000). No floats, no division, no loop over the queue: the only loop is over the
+//! move's slave axes (≤ 6).
+//!
+//! Cycle budget: see bench/RESULTS.md (modeled on the virtual bench).
+
+use core::sync::atomic::{AtomicI32, Ordering::Relaxed};
+
+use heapless::spsc::Consumer;
+
+use crate::board::PinMap;
+use crate::interp::Dda;
+use crate::queue::{Move, Shared, State};
+use crate::ramp::{Period, RampSlot, RAMP_LEN};
+use crate::TICKS_PER_MS;
+
+/// Longest timer period one tick can set (ARR is 16 bits).
+pub const MAX_TICK: u32 = 1 << 16;
+/// Period of idle ticks while no move runs (0.5 ms: a new move starts within this).
+pub const IDLE_TICKS: u32 = TICKS_PER_MS / 2;
+
+/// Where the engine is within a move.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Phase {
+    /// No move loaded.
+    Idle,
+    /// Walking up the ramp table.
+    Accel,
+    /// At the move's own cruise period.
+    Cruise,
+    /// Walking down the ramp table.
+    Decel,
+    /// Stopped by feed hold, move not finished.
+    Held,
+}
+
+/// One slave axis of the running move.
+#[derive(Clone, Copy, Debug, Default)]
+struct Slave {
+    dda: Dda,
+    on: u32,
+    axis: u8,
+    sign: i8,
+}
+
+/// The step engine for `N` axes.
+pub struct Engine<'a, const N: usize, const L: usize = RAMP_LEN> {
+    shared: &'a Shared<N>,
+    queue: Consumer<'a, Move<N>>,
+    ramp: &'a RampSlot<L>,
+    pins: PinMap<N>,
+    min_period: Period,
+    dir_setup: u32,
+    // The edge about to happen.
+    word: u32,
+    extend: u32,
+    frac: u32,
+    ms_left: i32,
+    // The running move.
+    phase: Phase,
+    hold_stop: bool,
+    epoch: u32,
+    idx: u16,
+    cruise_idx: u16,
+    cruise: Period,
+    period: Period,
+    left: u32,
+    total: u32,
+    ramp_steps: u32,
+    master_on: u32,
+    master_axis: u8,
+    master_sign: i8,
+    slaves: [Slave; N],
+    n_slaves: u8,
+    dir_neg: u32,
+    dir_known: u32,
+}
+
+impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
+    /// An idle engine.
+    pub fn new(
+        shared: &'a Shared<N>,
+        queue: Consumer<'a, Move<N>>,
+        ramp: &'a RampSlot<L>,
+        pins: PinMap<N>,
+    ) -> Self {
+        Engine {
+            shared,
+            queue,
+            ramp,
+            pins,
+            min_period: Period::ZERO,
+            dir_setup: 0,
+            word: 0,
+            extend: 0,
+            frac: 0,
+            ms_left: TICKS_PER_MS as i32,
+            phase: Phase::Idle,
+            hold_stop: false,
+            epoch: shared.abort_epoch.load(Relaxed),
+            idx: 0,
+            cruise_idx: 0,
+            cruise: Period::ZERO,
+            period: Period::ZERO,
+            left: 0,
+            total: 0,
+            ramp_steps: 0,
+            master_on: 0,
+            master_axis: 0,
+            master_sign: 0,
+            slaves: [Slave::default(); N],
+            n_slaves: 0,
+            dir_neg: 0,
+            dir_known: 0,
+        }
+    }
+
+    /// The BSRR word to store at this update event (precomputed by the previous tick).
+    #[inline(always)]
+    pub fn word(&self) -> u32 {
+        self.word
+    }
+
+    /// The BSRR word for the compare event (falling step edges).
+    #[inline(always)]
+    pub fn step_off(&self) -> u32 {
+        self.pins.step_off
+    }
+
+    /// Computes the next edge's word; returns the ARR value to preload now.
+    #[inline]
+    pub fn tick(&mut self) -> u16 {
+        if self.extend == 0 {
+            let (word, ticks) = self.next_event();
+            self.word = word;
+            self.extend = ticks;
+        } else {
+            self.word = 0;
+        }
+        self.emit_chunk()
+    }
+
+    /// Takes the next ≤ 65 536-tick piece of the current period and keeps time for the ramp.
+    #[inline(always)]
+    fn emit_chunk(&mut self) -> u16 {
+        let rem = self.extend;
+        // Pieces are ≥ 32 768 ticks, so a filler never gets shorter than a real period.
+        let chunk = if rem <= MAX_TICK {
+            rem
+        } else if rem >= MAX_TICK + MAX_TICK / 2 {
+            MAX_TICK
+        } else {
+            MAX_TICK / 2
+        };
+        self.extend = rem - chunk;
+        self.ms_left -= chunk as i32;
+        if self.ms_left <= 0 {
+            self.ms_left += TICKS_PER_MS as i32;
+            self.walk_ramp();
+        }
+        (chunk - 1) as u16
+    }
+
+    /// The next edge: a step, a direction change or an idle gap, with the gap after it.
+    #[inline(always)]
+    fn next_event(&mut self) -> (u32, u32) {
+        let epoch = self.shared.abort_epoch.load(Relaxed);
+        if epoch != self.epoch {
+            self.epoch = epoch;
+            self.end_move(false);
+        }
+        match self.phase {
+            Phase::Accel | Phase::Cruise | Phase::Decel => {
+                self.check_hold();
+                self.step()
+            }
+            Phase::Held => {
+                if !self.shared.hold.load(Relaxed) {
+                    self.resume();
+                }
+                (0, IDLE_TICKS)
+            }
+            Phase::Idle => self.refill(),
+        }
+    }
+
+    /// One master step (and the slaves' share): the hot path.
+    #[inline(always)]
+    fn step(&mut self) -> (u32, u32) {
+        let mut word = self.master_on;
+        let total = self.total;
+        for s in self.slaves[..self.n_slaves as usize].iter_mut() {
+            if s.dda.step(total) {
+                word |= s.on;
+                bump(&self.shared.position[s.axis as usize], s.sign);
+            }
+        }
+        bump(&self.shared.position[self.master_axis as usize], self.master_sign);
+        self.left -= 1;
+        match self.phase {
+            Phase::Accel => self.ramp_steps += 1,
+            Phase::Decel => self.ramp_steps = self.ramp_steps.saturating_sub(1),
+            _ => {}
+        }
+        if self.left <= self.ramp_steps && self.phase != Phase::Decel {
+            self.phase = Phase::Decel;
+        }
+        let acc = self.frac + self.period.to_bits();
+        self.frac = acc & 15;
+        if self.left == 0 {
+            self.end_move(true);
+        }
+        (word, acc >> 4)
+    }
+
+    /// One millisecond has passed: move one entry along the ramp.
+    #[inline(always)]
+    fn walk_ramp(&mut self) {
+        match self.phase {
+            Phase::Accel => {
+                self.idx += 1;
+                if self.idx >= self.cruise_idx {
+                    self.idx = self.cruise_idx;
+                    self.phase = Phase::Cruise;
+                }
+            }
+            Phase::Decel => {
+                if self.idx > 0 {
+                    self.idx -= 1;
+                } else if self.hold_stop {
+                    self.phase = Phase::Held;
+                    self.publish(State::Held);
+                    return;
+                }
+            }
+            _ => return,
+        }
+        self.set_period();
+    }
+
+    /// Period for the current ramp index.
+    #[inline(always)]
+    fn set_period(&mut self) {
+        let p = if self.idx >= self.cruise_idx {
+            self.cruise
+        } else {
+            self.ramp.profile().ramp.period(self.idx as usize)
+        };
+        self.period = p.max(self.min_period);
+        self.shared.period_bits.store(self.period.to_bits(), Relaxed);
+    }
+
+    /// Starts or ends a feed-hold deceleration as requested.
+    #[inline(always)]
+    fn check_hold(&mut self) {
+        let hold = self.shared.hold.load(Relaxed);
+        if hold != self.hold_stop {
+            self.hold_stop = hold;
+            if hold {
+                self.phase = Phase::Decel;
+                self.publish(State::Holding);
+            } else {
+                if self.left > self.ramp_steps {
+                    self.phase = Phase::Accel;
+                }
+                self.publish(State::Run);
+            }
+        }
+    }
+
+    /// Leaves a completed feed hold: accelerate again from the bottom of the table.
+    fn resume(&mut self) {
+        self.hold_stop = false;
+        self.ramp_steps = 0;
+        self.idx = 0;
+        if self.left == 0 {
+            self.phase = Phase::Idle;
+            self.publish(State::Idle);
+            return;
+        }
+        self.phase = if self.cruise_idx == 0 { Phase::Cruise } else { Phase::Accel };
+        self.set_period();
+        self.publish(State::Run);
+    }
+
+    /// Ends the running move (counted as done only when completed).
+    fn end_move(&mut self, completed: bool) {
+        if completed {
+            self.shared.moves_done.fetch_add(1, Relaxed);
+        }
+        self.left = 0;
+        self.phase = Phase::Idle;
+        self.hold_stop = false;
+        self.shared.period_bits.store(0, Relaxed);
+        self.publish(State::Idle);
+    }
+
+    /// Loads the next move, if any (queue refill; never in the step path).
+    fn refill(&mut self) -> (u32, u32) {
+        if self.shared.hold.load(Relaxed) {
+            self.publish(State::Held);
+            return (0, IDLE_TICKS);
+        }
+        if !self.ramp.enter() {
+            return (0, IDLE_TICKS);
+        }
+        let Some(mv) = self.queue.dequeue() else {
+            self.publish(State::Idle);
+            return (0, IDLE_TICKS);
+        };
+        if mv.epoch != self.epoch {
+            return (0, IDLE_TICKS); // dropped by an immediate stop
+        }
+        self.load(&mv)
+    }
+
+    /// Sets up a move: master, slaves, ramp; returns a direction event when a pin must change.
+    fn load(&mut self, mv: &Move<N>) -> (u32, u32) {
+        let m = mv.master as usize;
+        self.master_axis = mv.master;
+        self.total = mv.steps[m].unsigned_abs();
+        self.left = self.total;
+        self.master_on = self.pins.step_on[m];
+        self.master_sign = sign(mv.steps[m]);
+        let mut n = 0;
+        let mut dir_word = 0;
+        let mut dir_neg = self.dir_neg;
+        let mut moving = 0;
+        for (i, &s) in mv.steps.iter().enumerate() {
+            if s == 0 {
+                continue;
+            }
+            moving |= 1 << i;
+            let neg = (s < 0) as u32;
+            if (self.dir_known >> i & 1) == 0 || (dir_neg >> i & 1) != neg {
+                dir_word |= if neg == 1 { self.pins.dir_neg[i] } else { self.pins.dir_pos[i] };
+                dir_neg = (dir_neg & !(1 << i)) | neg << i;
+            }
+            if i != m {
+                self.slaves[n] = Slave {
+                    dda: Dda::new(s.unsigned_abs(), self.total),
+                    on: self.pins.step_on[i],
+                    axis: i as u8,
+                    sign: sign(s),
+                };
+                n += 1;
+            }
+        }
+        self.n_slaves = n as u8;
+        self.dir_neg = dir_neg;
+        self.dir_known |= moving;
+        self.cruise = mv.cruise;
+        let profile = self.ramp.profile();
+        self.cruise_idx = profile.ramp.cruise_index(mv.cruise);
+        let t = profile.timing;
+        self.min_period = Period::from_bits(t.min_period_ticks.saturating_mul(16));
+        self.dir_setup = t.dir_setup_ticks.max(t.min_period_ticks);
+        self.idx = 0;
+        self.ramp_steps = 0;
+        self.hold_stop = false;
+        self.phase = if self.cruise_idx == 0 { Phase::Cruise } else { Phase::Accel };
+        self.set_period();
+        self.publish(State::Run);
+        // The ramp's milliseconds start at the move's first step.
+        self.ms_left = TICKS_PER_MS as i32;
+        if dir_word != 0 {
+            let gap = self.dir_setup;
+            self.ms_left += gap as i32;
+            (dir_word, gap)
+        } else {
+            self.step()
+        }
+    }
+
+    #[inline(always)]
+    fn publish(&self, s: State) {
+        self.shared.state.store(s as u8, Relaxed);
+    }
+}
+
+/// Adds ±1 to a position with a plain load and store (the engine is the only writer).
+#[inline(always)]
+fn bump(p: &AtomicI32, sign: i8) {
+    p.store(p.load(Relaxed).wrapping_add(sign as i32), Relaxed);
+}
+
+fn sign(s: i32) -> i8 {
+    if s < 0 {
+        -1
+    } else {
+        1
+    }
+}

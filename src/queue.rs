@@ -1,0 +1,204 @@
+//! The move queue between the planner (producer) and the step engine (consumer), and the
+//! state they share: all lock-free (a `heapless::spsc` queue and atomics).
+//!
+//! Who uses it: the planner pushes [`Move`]s through a [`Feeder`]; the engine consumes them;
+//! status reports read [`Shared`].
+//!
+//! Invariant: an immediate stop ([`Feeder::abort`]) bumps an epoch; the engine drops the running
+//! move at its next tick and every queued move stamped with an older epoch when it reaches it
+//! (one per tick, so the interrupt never loops over the queue).
+
+use core::sync::atomic::{AtomicBool, AtomicI32, AtomicU32, AtomicU8, Ordering::Relaxed};
+
+use heapless::spsc::Producer;
+
+use crate::interp::master_axis;
+use crate::ramp::{period_of_hz, Period, MAX_RATE_HZ, MIN_RATE_HZ};
+
+/// What the engine is doing, as published in [`Shared::state`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+pub enum State {
+    /// No move.
+    Idle = 0,
+    /// Running a move.
+    Run = 1,
+    /// Feed hold requested, decelerating.
+    Holding = 2,
+    /// Feed hold complete: stopped mid-move (or between moves).
+    Held = 3,
+}
+
+/// Why a move cannot be built.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MoveError {
+    /// No axis moves.
+    ZeroLength,
+    /// A step count beyond ±(2^31 - 1).
+    TooManySteps,
+    /// Cruise rate outside 1 step/s ..= 1 MHz.
+    RateOutOfRange,
+}
+
+/// One straight move, ready for the queue: signed steps per axis and the master cruise rate.
+/// Built outside the interrupt (this is where the division happens).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Move<const N: usize> {
+    pub(crate) steps: [i32; N],
+    pub(crate) master: u8,
+    pub(crate) cruise: Period,
+    pub(crate) epoch: u32,
+}
+
+impl<const N: usize> Move<N> {
+    /// A move of `steps` (signed, per axis) whose master axis cruises at `cruise_hz` steps/s.
+    pub fn new(steps: [i64; N], cruise_hz: u32) -> Result<Self, MoveError> {
+        if !(MIN_RATE_HZ..=MAX_RATE_HZ).contains(&cruise_hz) {
+            return Err(MoveError::RateOutOfRange);
+        }
+        let mut s = [0i32; N];
+        let mut counts = [0u32; N];
+        for i in 0..N {
+            if steps[i] > i32::MAX as i64 || steps[i] < -(i32::MAX as i64) {
+                return Err(MoveError::TooManySteps);
+            }
+            s[i] = steps[i] as i32;
+            counts[i] = s[i].unsigned_abs();
+        }
+        let master = master_axis(&counts);
+        if counts[master] == 0 {
+            return Err(MoveError::ZeroLength);
+        }
+        Ok(Move { steps: s, master: master as u8, cruise: period_of_hz(cruise_hz), epoch: 0 })
+    }
+
+    /// Signed steps per axis.
+    pub fn steps(&self) -> &[i32; N] {
+        &self.steps
+    }
+
+    /// The master axis (most steps, ties to the lowest index).
+    pub fn master(&self) -> usize {
+        self.master as usize
+    }
+
+    /// Master cruise period.
+    pub fn cruise(&self) -> Period {
+        self.cruise
+    }
+}
+
+/// State shared lock-free between the engine (interrupt) and the rest of the firmware.
+pub struct Shared<const N: usize> {
+    /// Position of each axis in steps: the step words handed out so far.
+    pub position: [AtomicI32; N],
+    pub(crate) hold: AtomicBool,
+    pub(crate) abort_epoch: AtomicU32,
+    pub(crate) state: AtomicU8,
+    pub(crate) moves_done: AtomicU32,
+    pub(crate) period_bits: AtomicU32,
+}
+
+impl<const N: usize> Default for Shared<N> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const N: usize> Shared<N> {
+    pub const fn new() -> Self {
+        Shared {
+            position: [const { AtomicI32::new(0) }; N],
+            hold: AtomicBool::new(false),
+            abort_epoch: AtomicU32::new(0),
+            state: AtomicU8::new(State::Idle as u8),
+            moves_done: AtomicU32::new(0),
+            period_bits: AtomicU32::new(0),
+        }
+    }
+
+    /// Feed hold on (decelerate and pause) or off (resume).
+    pub fn set_hold(&self, on: bool) {
+        self.hold.store(on, Relaxed);
+    }
+
+    /// True while a feed hold is requested.
+    pub fn hold_requested(&self) -> bool {
+        self.hold.load(Relaxed)
+    }
+
+    /// What the engine is doing.
+    pub fn state(&self) -> State {
+        match self.state.load(Relaxed) {
+            1 => State::Run,
+            2 => State::Holding,
+            3 => State::Held,
+            _ => State::Idle,
+        }
+    }
+
+    /// Moves finished since start (for synchronisation, e.g. G4 or `?`).
+    pub fn moves_done(&self) -> u32 {
+        self.moves_done.load(Relaxed)
+    }
+
+    /// Current master step rate in steps/s (0 when idle).
+    pub fn rate_hz(&self) -> u32 {
+        match self.period_bits.load(Relaxed) {
+            0 => 0,
+            b => ((crate::TIMER_HZ as u64 * 16) / b as u64) as u32,
+        }
+    }
+
+    /// Position of every axis.
+    pub fn positions(&self) -> [i32; N] {
+        core::array::from_fn(|i| self.position[i].load(Relaxed))
+    }
+
+    /// Sets positions (only while idle: G92 and homing).
+    pub fn set_positions(&self, p: [i32; N]) {
+        for (a, v) in self.position.iter().zip(p) {
+            a.store(v, Relaxed);
+        }
+    }
+}
+
+/// Producer side of the move queue: stamps moves so an immediate stop can drop them.
+pub struct Feeder<'a, const N: usize> {
+    producer: Producer<'a, Move<N>>,
+    shared: &'a Shared<N>,
+    queued: u32,
+}
+
+impl<'a, const N: usize> Feeder<'a, N> {
+    pub fn new(producer: Producer<'a, Move<N>>, shared: &'a Shared<N>) -> Self {
+        Feeder { producer, shared, queued: shared.moves_done() }
+    }
+
+    /// Queues a move; gives it back when the queue is full.
+    pub fn push(&mut self, mut mv: Move<N>) -> Result<(), Move<N>> {
+        mv.epoch = self.shared.abort_epoch.load(Relaxed);
+        self.producer.enqueue(mv)?;
+        self.queued = self.queued.wrapping_add(1);
+        Ok(())
+    }
+
+    /// True when another move fits.
+    pub fn ready(&self) -> bool {
+        self.producer.ready()
+    }
+
+    /// Moves queued or running.
+    pub fn pending(&self) -> u32 {
+        self.queued.wrapping_sub(self.shared.moves_done())
+    }
+
+    /// Immediate stop: the running move ends at the next tick and queued moves are dropped.
+    /// Positions stay equal to the pulses emitted.
+    pub fn abort(&mut self) {
+        self.shared.abort_epoch.fetch_add(1, Relaxed);
+        // Dropped moves never count as done; forget them here.
+        self.queued = self.shared.moves_done();
+    }
+}
+

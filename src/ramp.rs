@@ -1,0 +1,347 @@
+//! Ramp tables: the master timer period for every millisecond of an acceleration.
+//!
+//! Who uses it: the firmware builds one table when settings change (outside any interrupt);
+//! the step engine walks it one entry per millisecond of timer time.
+//!
+//! Invariant: entry `i` holds the period (timer ticks, 1/16 resolution, [`Period`]) of the mean
+//! rate of the ideal profile during millisecond `i`: `v0 + a·(i+½) ms` for the trapezoid,
+//! clamped at `vmax` in its last entry; the S-curve uses the same mean of a normalized logistic.
+//! Entries strictly never rise in rate past `vmax` and never fall in rate along the table. The
+//! engine decelerates by walking the same entries down, so one table serves every move that
+//! shares the acceleration, and a move's step count never depends on the table. With
+//! [`RAMP_LEN`] = 1024 entries of 4 bytes the table is 4 KiB of RAM and covers 1.024 s of
+//! acceleration; a longer one is refused with [`RampError::TooLong`] naming the highest `vmax`
+//! that fits.
+
+use core::cell::UnsafeCell;
+use core::sync::atomic::{AtomicBool, Ordering};
+
+use fixed::types::U28F4;
+
+use crate::timing::Timing;
+use crate::TIMER_HZ;
+
+/// A timer period in ticks with four fractional bits: the engine dithers the fraction so the
+/// average rate is exact to 1/16 tick.
+pub type Period = U28F4;
+
+/// Lowest rate a table or move may use (steps/s): 1 step/s is 72 M ticks, well inside [`Period`].
+pub const MIN_RATE_HZ: u32 = 1;
+/// Highest rate a table or move may describe (steps/s); what the step interrupt sustains is
+/// lower and is enforced by the engine's timing ([`crate::timing::Timing`]).
+pub const MAX_RATE_HZ: u32 = 1_000_000;
+/// Entries (milliseconds) in the firmware's table.
+pub const RAMP_LEN: usize = 1024;
+
+/// Shape of the acceleration.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Shape {
+    /// Constant acceleration `a` (the seed paper's trapezoid; triangle on short moves).
+    Trapezoid,
+    /// Logistic (sigmoid) S-curve whose steepest acceleration is `a` (seeds 000 and 002).
+    SCurve,
+}
+
+/// What a table is built from (master steps/s and steps/s²).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RampConfig {
+    pub v0: u32,
+    pub vmax: u32,
+    pub accel: u32,
+    pub shape: Shape,
+}
+
+/// Why a table cannot be built.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RampError {
+    /// Acceleration of zero.
+    ZeroAccel,
+    /// `vmax < v0`.
+    VmaxBelowV0,
+    /// A rate outside [`MIN_RATE_HZ`]..=[`MAX_RATE_HZ`].
+    RateOutOfRange,
+    /// The ramp needs more milliseconds than the table has; `reachable_vmax` fits.
+    TooLong { reachable_vmax: u32 },
+}
+
+/// Logistic steepness: the S-curve spans the logistic on [-S_CURVE_SPAN, S_CURVE_SPAN].
+const S_CURVE_SPAN: f64 = 4.0;
+
+/// Period of a rate given in milli-steps per second (rounded to the nearest 1/16 tick).
+pub fn period_of_millihz(milli_hz: u64) -> Period {
+    let num = TIMER_HZ as u64 * 16 * 1000;
+    Period::from_bits(((num + milli_hz / 2) / milli_hz.max(1)).min(u32::MAX as u64) as u32)
+}
+
+/// Period of a whole rate in steps/s.
+pub fn period_of_hz(hz: u32) -> Period {
+    period_of_millihz(hz as u64 * 1000)
+}
+
+/// Rate in steps/s of a period (for reports and tests).
+pub fn hz_of_period(p: Period) -> f64 {
+    TIMER_HZ as f64 * 16.0 / p.to_bits().max(1) as f64
+}
+
+/// A ramp table of up to `L` milliseconds.
+pub struct RampTable<const L: usize = RAMP_LEN> {
+    periods: [Period; L],
+    len: u16,
+    cfg: RampConfig,
+}
+
+impl<const L: usize> Default for RampTable<L> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const L: usize> RampTable<L> {
+    /// An empty table (no entries: every move cruises at its own rate).
+    pub const fn new() -> Self {
+        RampTable {
+            periods: [Period::ZERO; L],
+            len: 0,
+            cfg: RampConfig { v0: 0, vmax: 0, accel: 0, shape: Shape::Trapezoid },
+        }
+    }
+
+    /// Milliseconds the ramp from `v0` to `vmax` takes with this shape.
+    pub fn ramp_ms(cfg: &RampConfig) -> u64 {
+        let dv = (cfg.vmax - cfg.v0) as u64;
+        let ms = (dv * 1000).div_ceil(cfg.accel as u64);
+        match cfg.shape {
+            Shape::Trapezoid => ms,
+            // The logistic's steepest slope is span/2 / norm of the mean slope.
+            Shape::SCurve => (ms as f64 * s_curve_stretch()) as u64 + 1,
+        }
+    }
+
+    /// Builds the table in place (no 4 KiB copy on the stack). On error the table is empty.
+    pub fn build(&mut self, cfg: RampConfig) -> Result<(), RampError> {
+        self.len = 0;
+        if cfg.accel == 0 {
+            return Err(RampError::ZeroAccel);
+        }
+        if cfg.v0 < MIN_RATE_HZ || cfg.vmax > MAX_RATE_HZ {
+            return Err(RampError::RateOutOfRange);
+        }
+        if cfg.vmax < cfg.v0 {
+            return Err(RampError::VmaxBelowV0);
+        }
+        let n = Self::ramp_ms(&cfg).max(1);
+        if n > L as u64 {
+            let reachable = match cfg.shape {
+                Shape::Trapezoid => cfg.v0 as u64 + cfg.accel as u64 * L as u64 / 1000,
+                Shape::SCurve => {
+                    cfg.v0 as u64 + (cfg.accel as f64 * L as f64 / 1000.0 / s_curve_stretch()) as u64
+                }
+            };
+            return Err(RampError::TooLong { reachable_vmax: reachable.saturating_sub(1) as u32 });
+        }
+        let n = n as usize;
+        for (i, p) in self.periods[..n].iter_mut().enumerate() {
+            *p = period_of_millihz(mean_millihz(&cfg, i, n));
+        }
+        // Rates must never fall along the table (rounding at the top could otherwise wobble).
+        for i in 1..n {
+            if self.periods[i] > self.periods[i - 1] {
+                self.periods[i] = self.periods[i - 1];
+            }
+        }
+        self.len = n as u16;
+        self.cfg = cfg;
+        Ok(())
+    }
+
+    /// Number of entries (milliseconds of ramp).
+    #[inline(always)]
+    pub fn len(&self) -> usize {
+        self.len as usize
+    }
+
+    /// True when the table has no entries.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// What the table was built from.
+    pub fn config(&self) -> RampConfig {
+        self.cfg
+    }
+
+    /// Period of entry `i` (the caller keeps `i < len`).
+    #[inline(always)]
+    pub fn period(&self, i: usize) -> Period {
+        self.periods[i]
+    }
+
+    /// The entries in use.
+    pub fn periods(&self) -> &[Period] {
+        &self.periods[..self.len as usize]
+    }
+
+    /// First entry at least as fast as `cruise` (binary search, ≤ 11 steps), or `len`.
+    pub fn cruise_index(&self, cruise: Period) -> u16 {
+        let (mut lo, mut hi) = (0usize, self.len as usize);
+        while lo < hi {
+            let mid = (lo + hi) / 2;
+            if self.periods[mid] <= cruise {
+                hi = mid;
+            } else {
+                lo = mid + 1;
+            }
+        }
+        lo as u16
+    }
+
+    /// Bytes of RAM the table takes.
+    pub const fn size_bytes() -> usize {
+        core::mem::size_of::<Self>()
+    }
+}
+
+/// How much longer the S-curve takes than a trapezoid with the same peak acceleration.
+fn s_curve_stretch() -> f64 {
+    let norm = logistic(S_CURVE_SPAN) - logistic(-S_CURVE_SPAN);
+    S_CURVE_SPAN / 2.0 / norm
+}
+
+fn logistic(x: f64) -> f64 {
+    1.0 / (1.0 + libm::exp(-x))
+}
+
+/// Ideal profile's normalized progress (0..=1) at fraction `u` (0..=1) of the ramp.
+fn s_curve(u: f64) -> f64 {
+    let lo = logistic(-S_CURVE_SPAN);
+    let hi = logistic(S_CURVE_SPAN);
+    (logistic(-S_CURVE_SPAN + 2.0 * S_CURVE_SPAN * u) - lo) / (hi - lo)
+}
+
+/// Mean rate in ms `i` of an `n`-entry ramp, in milli-steps/s.
+fn mean_millihz(cfg: &RampConfig, i: usize, n: usize) -> u64 {
+    let v0 = cfg.v0 as u64 * 1000;
+    let vmax = cfg.vmax as u64 * 1000;
+    match cfg.shape {
+        Shape::Trapezoid => {
+            // v(t) = v0 + a·t up to vmax; the mean over [i, i+1) ms of the clamped line.
+            let a = cfg.accel as u64; // milli-steps/s per ms
+            let end = v0 + a * (i as u64 + 1);
+            if end <= vmax {
+                v0 + a * (2 * i as u64 + 1) / 2
+            } else {
+                let start = v0 + a * i as u64;
+                if start >= vmax {
+                    return vmax;
+                }
+                // Ramp part of length f = (vmax-start)/a ms, then vmax for 1-f.
+                let f = (vmax - start) as f64 / a as f64;
+                let mean = f * (start as f64 + vmax as f64) / 2.0 + (1.0 - f) * vmax as f64;
+                (mean as u64).min(vmax)
+            }
+        }
+        Shape::SCurve => {
+            // Midpoint of the millisecond on the logistic stretched over n ms (Simpson-free:
+            // the curve is smooth enough that the midpoint is within 0.1 % of the mean here).
+            let u = ((i as f64 + 0.5) / n as f64).min(1.0);
+            let v = v0 as f64 + (vmax - v0) as f64 * s_curve(u);
+            (v as u64).clamp(v0.max(1), vmax.max(1))
+        }
+    }
+}
+
+/// What the engine reads from settings: the ramp table and the step timing.
+pub struct Profile<const L: usize = RAMP_LEN> {
+    pub ramp: RampTable<L>,
+    pub timing: Timing,
+}
+
+/// The profile shared between the step interrupt (reader) and the settings code (writer)
+/// without locks: the writer asks, the engine parks between moves, the writer rebuilds.
+///
+/// Protocol: [`RampSlot::try_write`] raises `writer`; the engine, which reads the table only
+/// while a move runs, sees the flag when it would load the next move, sets `parked` and loads
+/// nothing; once parked the writer gets the table, and dropping the guard lowers `writer`.
+pub struct RampSlot<const L: usize = RAMP_LEN> {
+    table: UnsafeCell<Profile<L>>,
+    writer: AtomicBool,
+    parked: AtomicBool,
+}
+
+// SAFETY: the table is read only by the engine while `writer` is low (checked before each
+// move starts) and written only through a guard that exists only while the engine is parked.
+unsafe impl<const L: usize> Sync for RampSlot<L> {}
+
+impl<const L: usize> Default for RampSlot<L> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const L: usize> RampSlot<L> {
+    /// An empty slot; the engine starts parked, so the first write needs no handshake.
+    pub const fn new() -> Self {
+        RampSlot {
+            table: UnsafeCell::new(Profile { ramp: RampTable::new(), timing: Timing::DEFAULT }),
+            writer: AtomicBool::new(false),
+            parked: AtomicBool::new(true),
+        }
+    }
+
+    /// Writer side: the table, if the engine is parked; otherwise asks it to park and returns
+    /// `None` (try again after the running move ends).
+    pub fn try_write(&self) -> Option<RampWriteGuard<'_, L>> {
+        self.writer.store(true, Ordering::SeqCst);
+        if self.parked.load(Ordering::SeqCst) {
+            Some(RampWriteGuard { slot: self })
+        } else {
+            None
+        }
+    }
+
+    /// Engine side: may a move start now? Parks (and says no) while a writer waits.
+    #[inline]
+    pub(crate) fn enter(&self) -> bool {
+        if self.writer.load(Ordering::SeqCst) {
+            self.parked.store(true, Ordering::SeqCst);
+            false
+        } else {
+            self.parked.store(false, Ordering::SeqCst);
+            true
+        }
+    }
+
+    /// Engine side: the table, valid from a successful [`Self::enter`] to the move's end.
+    #[inline(always)]
+    pub(crate) fn profile(&self) -> &Profile<L> {
+        // SAFETY: called only by the engine between `enter() == true` and the next `enter`,
+        // during which no write guard can exist (see the type's protocol).
+        unsafe { &*self.table.get() }
+    }
+}
+
+/// Exclusive access to the table while the engine is parked.
+pub struct RampWriteGuard<'a, const L: usize> {
+    slot: &'a RampSlot<L>,
+}
+
+impl<const L: usize> core::ops::Deref for RampWriteGuard<'_, L> {
+    type Target = Profile<L>;
+    fn deref(&self) -> &Profile<L> {
+        // SAFETY: the guard exists only while the engine is parked (no reader).
+        unsafe { &*self.slot.table.get() }
+    }
+}
+
+impl<const L: usize> core::ops::DerefMut for RampWriteGuard<'_, L> {
+    fn deref_mut(&mut self) -> &mut Profile<L> {
+        // SAFETY: as above, and `&mut self` makes this the only writer.
+        unsafe { &mut *self.slot.table.get() }
+    }
+}
+
+impl<const L: usize> Drop for RampWriteGuard<'_, L> {
+    fn drop(&mut self) {
+        self.slot.writer.store(false, Ordering::SeqCst);
+    }
+}

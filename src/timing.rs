@@ -1,0 +1,93 @@
+//! Step-driver timing as data: pulse width and direction setup/hold per driver family.
+//!
+//! Who uses it: settings defaults and docs; the engine itself only sees timer ticks
+//! ([`Timing`]). Figures are the minimums from each driver's datasheet.
+
+use crate::ramp::MAX_RATE_HZ;
+use crate::TIMER_HZ;
+
+/// Minimum timing a step/dir driver needs, in nanoseconds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DriverTiming {
+    /// Minimum STEP high (active) time.
+    pub pulse_ns: u32,
+    /// Minimum STEP low (inactive) time.
+    pub low_ns: u32,
+    /// Minimum DIR stable before the STEP rising edge.
+    pub dir_setup_ns: u32,
+    /// Minimum DIR stable after the STEP rising edge.
+    pub dir_hold_ns: u32,
+}
+
+/// TB6600 modules (opto-isolated inputs): sellers' manuals ask for ≥ 2.2 µs pulses and
+/// ≥ 5 µs direction lead; we default to 3 µs pulses as the project guide demands.
+pub const TB6600: DriverTiming =
+    DriverTiming { pulse_ns: 3_000, low_ns: 3_000, dir_setup_ns: 5_000, dir_hold_ns: 5_000 };
+/// TI DRV8825 datasheet (SLVSA73F), 7.6 Timing Requirements: t_WH/t_WL ≥ 1.9 µs,
+/// t_SU/t_H ≥ 650 ns.
+pub const DRV8825: DriverTiming =
+    DriverTiming { pulse_ns: 1_900, low_ns: 1_900, dir_setup_ns: 650, dir_hold_ns: 650 };
+/// Allegro A4988 datasheet, Figure 1 logic timing: STEP high/low ≥ 1 µs, setup/hold ≥ 200 ns.
+pub const A4988: DriverTiming =
+    DriverTiming { pulse_ns: 1_000, low_ns: 1_000, dir_setup_ns: 200, dir_hold_ns: 200 };
+/// Trinamic TMC2209 datasheet rev 1.09, 13.1 STEP/DIR timing: t_SH/t_SL ≥ 100 ns,
+/// t_DSU ≥ 20 ns.
+pub const TMC2209: DriverTiming =
+    DriverTiming { pulse_ns: 100, low_ns: 100, dir_setup_ns: 20, dir_hold_ns: 20 };
+
+/// Timing the engine honours, in timer ticks.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Timing {
+    /// Step pulse width: where the firmware sets the compare event (CCR1).
+    pub pulse_ticks: u32,
+    /// Direction setup: gap between a direction change and the next step edge.
+    pub dir_setup_ticks: u32,
+    /// Shortest step period allowed (pulse + low time + interrupt headroom).
+    pub min_period_ticks: u32,
+}
+
+impl Timing {
+    /// 3 µs pulses, 5 µs direction setup, 500 kHz at most: safe for every driver in
+    /// [`crate::timing`] until settings say otherwise.
+    pub const DEFAULT: Timing = Timing::new(216, 360, 144);
+
+    /// Timing from its parts (ticks); the shortest period is never below twice the pulse.
+    pub const fn new(pulse_ticks: u32, dir_setup_ticks: u32, min_period_ticks: u32) -> Self {
+        let floor = 2 * pulse_ticks;
+        Timing {
+            pulse_ticks,
+            dir_setup_ticks,
+            min_period_ticks: if min_period_ticks > floor { min_period_ticks } else { floor },
+        }
+    }
+
+    /// Fastest master rate (steps/s) this timing allows.
+    pub fn max_rate_hz(&self) -> u32 {
+        (crate::TIMER_HZ / self.min_period_ticks.max(1)).min(MAX_RATE_HZ)
+    }
+}
+
+/// Converts nanoseconds to timer ticks, rounding up so a minimum is never undercut.
+pub const fn ns_to_ticks(ns: u32) -> u32 {
+    ((ns as u64 * TIMER_HZ as u64).div_ceil(1_000_000_000)) as u32
+}
+
+/// Converts timer ticks to nanoseconds (rounded down).
+pub const fn ticks_to_ns(ticks: u64) -> u64 {
+    ticks * 1_000_000_000 / TIMER_HZ as u64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ns_round_trip_never_undercuts() {
+        for ns in [0u32, 1, 13, 14, 100, 650, 1_000, 1_900, 3_000, 1_000_000] {
+            let t = ns_to_ticks(ns);
+            assert!(ticks_to_ns(t as u64) + 1 >= ns as u64, "{ns} ns -> {t} ticks");
+            assert!(t == 0 || ticks_to_ns(t as u64 - 1) < ns as u64);
+        }
+        assert_eq!(ns_to_ticks(1_000), 72);
+    }
+}
