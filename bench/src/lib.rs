@@ -1,1 +1,2 @@
 //! ddastep virtual bench (placeholder until the modules land).
+pub mod la;
