@@ -64,6 +64,7 @@ pub mod map;
 pub mod plot;
 mod rate;
 mod report;
+pub mod synth;
 mod vcd;
 
 pub use analysis::{reduce, Analyzer, AxisChannels, Config, CRUISE_FRACTION};

@@ -125,8 +125,8 @@ fn hz(rate: f64) -> String {
 fn ns(time: Option<f64>) -> String {
     match time {
         None => "-".into(),
-        Some(t) if t >= 1e6 => format!("{:.2} ms", t / 1e6),
-        Some(t) if t >= 1e3 => format!("{:.2} µs", t / 1e3),
+        Some(t) if t >= 1e6 => format!("{:.3} ms", t / 1e6),
+        Some(t) if t >= 1e3 => format!("{:.3} µs", t / 1e3),
         Some(t) => format!("{t:.0} ns"),
     }
 }
@@ -185,7 +185,7 @@ mod tests {
     fn units_read_naturally() {
         assert_eq!(hz(50_000.0), "50.0 kHz");
         assert_eq!(hz(400.0), "400.0 Hz");
-        assert_eq!(ns(Some(4_100.0)), "4.10 µs");
+        assert_eq!(ns(Some(4_125.0)), "4.125 µs");
         assert_eq!(ns(Some(41.7)), "42 ns");
         assert_eq!(ns(None), "-");
         assert_eq!(join(&[5, 3, 2]), "5:3:2");

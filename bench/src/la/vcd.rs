@@ -5,7 +5,8 @@
 //! "Acquisition with 4/8 channels at 24 MHz" comment for the sample rate), then value changes:
 //! `#time`, scalar `0!`/`1!` and vector `b0101 !` (one channel per bit, `name[i]`), several per
 //! line or one per line, `$dumpvars` blocks. `x`/`z` carry no level and are skipped; real and
-//! string values are ignored. Times must not go backwards.
+//! string values are ignored. Times must not go backwards. sigrok-cli's `META samplerate: N`
+//! line (written when it converts a file) may precede the header.
 
 use std::collections::HashMap;
 use std::io::BufRead;
@@ -108,6 +109,14 @@ impl<R: BufRead> VcdReader<R> {
                 b"$var" => {
                     let decl = me.tokens.until_end(&mut token)?;
                     me.declare(&decl).with_context(|| format!("line {}: $var {decl}", me.tokens.line + 1))?;
+                }
+                // sigrok-cli puts "META samplerate: N" first when converting a file.
+                b"META" => {
+                    let key = me.tokens.next(&mut token).map(|_| token.clone())?;
+                    me.tokens.next(&mut token)?;
+                    if key == b"samplerate:" {
+                        me.info.sample_rate_hz = std::str::from_utf8(&token).ok().and_then(|v| v.parse().ok());
+                    }
                 }
                 b"$comment" => {
                     let text = me.tokens.until_end(&mut token)?;
