@@ -142,7 +142,11 @@ fn print_human(output: &Output) {
         .iter()
         .map(|l| format!("{}={}{}", l.axis, l.step, l.dir.as_ref().map_or(String::new(), |d| format!("/{d}"))))
         .collect();
-    println!("{} ({:?}{rate}): {}", output.capture, output.format, lines.join(" "));
+    let format = match output.format {
+        Format::Vcd => "VCD",
+        Format::Csv => "CSV",
+    };
+    println!("{} ({format}{rate}): {}", output.capture, lines.join(" "));
     print!("{}", output.report);
 }
 

@@ -62,7 +62,8 @@ where
     rate.configure_mesh().x_desc("time (ms)").y_desc("rate (kHz)").label_style(("sans-serif", 14)).draw()?;
     for (i, axis) in report.axes.iter().enumerate() {
         let color = PALETTE[i % PALETTE.len()];
-        let points = report.series.rate_hz[i].iter().enumerate().map(|(b, &r)| (b as f64 * report.bin_ms, r / 1e3));
+        // A bin's rate is drawn at its middle.
+        let points = report.series.rate_hz[i].iter().enumerate().map(|(b, &r)| ((b as f64 + 0.5) * report.bin_ms, r / 1e3));
         rate.draw_series(LineSeries::new(points, color.stroke_width(2)))?
             .label(format!("{} ({} steps)", axis.name, axis.steps))
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(3)));
@@ -78,13 +79,19 @@ where
         .x_label_area_size(40)
         .y_label_area_size(70)
         .build_cartesian_2d(0.0..x_end, -extent..extent)?;
-    dev.configure_mesh().x_desc("time (ms)").y_desc("deviation (steps)").label_style(("sans-serif", 14)).draw()?;
+    dev.configure_mesh()
+        .x_desc("time (ms)")
+        .y_desc("deviation (steps)")
+        .y_label_formatter(&|v| format!("{:.2}", if v.abs() < 1e-9 { 0.0 } else { *v }))
+        .label_style(("sans-serif", 14))
+        .draw()?;
     for (i, axis) in report.axes.iter().enumerate() {
         if deviations[i].is_empty() {
             continue;
         }
         let color = PALETTE[i % PALETTE.len()];
-        let points = deviations[i].iter().enumerate().map(|(b, &d)| (b as f64 * report.bin_ms, d));
+        // A bin's deviation is the one at its end.
+        let points = deviations[i].iter().enumerate().map(|(b, &d)| ((b as f64 + 1.0) * report.bin_ms, d));
         dev.draw_series(LineSeries::new(points, color.stroke_width(2)))?
             .label(format!("{} max {:.2}", axis.name, axis.max_deviation_steps.unwrap_or(0.0)))
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(3)));
