@@ -119,9 +119,12 @@ pub fn open(path: &Path, format: Option<Format>, sample_rate_hz: Option<f64>) ->
         .with_context(|| format!("cannot read {}", path.display()))
 }
 
-// VCD starts with `$`, anything else is taken as CSV
+// VCD starts with `$` (after sigrok-cli's `META` lines), anything else is taken as CSV
 fn sniff(reader: &mut Box<dyn BufRead>) -> Result<Format> {
-    let buf = reader.fill_buf().context("reading capture")?;
+    let mut buf = reader.fill_buf().context("reading capture")?;
+    while buf.starts_with(b"META ") {
+        buf = buf.iter().position(|&b| b == b'\n').map_or(&[][..], |i| &buf[i + 1..]);
+    }
     match buf.iter().find(|b| !b.is_ascii_whitespace()) {
         Some(b'$') => Ok(Format::Vcd),
         Some(_) => Ok(Format::Csv),
