@@ -221,7 +221,7 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
             _ => {}
         }
         if self.left <= self.ramp_steps && self.phase != Phase::Decel {
-            self.phase = Phase::Decel;
+            self.start_decel();
         }
         let acc = self.frac + self.period.to_bits();
         self.frac = acc & 15;
@@ -256,6 +256,23 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
         self.set_period();
     }
 
+    /// Turns round on the ramp so the way down mirrors the way up: from cruise, the next entry
+    /// down gets a whole millisecond; mid-ramp, the current entry gets as long again as it has
+    /// had, so the steps down equal the steps up (`ramp_steps`).
+    #[inline(always)]
+    fn start_decel(&mut self) {
+        if self.phase == Phase::Cruise {
+            if self.idx > 0 {
+                self.idx -= 1;
+                self.set_period();
+            }
+            self.ms_left = TICKS_PER_MS as i32;
+        } else {
+            self.ms_left = TICKS_PER_MS as i32 - self.ms_left;
+        }
+        self.phase = Phase::Decel;
+    }
+
     /// Period for the current ramp index.
     #[inline(always)]
     fn set_period(&mut self) {
@@ -275,7 +292,9 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
         if hold != self.hold_stop {
             self.hold_stop = hold;
             if hold {
-                self.phase = Phase::Decel;
+                if self.phase != Phase::Decel {
+                    self.start_decel();
+                }
                 self.publish(State::Holding);
             } else {
                 if self.left > self.ramp_steps {

@@ -1,0 +1,134 @@
+//! A host rig around the real engine: queue, shared state, ramp slot, timer model, pin decoding.
+#![allow(dead_code)]
+
+use ddastep::board::{pin_map, PinMap};
+use ddastep::engine::Engine;
+use ddastep::queue::{Feeder, Move, Shared, State};
+use ddastep::ramp::{RampConfig, RampSlot, Shape};
+use ddastep::sim::{apply_bsrr, Edge, TimerSim};
+use ddastep::timing::Timing;
+use heapless::spsc::Queue;
+
+/// One step edge of one axis.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StepEdge {
+    pub t: u64,
+    pub axis: usize,
+    pub positive: bool,
+    /// Time of the last direction-pin change of this axis before this step.
+    pub dir_changed_at: Option<u64>,
+}
+
+pub struct Rig<const N: usize> {
+    pub shared: &'static Shared<N>,
+    pub slot: &'static RampSlot,
+    pub feeder: Feeder<'static, N>,
+    pub engine: Engine<'static, N>,
+    pub timer: TimerSim,
+    pub pins: PinMap<N>,
+    pub odr: u16,
+    pub steps: Vec<StepEdge>,
+    pub updates: u64,
+    dir_change: [Option<u64>; N],
+    pub last_edge: Option<Edge>,
+}
+
+impl<const N: usize> Rig<N> {
+    pub fn new(cfg: RampConfig, timing: Timing) -> Self {
+        let shared: &'static Shared<N> = Box::leak(Box::new(Shared::new()));
+        let slot: &'static RampSlot = Box::leak(Box::new(RampSlot::new()));
+        {
+            let mut p = slot.try_write().expect("fresh slot is parked");
+            p.ramp.build(cfg).expect("ramp builds");
+            p.timing = timing;
+        }
+        let q: &'static mut Queue<Move<N>, 16> = Box::leak(Box::new(Queue::new()));
+        let (prod, cons) = q.split();
+        let pins = pin_map::<N>(0, 0);
+        let engine = Engine::new(shared, cons, slot, pins);
+        let mut odr = 0u16;
+        // Dir pins start low ("positive"), step pins low.
+        odr = apply_bsrr(odr, pins.step_off);
+        Rig {
+            shared,
+            slot,
+            feeder: Feeder::new(prod, shared),
+            engine,
+            timer: TimerSim::new(),
+            pins,
+            odr,
+            steps: Vec::new(),
+            updates: 0,
+            dir_change: [None; N],
+            last_edge: None,
+        }
+    }
+
+    /// Timing of the trapezoid rigs: 0.5 µs pulses, 1 µs direction setup, 500 kHz at most.
+    pub const FAST: Timing = Timing::new(36, 72, 144);
+
+    pub fn trapezoid(v0: u32, vmax: u32, accel: u32) -> Self {
+        Self::new(RampConfig { v0, vmax, accel, shape: Shape::Trapezoid }, Self::FAST)
+    }
+
+    pub fn push(&mut self, steps: [i64; N], cruise_hz: u32) {
+        let mv = Move::new(steps, cruise_hz).expect("valid move");
+        self.feeder.push(mv).expect("queue has room");
+    }
+
+    /// One update event: decode the word into step edges and direction changes.
+    pub fn update(&mut self) -> Edge {
+        let e = self.timer.update(&mut self.engine);
+        self.updates += 1;
+        let after = apply_bsrr(self.odr, e.word);
+        for a in 0..N {
+            // Any store to the direction pin (even one that leaves it as it was) counts.
+            if e.word & (self.pins.dir_pos[a] | self.pins.dir_neg[a]) != 0 {
+                self.dir_change[a] = Some(e.t);
+            }
+        }
+        for a in 0..N {
+            if e.word & self.pins.step_on[a] != 0 {
+                let dbit = 1u16 << ddastep::board::DIR_PINS[a];
+                self.steps.push(StepEdge {
+                    t: e.t,
+                    axis: a,
+                    positive: after & dbit == 0,
+                    dir_changed_at: self.dir_change[a],
+                });
+            }
+        }
+        // The compare event puts the step pins back before the next update.
+        self.odr = apply_bsrr(after, self.pins.step_off);
+        self.last_edge = Some(e);
+        e
+    }
+
+    /// Runs until the engine is idle with nothing queued (or `max_updates` pass).
+    pub fn run_to_idle(&mut self, max_updates: u64) {
+        let start = self.updates;
+        loop {
+            self.update();
+            if self.feeder.pending() == 0 && self.shared.state() == State::Idle {
+                // One more update writes the last computed word.
+                self.update();
+                break;
+            }
+            assert!(self.updates - start < max_updates, "engine did not finish");
+        }
+    }
+
+    /// Net steps per axis seen on the pins.
+    pub fn net_steps(&self) -> [i64; N] {
+        let mut n = [0i64; N];
+        for s in &self.steps {
+            n[s.axis] += if s.positive { 1 } else { -1 };
+        }
+        n
+    }
+
+    /// Master-step times of `axis`.
+    pub fn times(&self, axis: usize) -> Vec<u64> {
+        self.steps.iter().filter(|s| s.axis == axis).map(|s| s.t).collect()
+    }
+}

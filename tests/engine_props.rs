@@ -1,0 +1,197 @@
+//! Properties of the engine over random moves, ramps and feed holds, simulated tick by tick
+//! with time accumulated from the returned periods.
+
+mod common;
+
+use common::Rig;
+use ddastep::queue::{Move, State};
+use ddastep::ramp::{RampConfig, RampTable, Shape};
+use ddastep::TIMER_HZ;
+use proptest::prelude::*;
+
+const TICKS: f64 = TIMER_HZ as f64;
+
+/// A random ramp whose acceleration fits the table, and a cruise rate for the move.
+fn ramp_and_cruise() -> impl Strategy<Value = (u32, u32, u32, u32)> {
+    (1u32..5_000, 2_000u32..490_000, 0.05f64..1.0, 0.0f64..1.2).prop_map(|(v0, span, t, c)| {
+        let vmax = v0 + span;
+        // Ramp time t·1.0 s (fits the 1024-entry table).
+        let accel = ((span as f64 / t).ceil() as u32).max(1);
+        let cruise = ((vmax as f64 * c) as u32).clamp(1, vmax);
+        (v0, vmax, accel, cruise)
+    })
+}
+
+/// Steps per axis: up to 7 axes, up to ±10^6, bounded so a case stays fast.
+fn steps7() -> impl Strategy<Value = [i64; 7]> {
+    (1i64..1_000_000, prop::array::uniform7(-1.0f64..1.0), 1usize..=7).prop_map(|(m, r, n)| {
+        let mut s = [0i64; 7];
+        for i in 0..n {
+            s[i] = (m as f64 * r[i]) as i64;
+        }
+        if s.iter().all(|&x| x == 0) {
+            s[0] = m;
+        }
+        s
+    })
+}
+
+/// Analytic duration of a stop-to-stop trapezoid (s) of `l` steps.
+fn analytic_time(l: f64, v0: f64, vc: f64, a: f64) -> f64 {
+    if vc <= v0 {
+        return l / vc;
+    }
+    let t_acc = (vc - v0) / a;
+    let s_acc = (v0 + vc) / 2.0 * t_acc;
+    if 2.0 * s_acc <= l {
+        2.0 * t_acc + (l - 2.0 * s_acc) / vc
+    } else {
+        let vp = (v0 * v0 + a * l).sqrt();
+        2.0 * (vp - v0) / a
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 40, ..ProptestConfig::default() })]
+
+    #[test]
+    fn moves_are_exact_in_count_ratio_and_time((v0, vmax, accel, cruise) in ramp_and_cruise(),
+                                                 steps in steps7()) {
+        let counts: Vec<u64> = steps.iter().map(|s| s.unsigned_abs()).collect();
+        let m = *counts.iter().max().unwrap();
+        // Keep the simulated time (and so the test time) bounded.
+        prop_assume!(m as f64 / cruise as f64 <= 60.0);
+        let mut rig = Rig::<7>::trapezoid(v0, vmax, accel);
+        let table_vmax = vmax;
+        rig.push(steps, cruise);
+        rig.run_to_idle(u64::MAX);
+
+        // Exact counts and directions, on the pins and in the position counters.
+        prop_assert_eq!(rig.net_steps(), steps);
+        let pos = rig.shared.positions();
+        prop_assert_eq!(pos.map(|p| p as i64), steps);
+
+        // Slaves within ½ step of the ideal line at every master step.
+        let master = ddastep::interp::master_axis(&counts.iter().map(|&c| c as u32).collect::<Vec<_>>());
+        let mut k = 0u64;
+        let mut done = [0u64; 7];
+        let mut by_time = rig.steps.iter().peekable();
+        while let Some(s) = by_time.next() {
+            done[s.axis] += 1;
+            let same_edge = by_time.peek().is_some_and(|n| n.t == s.t);
+            if !same_edge {
+                k = done[master];
+                for a in 0..7 {
+                    let dev = 2 * (m as i128 * done[a] as i128 - k as i128 * counts[a] as i128);
+                    prop_assert!(dev.unsigned_abs() <= m as u128,
+                        "axis {} made {} of {} at master step {} of {}", a, done[a], counts[a], k, m);
+                }
+            }
+        }
+        prop_assert_eq!(k, m);
+
+        // Rates: accelerating steps run the table entry of their millisecond, which is the
+        // ideal trapezoid's mean rate there within 0.5 % (or one tick); cruise steps run the
+        // cruise rate within 0.5 % (or one tick).
+        let t = rig.times(master);
+        let t0 = t[0];
+        let vc = cruise.min(table_vmax).min(Rig::<7>::FAST.max_rate_hz()) as f64;
+        let a = accel as f64;
+        let t_acc = if vc > v0 as f64 { (vc - v0 as f64) / a } else { 0.0 };
+        let total = analytic_time(m as f64, v0 as f64, vc, a);
+        let triangle = 2.0 * t_acc >= total;
+        let mut checked = 0;
+        for j in 0..t.len().saturating_sub(1) {
+            let p = (t[j + 1] - t[j]) as f64;
+            let since = (t[j] - t0) as f64 / TICKS;
+            let to_end = (t[t.len() - 1] - t[j]) as f64 / TICKS;
+            let ideal = if since + 0.001 < t_acc && (!triangle || since + 0.002 < total / 2.0) {
+                let w = (since * 1000.0).floor();
+                (v0 as f64 + a * (w + 0.5) / 1000.0).min(vc)
+            } else if !triangle && since > t_acc + 0.001 && to_end > t_acc + 0.002 {
+                vc
+            } else {
+                continue;
+            };
+            let p_ideal = TICKS / ideal;
+            prop_assert!((p - p_ideal).abs() <= (0.005 * p_ideal).max(1.0) + 1.0,
+                "step {} at {:.4} s: period {} vs ideal {:.1} ({} Hz)", j, since, p, p_ideal, ideal);
+            checked += 1;
+        }
+        prop_assert!(checked > 0 || m < 50 || t_acc < 0.002);
+
+        // Whole move time vs the analytic trapezoid: 1 % plus the slowest two periods (the
+        // last steps may run at the bottom entry when the mirrored ramp lands a step early).
+        let measured = (t[t.len() - 1] - t0) as f64 / TICKS + 1.0 / vc.max(1.0);
+        let slack = 0.01 * total + 2.0 / (v0 as f64 + a / 2000.0).min(vc) + 0.002;
+        prop_assert!((measured - total).abs() <= slack,
+            "move took {:.5} s, analytic {:.5} s (slack {:.5})", measured, total, slack);
+    }
+
+    #[test]
+    fn feed_hold_and_resume_keep_counts_exact(steps in steps7(), hold_at in 10u64..20_000,
+                                               held_for in 0u64..5_000, shape in any::<bool>()) {
+        let shape = if shape { Shape::SCurve } else { Shape::Trapezoid };
+        let cfg = RampConfig { v0: 800, vmax: 120_000, accel: 400_000, shape };
+        let mut rig = Rig::<7>::new(cfg, ddastep::timing::Timing::DEFAULT);
+        let steps = steps.map(|s| s / 20); // a few seconds at most
+        prop_assume!(steps.iter().any(|&s| s != 0));
+        rig.push(steps, 100_000);
+        rig.push(steps.map(|s| -s), 60_000);
+        for _ in 0..hold_at { rig.update(); }
+        rig.shared.set_hold(true);
+        for _ in 0..300_000 {
+            rig.update();
+            if rig.shared.state() == State::Held { break; }
+        }
+        let frozen = rig.shared.positions();
+        for _ in 0..held_for { rig.update(); }
+        let after = rig.shared.positions();
+        // At most the one word already computed when the hold completed.
+        for a in 0..7 { prop_assert!((after[a] - frozen[a]).abs() <= 1); }
+        rig.shared.set_hold(false);
+        rig.run_to_idle(u64::MAX);
+        prop_assert_eq!(rig.net_steps(), [0i64; 7]);
+        prop_assert_eq!(rig.shared.positions(), [0i32; 7]);
+    }
+
+    #[test]
+    fn direction_setup_holds_for_random_move_sequences(moves in prop::collection::vec(
+            prop::array::uniform3(-300i64..300), 1..8), setup in 1u32..2000, pulse in 7u32..400) {
+        let timing = ddastep::timing::Timing::new(pulse, setup, 144);
+        let cfg = RampConfig { v0: 1000, vmax: 200_000, accel: 1_000_000, shape: Shape::Trapezoid };
+        let mut rig = Rig::<3>::new(cfg, timing);
+        let mut want = [0i64; 3];
+        for m in &moves {
+            if Move::new(*m, 150_000).is_ok() {
+                rig.push(*m, 150_000);
+                for a in 0..3 { want[a] += m[a]; }
+            }
+        }
+        rig.run_to_idle(u64::MAX);
+        prop_assert_eq!(rig.net_steps(), want);
+        for s in &rig.steps {
+            let d = s.dir_changed_at.expect("direction written before the first step");
+            prop_assert!(s.t - d >= setup as u64);
+        }
+        for a in 0..3 {
+            let t = rig.times(a);
+            prop_assert!(t.windows(2).all(|w| w[1] - w[0] >= timing.min_period_ticks as u64));
+        }
+    }
+
+    #[test]
+    fn extreme_inputs_never_panic(v0 in any::<u32>(), vmax in any::<u32>(), accel in any::<u32>(),
+                                  s in any::<[i64; 3]>(), hz in any::<u32>(), curve in any::<bool>()) {
+        let shape = if curve { Shape::SCurve } else { Shape::Trapezoid };
+        let mut t: RampTable = RampTable::new();
+        match t.build(RampConfig { v0, vmax, accel, shape }) {
+            Ok(()) => {
+                prop_assert!(!t.is_empty() && t.len() <= 1024);
+                prop_assert!(t.periods().windows(2).all(|w| w[1] <= w[0]));
+            }
+            Err(_) => prop_assert!(t.is_empty()),
+        }
+        let _ = Move::<3>::new(s, hz);
+    }
+}
