@@ -45,7 +45,11 @@ fn sigrok_vcd() -> Vec<u8> {
 
 // the three axes of the generated capture
 fn config() -> Config {
-    Config::new(vec![AxisChannels::new("X", 0, None), AxisChannels::new("Y", 1, None), AxisChannels::new("Z", 2, None)])
+    Config::new(vec![
+        AxisChannels::new("X", 0, None),
+        AxisChannels::new("Y", 1, None),
+        AxisChannels::new("Z", 2, None),
+    ])
 }
 
 // read and check the capture from memory

@@ -5,7 +5,11 @@ use std::process::{Command, Output};
 
 // path of a fixture
 fn fixture(name: &str) -> String {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/la").join(name).display().to_string()
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("fixtures/la")
+        .join(name)
+        .display()
+        .to_string()
 }
 
 // a fresh path in the temp dir
@@ -15,12 +19,18 @@ fn temp(name: &str) -> PathBuf {
 
 // run `la` with arguments
 fn la(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_la")).args(args).output().expect("run la")
+    Command::new(env!("CARGO_BIN_EXE_la"))
+        .args(args)
+        .output()
+        .expect("run la")
 }
 
 // stdout and stderr as text
 fn text(out: &Output) -> (String, String) {
-    (String::from_utf8_lossy(&out.stdout).into_owned(), String::from_utf8_lossy(&out.stderr).into_owned())
+    (
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
 }
 
 #[test]
@@ -28,9 +38,20 @@ fn passing_expect_exits_0_with_the_summary() {
     let out = la(&[&fixture("bresenham_532.vcd"), "--expect", "5:3:2"]);
     let (stdout, stderr) = text(&out);
     assert_eq!(out.status.code(), Some(0), "{stdout}{stderr}");
-    assert!(stdout.contains("X:Y:Z = 50:30:20 = 5:3:2 exact, cruise 50.0 kHz"), "{stdout}");
-    assert!(stdout.contains("(VCD, 24 MHz): X=X_STEP/X_DIR Y=Y_STEP/Y_DIR Z=Z_STEP/Z_DIR"), "{stdout}");
-    assert!(stdout.lines().any(|l| l.starts_with("Y ") && l.contains("-30") && l.contains("0.40")), "{stdout}");
+    assert!(
+        stdout.contains("X:Y:Z = 50:30:20 = 5:3:2 exact, cruise 50.0 kHz"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("(VCD, 24 MHz): X=X_STEP/X_DIR Y=Y_STEP/Y_DIR Z=Z_STEP/Z_DIR"),
+        "{stdout}"
+    );
+    assert!(
+        stdout
+            .lines()
+            .any(|l| l.starts_with("Y ") && l.contains("-30") && l.contains("0.40")),
+        "{stdout}"
+    );
 }
 
 #[test]
@@ -38,29 +59,68 @@ fn ratio_wrong_by_one_step_exits_1() {
     let out = la(&[&fixture("wrong_ratio_51_30_20.vcd"), "--expect", "5:3:2"]);
     let (stdout, _) = text(&out);
     assert_eq!(out.status.code(), Some(1), "{stdout}");
-    assert!(stdout.contains("X:Y:Z = 51:30:20 = 51:30:20, expected 5:3:2: MISMATCH"), "{stdout}");
+    assert!(
+        stdout.contains("X:Y:Z = 51:30:20 = 51:30:20, expected 5:3:2: MISMATCH"),
+        "{stdout}"
+    );
     // Without --expect nothing is checked.
-    assert_eq!(la(&[&fixture("wrong_ratio_51_30_20.vcd")]).status.code(), Some(0));
+    assert_eq!(
+        la(&[&fixture("wrong_ratio_51_30_20.vcd")]).status.code(),
+        Some(0)
+    );
 }
 
 #[test]
 fn csv_with_map_and_dir_options() {
-    let args = [&fixture("bresenham_532_d.csv"), "--map", "X=D0,Y=D1,Z=D2", "--dir", "X=D3,Y=D4,Z=D5", "--expect", "5:3:2"];
+    let args = [
+        &fixture("bresenham_532_d.csv"),
+        "--map",
+        "X=D0,Y=D1,Z=D2",
+        "--dir",
+        "X=D3,Y=D4,Z=D5",
+        "--expect",
+        "5:3:2",
+    ];
     let out = la(&args);
     let (stdout, stderr) = text(&out);
     assert_eq!(out.status.code(), Some(0), "{stdout}{stderr}");
-    assert!(stdout.contains("(CSV, 24 MHz): X=D0/D3 Y=D1/D4 Z=D2/D5"), "{stdout}");
+    assert!(
+        stdout.contains("(CSV, 24 MHz): X=D0/D3 Y=D1/D4 Z=D2/D5"),
+        "{stdout}"
+    );
     // --dir-invert flips the signs.
     let out = la(&[&args[..], &["--dir-invert"]].concat());
-    assert!(text(&out).0.lines().any(|l| l.starts_with("X ") && l.contains("-50")), "{}", text(&out).0);
+    assert!(
+        text(&out)
+            .0
+            .lines()
+            .any(|l| l.starts_with("X ") && l.contains("-50")),
+        "{}",
+        text(&out).0
+    );
 }
 
 #[test]
 fn min_glitch_option_decides_the_glitch_fixture() {
-    assert_eq!(la(&[&fixture("glitch.vcd"), "--expect", "2:1"]).status.code(), Some(1));
-    let out = la(&[&fixture("glitch.vcd"), "--expect", "2:1", "--min-glitch-ns", "100"]);
+    assert_eq!(
+        la(&[&fixture("glitch.vcd"), "--expect", "2:1"])
+            .status
+            .code(),
+        Some(1)
+    );
+    let out = la(&[
+        &fixture("glitch.vcd"),
+        "--expect",
+        "2:1",
+        "--min-glitch-ns",
+        "100",
+    ]);
     assert_eq!(out.status.code(), Some(0), "{}", text(&out).0);
-    assert!(text(&out).0.contains("4 glitches dropped"), "{}", text(&out).0);
+    assert!(
+        text(&out).0.contains("4 glitches dropped"),
+        "{}",
+        text(&out).0
+    );
 }
 
 #[test]
@@ -84,10 +144,15 @@ fn json_goes_to_stdout_or_a_file_and_the_plot_is_a_png() {
     ]);
     assert_eq!(out.status.code(), Some(0), "{}", text(&out).1);
     assert!(text(&out).0.contains("5:3:2"), "human report still printed");
-    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(&json_path).unwrap()).unwrap();
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&json_path).unwrap()).unwrap();
     assert_eq!(json["axes"][0]["steps"], 500);
     let png = std::fs::read(&png_path).unwrap();
-    assert!(png.starts_with(b"\x89PNG\r\n\x1a\n") && png.len() > 10_000, "{} bytes", png.len());
+    assert!(
+        png.starts_with(b"\x89PNG\r\n\x1a\n") && png.len() > 10_000,
+        "{} bytes",
+        png.len()
+    );
     let _ = std::fs::remove_file(json_path);
     let _ = std::fs::remove_file(png_path);
 }
@@ -95,11 +160,19 @@ fn json_goes_to_stdout_or_a_file_and_the_plot_is_a_png() {
 #[test]
 fn bad_inputs_exit_2_with_a_message() {
     let garbage = temp("garbage.vcd");
-    std::fs::write(&garbage, "$timescale 1 ns $end\n$var wire 1 ! X_STEP $end\n$enddefinitions $end\n#10\n1?\n").unwrap();
+    std::fs::write(
+        &garbage,
+        "$timescale 1 ns $end\n$var wire 1 ! X_STEP $end\n$enddefinitions $end\n#10\n1?\n",
+    )
+    .unwrap();
     let truncated = temp("truncated.vcd");
     std::fs::write(&truncated, "$timescale 1 ns $end\n$var wire 1 ! X_STEP").unwrap();
     let backwards = temp("backwards.vcd");
-    std::fs::write(&backwards, "$var wire 1 ! X_STEP $end\n$enddefinitions $end\n#10\n1!\n#5\n0!\n").unwrap();
+    std::fs::write(
+        &backwards,
+        "$var wire 1 ! X_STEP $end\n$enddefinitions $end\n#10\n1!\n#5\n0!\n",
+    )
+    .unwrap();
     let binary = temp("binary.csv");
     std::fs::write(&binary, [0xffu8, 0xfe, 0x00, 0x12, b'\n']).unwrap();
     let cases: Vec<(Vec<String>, &str)> = vec![
@@ -109,10 +182,34 @@ fn bad_inputs_exit_2_with_a_message() {
         (vec![backwards.display().to_string()], "time goes backwards"),
         (vec![binary.display().to_string()], "cannot read"),
         (vec![fixture("bresenham_532_d.csv")], "--map"),
-        (vec![fixture("bresenham_532_d.csv"), "--map".into(), "X=D9".into()], "no channel named \"D9\""),
-        (vec![fixture("bresenham_532.vcd"), "--expect".into(), "5:3".into()], "2 terms but 3 axes"),
-        (vec![fixture("bresenham_532.vcd"), "--expect".into(), "5:x:2".into()], "not a ratio"),
-        (vec![fixture("bresenham_532.vcd"), "--no-such-flag".into()], "unexpected argument"),
+        (
+            vec![
+                fixture("bresenham_532_d.csv"),
+                "--map".into(),
+                "X=D9".into(),
+            ],
+            "no channel named \"D9\"",
+        ),
+        (
+            vec![
+                fixture("bresenham_532.vcd"),
+                "--expect".into(),
+                "5:3".into(),
+            ],
+            "2 terms but 3 axes",
+        ),
+        (
+            vec![
+                fixture("bresenham_532.vcd"),
+                "--expect".into(),
+                "5:x:2".into(),
+            ],
+            "not a ratio",
+        ),
+        (
+            vec![fixture("bresenham_532.vcd"), "--no-such-flag".into()],
+            "unexpected argument",
+        ),
     ];
     for (args, message) in cases {
         let args: Vec<&str> = args.iter().map(String::as_str).collect();

@@ -20,7 +20,10 @@ fn vcd_vectors_timescales_and_unknown_values() {
         $upscope $end\n$enddefinitions $end\n\
         $dumpvars b0101 % 0ab $end\n#2 b1 % 1ab\n#3 x% zab\n#4 0ab\n#5\n";
     let (channels, rec) = read(text, None, None);
-    assert_eq!(channels, vec!["bus[0]", "bus[1]", "bus[2]", "bus[3]", "X_STEP"]);
+    assert_eq!(
+        channels,
+        vec!["bus[0]", "bus[1]", "bus[2]", "bus[3]", "X_STEP"]
+    );
     let t = |n: u64| n * 41_667;
     assert_eq!(
         rec.levels,
@@ -45,13 +48,17 @@ fn vcd_vectors_timescales_and_unknown_values() {
 
 #[test]
 fn vcd_sigrok_header_gives_the_sample_rate() {
-    let text = "META samplerate: 1000000\n$comment\n  Acquisition with 1/8 channels at 1 MHz\n$end\n\
+    let text =
+        "META samplerate: 1000000\n$comment\n  Acquisition with 1/8 channels at 1 MHz\n$end\n\
         $timescale 1 us $end\n$scope module libsigrok $end\n$var wire 1 ! D0 $end\n$upscope $end\n\
         $enddefinitions $end\n#0 0!\n#5 1!\n#7 0!\n#9\n";
     let capture = from_text(text, None, None).unwrap();
     assert_eq!(capture.info().sample_rate_hz, Some(1e6));
     let (_, rec) = read(text, None, None);
-    assert_eq!(rec.levels, vec![(0, 0, false), (5_000_000, 0, true), (7_000_000, 0, false)]);
+    assert_eq!(
+        rec.levels,
+        vec![(0, 0, false), (5_000_000, 0, true), (7_000_000, 0, false)]
+    );
 }
 
 #[test]
@@ -60,13 +67,29 @@ fn vcd_rejects_bad_input_without_panicking() {
         ("", "empty capture"),
         ("$enddefinitions $end\n", "no signals"),
         ("$timescale 3 weeks $end\n", "timescale"),
-        ("$var wire 1 ! A $end\n$enddefinitions $end\n#1x\n", "bad time"),
-        ("$var wire 1 ! A $end\n$enddefinitions $end\nb10 !\n", "2 bits for a 1-bit"),
-        ("$var wire 2 ! A $end\n$enddefinitions $end\n1!\n", "scalar value"),
-        ("$var wire 1 ! A $end\n$enddefinitions $end\n?\n", "unexpected"),
-        ("$var wire 1 ! A $end\n$enddefinitions $end\n#18446744073709551615\n", "overflows"),
+        (
+            "$var wire 1 ! A $end\n$enddefinitions $end\n#1x\n",
+            "bad time",
+        ),
+        (
+            "$var wire 1 ! A $end\n$enddefinitions $end\nb10 !\n",
+            "2 bits for a 1-bit",
+        ),
+        (
+            "$var wire 2 ! A $end\n$enddefinitions $end\n1!\n",
+            "scalar value",
+        ),
+        (
+            "$var wire 1 ! A $end\n$enddefinitions $end\n?\n",
+            "unexpected",
+        ),
+        (
+            "$var wire 1 ! A $end\n$enddefinitions $end\n#18446744073709551615\n",
+            "overflows",
+        ),
     ] {
-        let result = from_text(text, Some(Format::Vcd), None).and_then(|mut c| c.stream(&mut Recorded::default()));
+        let result = from_text(text, Some(Format::Vcd), None)
+            .and_then(|mut c| c.stream(&mut Recorded::default()));
         let err = match (text.is_empty(), result) {
             (true, _) => from_text(text, None, None).err().expect("empty"),
             (false, Err(e)) => e,
@@ -87,7 +110,14 @@ fn csv_device_header_restores_the_exact_sample_period() {
     let t = |sample: u64| (sample as f64 * 1e12 / 24e6).round() as u64;
     assert_eq!(
         rec.levels,
-        vec![(0, 0, false), (0, 1, false), (t(23), 0, true), (t(32), 0, false), (t(32), 1, true), (t(599_999), 1, false)]
+        vec![
+            (0, 0, false),
+            (0, 1, false),
+            (t(23), 0, true),
+            (t(32), 0, false),
+            (t(32), 1, true),
+            (t(599_999), 1, false)
+        ]
     );
     assert_eq!(rec.end_ps, t(599_999), "10 ms less a sample, not 9.84 ms");
 }
@@ -98,24 +128,49 @@ fn csv_without_time_counts_rows_and_needs_a_rate() {
     assert!(from_text(body, Some(Format::Csv), None).is_err());
     let (channels, rec) = read(body, Some(Format::Csv), Some(1e6));
     assert_eq!(channels, vec!["D0", "D1"]);
-    assert_eq!(rec.levels, vec![(0, 0, false), (0, 1, true), (1_000_000, 0, true), (2_000_000, 1, false)]);
+    assert_eq!(
+        rec.levels,
+        vec![
+            (0, 0, false),
+            (0, 1, true),
+            (1_000_000, 0, true),
+            (2_000_000, 1, false)
+        ]
+    );
     // sigrok-cli's file conversions: "META samplerate" and a "samples" column of zeros.
-    let converted = "; Channels (2/2): A, B\nMETA samplerate: 1000000\nsamples,logic,logic\n0,0,1\n0,1,1\n";
+    let converted =
+        "; Channels (2/2): A, B\nMETA samplerate: 1000000\nsamples,logic,logic\n0,0,1\n0,1,1\n";
     let (channels, rec) = read(converted, None, None);
     assert_eq!(channels, vec!["A", "B"]);
-    assert_eq!(rec.levels, vec![(0, 0, false), (0, 1, true), (1_000_000, 0, true)]);
+    assert_eq!(
+        rec.levels,
+        vec![(0, 0, false), (0, 1, true), (1_000_000, 0, true)]
+    );
 }
 
 #[test]
 fn csv_rejects_bad_rows() {
     for (text, message) in [
-        ("; Samplerate: 1 MHz\nlogic,logic\n0,2\n", "not a logic level"),
-        ("; Samplerate: 1 MHz\nlogic,logic\n0,1,1\n", "expected 2 columns"),
-        ("; Samplerate: 1 MHz\nnanoseconds,logic\n2000,1\n1000,0\n", "backwards"),
-        ("; Channels (2/8): A, B\n0,1,1,1\n", "header names 2 channels"),
+        (
+            "; Samplerate: 1 MHz\nlogic,logic\n0,2\n",
+            "not a logic level",
+        ),
+        (
+            "; Samplerate: 1 MHz\nlogic,logic\n0,1,1\n",
+            "expected 2 columns",
+        ),
+        (
+            "; Samplerate: 1 MHz\nnanoseconds,logic\n2000,1\n1000,0\n",
+            "backwards",
+        ),
+        (
+            "; Channels (2/8): A, B\n0,1,1,1\n",
+            "header names 2 channels",
+        ),
         ("; only comments\n", "no data rows"),
     ] {
-        let result = from_text(text, Some(Format::Csv), None).and_then(|mut c| c.stream(&mut Recorded::default()));
+        let result = from_text(text, Some(Format::Csv), None)
+            .and_then(|mut c| c.stream(&mut Recorded::default()));
         let err = result.expect_err(text);
         assert!(format!("{err:#}").contains(message), "{text:?}: {err:#}");
     }
@@ -130,5 +185,9 @@ fn same_timestamp_glitch_from_a_reader_is_dropped() {
     capture.stream(&mut analyzer).unwrap();
     let report = analyzer.finish();
     assert_eq!((report.axes[0].steps, report.axes[0].glitches), (2, 1));
-    assert_eq!(report.axes[0].min_low_ns, Some(200.0), "the glitch did not split the low");
+    assert_eq!(
+        report.axes[0].min_low_ns,
+        Some(200.0),
+        "the glitch did not split the low"
+    );
 }

@@ -24,7 +24,10 @@ fn axis_plan(unit: u64) -> impl Strategy<Value = AxisPlan> {
         prop::collection::btree_set(1u64..1_000, 0..6),
     )
         .prop_map(move |(pulses, dir_start, toggles)| AxisPlan {
-            pulses: pulses.into_iter().map(|(gap, width)| (gap * unit, width * unit)).collect(),
+            pulses: pulses
+                .into_iter()
+                .map(|(gap, width)| (gap * unit, width * unit))
+                .collect(),
             dir_start,
             toggles: toggles.into_iter().map(|t| t * unit).collect(),
         })
@@ -32,7 +35,8 @@ fn axis_plan(unit: u64) -> impl Strategy<Value = AxisPlan> {
 
 // one to four axes sharing a time unit of 1 ns or 50 ns
 fn plans() -> impl Strategy<Value = Vec<AxisPlan>> {
-    prop_oneof![Just(1u64), Just(50u64)].prop_flat_map(|unit| prop::collection::vec(axis_plan(unit), 1..5))
+    prop_oneof![Just(1u64), Just(50u64)]
+        .prop_flat_map(|unit| prop::collection::vec(axis_plan(unit), 1..5))
 }
 
 // the trace of a plan: pulses back to back after their gaps
@@ -44,10 +48,18 @@ fn trace(name: &str, plan: &AxisPlan) -> AxisTrace {
         .map(|&(gap, width)| {
             let rise_ns = t + gap;
             t = rise_ns + width;
-            Pulse { rise_ns, width_ns: width }
+            Pulse {
+                rise_ns,
+                width_ns: width,
+            }
         })
         .collect();
-    AxisTrace { name: name.to_string(), dir_start: plan.dir_start, dir_toggles_ns: plan.toggles.clone(), pulses }
+    AxisTrace {
+        name: name.to_string(),
+        dir_start: plan.dir_start,
+        dir_toggles_ns: plan.toggles.clone(),
+        pulses,
+    }
 }
 
 // dir level at `t`, toggles at `t` included (dir applies before steps)
@@ -70,20 +82,35 @@ struct Expected {
 fn expected(axis: &AxisTrace) -> Expected {
     let rises: Vec<u64> = axis.pulses.iter().map(|p| p.rise_ns).collect();
     let min = |v: Vec<u64>| v.into_iter().min().map(|x| x as f64);
-    let lows = axis.pulses.windows(2).map(|w| w[1].rise_ns - (w[0].rise_ns + w[0].width_ns)).collect();
+    let lows = axis
+        .pulses
+        .windows(2)
+        .map(|w| w[1].rise_ns - (w[0].rise_ns + w[0].width_ns))
+        .collect();
     let setups = rises
         .iter()
         .enumerate()
         .filter_map(|(i, &r)| {
             let after = if i == 0 { None } else { Some(rises[i - 1]) };
-            let last = axis.dir_toggles_ns.iter().filter(|&&d| d <= r && after.map_or(true, |a| d > a)).max()?;
+            let last = axis
+                .dir_toggles_ns
+                .iter()
+                .filter(|&&d| d <= r && after.is_none_or(|a| d > a))
+                .max()?;
             Some(r - last)
         })
         .collect();
-    let holds = axis.dir_toggles_ns.iter().filter_map(|&d| rises.iter().filter(|&&r| r < d).max().map(|r| d - r)).collect();
+    let holds = axis
+        .dir_toggles_ns
+        .iter()
+        .filter_map(|&d| rises.iter().filter(|&&r| r < d).max().map(|r| d - r))
+        .collect();
     Expected {
         steps: rises.len() as u64,
-        net: rises.iter().map(|&r| if dir_at(axis, r) { 1 } else { -1 }).sum(),
+        net: rises
+            .iter()
+            .map(|&r| if dir_at(axis, r) { 1 } else { -1 })
+            .sum(),
         min_high: min(axis.pulses.iter().map(|p| p.width_ns).collect()),
         min_low: min(lows),
         setup: min(setups),
@@ -93,13 +120,20 @@ fn expected(axis: &AxisTrace) -> Expected {
 
 // max |s - k·c/M| at each master rise, after all edges of that timestamp
 fn brute_deviation(axes: &[AxisTrace], master: usize, slave: usize) -> f64 {
-    let (m, c) = (axes[master].pulses.len() as f64, axes[slave].pulses.len() as f64);
+    let (m, c) = (
+        axes[master].pulses.len() as f64,
+        axes[slave].pulses.len() as f64,
+    );
     axes[master]
         .pulses
         .iter()
         .enumerate()
         .map(|(k, p)| {
-            let s = axes[slave].pulses.iter().filter(|q| q.rise_ns <= p.rise_ns).count() as f64;
+            let s = axes[slave]
+                .pulses
+                .iter()
+                .filter(|q| q.rise_ns <= p.rise_ns)
+                .count() as f64;
             (s - (k + 1) as f64 * c / m).abs()
         })
         .fold(0.0, f64::max)
@@ -109,12 +143,19 @@ fn brute_deviation(axes: &[AxisTrace], master: usize, slave: usize) -> f64 {
 fn run(axes: &[AxisTrace]) -> Report {
     let mut vcd = Vec::new();
     synth::write_vcd(axes, 400_000, &mut vcd).unwrap();
-    let mut capture = Capture::from_reader(Box::new(std::io::Cursor::new(vcd)), None, None).unwrap();
+    let mut capture =
+        Capture::from_reader(Box::new(std::io::Cursor::new(vcd)), None, None).unwrap();
     let channels = capture.info().channels.clone();
     let find = |n: String| channels.iter().position(|c| *c == n);
     let config = Config::new(
         axes.iter()
-            .map(|a| AxisChannels::new(&a.name, find(format!("{}_STEP", a.name)).unwrap(), find(format!("{}_DIR", a.name))))
+            .map(|a| {
+                AxisChannels::new(
+                    &a.name,
+                    find(format!("{}_STEP", a.name)).unwrap(),
+                    find(format!("{}_DIR", a.name)),
+                )
+            })
             .collect(),
     );
     let mut analyzer = Analyzer::new(config).unwrap();

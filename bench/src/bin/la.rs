@@ -74,8 +74,10 @@ fn parse_rate(text: &str) -> Result<f64> {
         Some('g') => (&t[..t.len() - 1], 1e9),
         _ => (t, 1.0),
     };
-    let rate: f64 = digits.parse().map_err(|_| anyhow!("{text:?} is not a sample rate like 24m or 24000000"))?;
-    if !(rate > 0.0) {
+    let rate: f64 = digits
+        .parse()
+        .map_err(|_| anyhow!("{text:?} is not a sample rate like 24m or 24000000"))?;
+    if rate.is_nan() || rate <= 0.0 {
         return Err(anyhow!("sample rate must be positive"));
     }
     Ok(rate * scale)
@@ -84,9 +86,14 @@ fn parse_rate(text: &str) -> Result<f64> {
 // check the capture; Ok(false) when a check failed
 fn run(args: &Args) -> Result<bool> {
     let expect = args.expect.as_deref().map(map::parse_ratio).transpose()?;
-    let pairs = |o: &Option<String>| o.as_deref().map(map::parse_pairs).transpose().map(Option::unwrap_or_default);
+    let pairs = |o: &Option<String>| {
+        o.as_deref()
+            .map(map::parse_pairs)
+            .transpose()
+            .map(Option::unwrap_or_default)
+    };
     let (map_pairs, dir_pairs) = (pairs(&args.map)?, pairs(&args.dir)?);
-    if !(args.min_glitch_ns >= 0.0) {
+    if args.min_glitch_ns.is_nan() || args.min_glitch_ns < 0.0 {
         return Err(anyhow!("--min-glitch-ns must be 0 or more"));
     }
     let rate = args.samplerate.as_deref().map(parse_rate).transpose()?;
@@ -101,7 +108,9 @@ fn run(args: &Args) -> Result<bool> {
         expect,
     };
     let mut analyzer = Analyzer::new(config)?;
-    capture.stream(&mut analyzer).with_context(|| format!("cannot read {}", args.capture.display()))?;
+    capture
+        .stream(&mut analyzer)
+        .with_context(|| format!("cannot read {}", args.capture.display()))?;
     let report = analyzer.finish();
 
     let lines = axes.iter().map(|a| lines_of(a, &info.channels)).collect();
@@ -117,13 +126,20 @@ fn run(args: &Args) -> Result<bool> {
         Some(p) if p == Path::new("-") => println!("{json}"),
         other => {
             if let Some(path) = other {
-                std::fs::write(path, json + "\n").with_context(|| format!("cannot write {}", path.display()))?;
+                std::fs::write(path, json + "\n")
+                    .with_context(|| format!("cannot write {}", path.display()))?;
             }
             print_human(&output);
         }
     }
     if let Some(path) = &args.plot {
-        let title = format!("{}: {}", args.capture.file_name().map_or("capture".into(), |n| n.to_string_lossy()), report.summary());
+        let title = format!(
+            "{}: {}",
+            args.capture
+                .file_name()
+                .map_or("capture".into(), |n| n.to_string_lossy()),
+            report.summary()
+        );
         la::plot::write_png(&report, &title, path)?;
     }
     Ok(report.passed())
@@ -131,16 +147,29 @@ fn run(args: &Args) -> Result<bool> {
 
 // channel names of one axis
 fn lines_of(axis: &AxisChannels, channels: &[String]) -> AxisLines {
-    AxisLines { axis: axis.name.clone(), step: channels[axis.step].clone(), dir: axis.dir.map(|d| channels[d].clone()) }
+    AxisLines {
+        axis: axis.name.clone(),
+        step: channels[axis.step].clone(),
+        dir: axis.dir.map(|d| channels[d].clone()),
+    }
 }
 
 // the report for people: source line, summary, table
 fn print_human(output: &Output) {
-    let rate = output.sample_rate_hz.map_or(String::new(), |r| format!(", {} MHz", r / 1e6));
+    let rate = output
+        .sample_rate_hz
+        .map_or(String::new(), |r| format!(", {} MHz", r / 1e6));
     let lines: Vec<String> = output
         .lines
         .iter()
-        .map(|l| format!("{}={}{}", l.axis, l.step, l.dir.as_ref().map_or(String::new(), |d| format!("/{d}"))))
+        .map(|l| {
+            format!(
+                "{}={}{}",
+                l.axis,
+                l.step,
+                l.dir.as_ref().map_or(String::new(), |d| format!("/{d}"))
+            )
+        })
         .collect();
     let format = match output.format {
         Format::Vcd => "VCD",

@@ -29,7 +29,11 @@ pub struct AxisChannels {
 impl AxisChannels {
     // name an axis and its channel indices
     pub fn new(name: &str, step: usize, dir: Option<usize>) -> Self {
-        Self { name: name.to_string(), step, dir }
+        Self {
+            name: name.to_string(),
+            step,
+            dir,
+        }
     }
 }
 
@@ -49,7 +53,10 @@ pub struct Config {
 impl Config {
     // check these axes with default settings
     pub fn new(axes: Vec<AxisChannels>) -> Self {
-        Self { axes, ..Self::default() }
+        Self {
+            axes,
+            ..Self::default()
+        }
     }
 }
 
@@ -84,10 +91,21 @@ impl Analyzer {
         }
         if let Some(expect) = &config.expect {
             if expect.len() != config.axes.len() {
-                bail!("--expect has {} terms but {} axes are mapped", expect.len(), config.axes.len());
+                bail!(
+                    "--expect has {} terms but {} axes are mapped",
+                    expect.len(),
+                    config.axes.len()
+                );
             }
         }
-        let channels = config.axes.iter().flat_map(|a| [Some(a.step), a.dir]).flatten().max().unwrap_or(0) + 1;
+        let channels = config
+            .axes
+            .iter()
+            .flat_map(|a| [Some(a.step), a.dir])
+            .flatten()
+            .max()
+            .unwrap_or(0)
+            + 1;
         let mut roles = vec![None; channels];
         for (i, axis) in config.axes.iter().enumerate() {
             for (channel, role) in [(Some(axis.step), Role::Step(i)), (axis.dir, Role::Dir(i))] {
@@ -118,7 +136,9 @@ impl Analyzer {
     // report `channel`'s level at `time_ps`; earlier times than already seen count as now
     pub fn edge(&mut self, time_ps: u64, channel: usize, level: bool) {
         self.advance(time_ps);
-        let Some(Some(role)) = self.roles.get(channel).copied() else { return };
+        let Some(Some(role)) = self.roles.get(channel).copied() else {
+            return;
+        };
         if self.filter.observe(self.now_ps, channel, level) == Observed::Initial {
             match role {
                 Role::Dir(axis) => self.axes[axis].initial_dir(level),
@@ -148,7 +168,11 @@ impl Analyzer {
     fn commit_ready(&mut self) {
         let ready = std::mem::take(&mut self.ready);
         for edge in &ready {
-            if self.batch.first().is_some_and(|b| b.time_ps != edge.time_ps) {
+            if self
+                .batch
+                .first()
+                .is_some_and(|b| b.time_ps != edge.time_ps)
+            {
                 self.flush_batch();
             }
             self.batch.push(*edge);
@@ -159,7 +183,9 @@ impl Analyzer {
 
     // apply one timestamp's edges: dir first, then steps, then deviation samples
     fn flush_batch(&mut self) {
-        let Some(time_ps) = self.batch.first().map(|e| e.time_ps) else { return };
+        let Some(time_ps) = self.batch.first().map(|e| e.time_ps) else {
+            return;
+        };
         let bin = self.bin_index(time_ps);
         for edge in &self.batch {
             if let Some(Role::Dir(axis)) = self.roles[edge.channel] {
@@ -259,14 +285,23 @@ impl Analyzer {
         let deviation_steps = (0..self.axes.len())
             .map(|i| match master {
                 Some(m) if m != i => {
-                    let (mc, sc) = (self.axes[m].bins.cumulative_rises(bins), self.axes[i].bins.cumulative_rises(bins));
+                    let (mc, sc) = (
+                        self.axes[m].bins.cumulative_rises(bins),
+                        self.axes[i].bins.cumulative_rises(bins),
+                    );
                     let slope = self.counts[i] as f64 / self.counts[m] as f64;
-                    mc.iter().zip(&sc).map(|(&k, &s)| s as f64 - k as f64 * slope).collect()
+                    mc.iter()
+                        .zip(&sc)
+                        .map(|(&k, &s)| s as f64 - k as f64 * slope)
+                        .collect()
                 }
                 _ => Vec::new(),
             })
             .collect();
-        Series { rate_hz, deviation_steps }
+        Series {
+            rate_hz,
+            deviation_steps,
+        }
     }
 }
 
@@ -277,11 +312,18 @@ fn ps_to_ns(ps: u64) -> f64 {
 
 // greatest common divisor
 fn gcd(a: u64, b: u64) -> u64 {
-    if b == 0 { a } else { gcd(b, a % b) }
+    if b == 0 {
+        a
+    } else {
+        gcd(b, a % b)
+    }
 }
 
 // counts divided by their gcd (all zero stays all zero)
 pub fn reduce(counts: &[u64]) -> Vec<u64> {
     let g = counts.iter().fold(0, |g, &c| gcd(g, c));
-    counts.iter().map(|&c| if g == 0 { 0 } else { c / g }).collect()
+    counts
+        .iter()
+        .map(|&c| c.checked_div(g).unwrap_or(0))
+        .collect()
 }

@@ -41,7 +41,10 @@ pub struct AxisState {
 impl AxisState {
     // create an axis whose dir high means + (or - with `dir_invert`)
     pub fn new(dir_invert: bool) -> Self {
-        Self { dir_invert, ..Self::default() }
+        Self {
+            dir_invert,
+            ..Self::default()
+        }
     }
 
     // take the dir level at capture start
@@ -76,7 +79,7 @@ impl AxisState {
         }
         self.rises += 1;
         // No dir channel (or no level yet) counts as +.
-        let positive = self.dir.map_or(true, |d| d != self.dir_invert);
+        let positive = self.dir.is_none_or(|d| d != self.dir_invert);
         self.net += if positive { 1 } else { -1 };
         self.last_rise_ps = Some(time_ps);
         self.bins.rise(time_ps, bin);

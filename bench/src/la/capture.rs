@@ -77,7 +77,11 @@ pub enum Capture {
 
 impl Capture {
     // read a capture's header from any reader; `format` None sniffs the first byte
-    pub fn from_reader(reader: Box<dyn BufRead>, format: Option<Format>, sample_rate_hz: Option<f64>) -> Result<Self> {
+    pub fn from_reader(
+        reader: Box<dyn BufRead>,
+        format: Option<Format>,
+        sample_rate_hz: Option<f64>,
+    ) -> Result<Self> {
         let mut reader = reader;
         let format = match format {
             Some(f) => f,
@@ -109,7 +113,12 @@ impl Capture {
 // open a capture file; the format comes from `format`, the extension, or the first byte
 pub fn open(path: &Path, format: Option<Format>, sample_rate_hz: Option<f64>) -> Result<Capture> {
     let file = File::open(path).with_context(|| format!("cannot open {}", path.display()))?;
-    let by_extension = match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+    let by_extension = match path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .as_deref()
+    {
         Some("vcd") => Some(Format::Vcd),
         Some("csv") => Some(Format::Csv),
         _ => None,
@@ -123,7 +132,10 @@ pub fn open(path: &Path, format: Option<Format>, sample_rate_hz: Option<f64>) ->
 fn sniff(reader: &mut Box<dyn BufRead>) -> Result<Format> {
     let mut buf = reader.fill_buf().context("reading capture")?;
     while buf.starts_with(b"META ") {
-        buf = buf.iter().position(|&b| b == b'\n').map_or(&[][..], |i| &buf[i + 1..]);
+        buf = buf
+            .iter()
+            .position(|&b| b == b'\n')
+            .map_or(&[][..], |i| &buf[i + 1..]);
     }
     match buf.iter().find(|b| !b.is_ascii_whitespace()) {
         Some(b'$') => Ok(Format::Vcd),
@@ -133,7 +145,15 @@ fn sniff(reader: &mut Box<dyn BufRead>) -> Result<Format> {
 }
 
 // read a capture held in a string (tests, small inputs)
-pub fn from_text(text: &str, format: Option<Format>, sample_rate_hz: Option<f64>) -> Result<Capture> {
+pub fn from_text(
+    text: &str,
+    format: Option<Format>,
+    sample_rate_hz: Option<f64>,
+) -> Result<Capture> {
     let bytes = text.as_bytes().to_vec();
-    Capture::from_reader(Box::new(std::io::Cursor::new(bytes)), format, sample_rate_hz)
+    Capture::from_reader(
+        Box::new(std::io::Cursor::new(bytes)),
+        format,
+        sample_rate_hz,
+    )
 }

@@ -93,8 +93,17 @@ impl<R: BufRead> CsvReader<R> {
             }
             if let Some(comment) = row.strip_prefix(';') {
                 let comment = comment.trim();
-                if let Some(names) = comment.strip_prefix("Channels").and_then(|c| c.split_once(':')) {
-                    comment_names = Some(names.1.split(',').map(|n| n.trim().to_string()).collect::<Vec<_>>());
+                if let Some(names) = comment
+                    .strip_prefix("Channels")
+                    .and_then(|c| c.split_once(':'))
+                {
+                    comment_names = Some(
+                        names
+                            .1
+                            .split(',')
+                            .map(|n| n.trim().to_string())
+                            .collect::<Vec<_>>(),
+                    );
                 } else if let Some(r) = comment.strip_prefix("Samplerate:") {
                     rate = parse_rate(r);
                 }
@@ -107,7 +116,11 @@ impl<R: BufRead> CsvReader<R> {
             if row.split(',').all(|f| f.trim().parse::<u64>().is_ok()) {
                 first_row = Some(row.to_string());
             } else {
-                labels = Some(row.split(',').map(|f| f.trim().to_string()).collect::<Vec<_>>());
+                labels = Some(
+                    row.split(',')
+                        .map(|f| f.trim().to_string())
+                        .collect::<Vec<_>>(),
+                );
             }
             break;
         }
@@ -124,7 +137,9 @@ impl<R: BufRead> CsvReader<R> {
                 None if label.eq_ignore_ascii_case("samples") => Clock::Rows,
                 // "Time" (label=channel) or no label row: libsigrok's unit for the rate.
                 None => match rate {
-                    Some(r) => Clock::Column { unit_fs: sigrok_unit_fs(r) },
+                    Some(r) => Clock::Column {
+                        unit_fs: sigrok_unit_fs(r),
+                    },
                     None => bail!("CSV time column has no unit: pass --samplerate"),
                 },
             },
@@ -135,7 +150,11 @@ impl<R: BufRead> CsvReader<R> {
         }
         Ok(Self {
             reader,
-            info: CaptureInfo { format: Format::Csv, channels: names, sample_rate_hz: rate },
+            info: CaptureInfo {
+                format: Format::Csv,
+                channels: names,
+                sample_rate_hz: rate,
+            },
             clock,
             time_column: time_label.is_some(),
             first_row,
@@ -174,8 +193,14 @@ impl<R: BufRead> CsvReader<R> {
                 bail!("line {line}: expected {expected} columns");
             }
             let mut fields = row.split(',').map(str::trim);
-            let raw_time = if self.time_column { fields.next() } else { None };
-            let time_ps = self.time_ps(raw_time, row_index).with_context(|| format!("line {line}"))?;
+            let raw_time = if self.time_column {
+                fields.next()
+            } else {
+                None
+            };
+            let time_ps = self
+                .time_ps(raw_time, row_index)
+                .with_context(|| format!("line {line}"))?;
             if time_ps < last_ps {
                 bail!("line {line}: time goes backwards");
             }
@@ -207,24 +232,39 @@ impl<R: BufRead> CsvReader<R> {
                 let per_second = 1e15 / unit_fs as f64;
                 match rate.map(|r| (per_second / r).floor() as u64) {
                     // libsigrok's truncated period: undo it (its first row is sample 1).
-                    Some(period) if period >= 1 => Ok(from_sample((value / period).saturating_sub(1), rate.unwrap_or(1.0))),
-                    _ => Ok(u64::try_from(value as u128 * unit_fs / 1000).map_err(|_| anyhow!("time overflows"))?),
+                    Some(period) if period >= 1 => Ok(from_sample(
+                        (value / period).saturating_sub(1),
+                        rate.unwrap_or(1.0),
+                    )),
+                    _ => Ok(u64::try_from(value as u128 * unit_fs / 1000)
+                        .map_err(|_| anyhow!("time overflows"))?),
                 }
             }
-            _ => Ok(from_sample(row_index, rate.ok_or_else(|| anyhow!("no sample rate"))?)),
+            _ => Ok(from_sample(
+                row_index,
+                rate.ok_or_else(|| anyhow!("no sample rate"))?,
+            )),
         }
     }
 }
 
 // time column label (if any) and channel names from the label row or comment header
-fn layout(labels: Option<Vec<String>>, comment_names: Option<Vec<String>>, columns: usize) -> Result<(Option<String>, Vec<String>)> {
+fn layout(
+    labels: Option<Vec<String>>,
+    comment_names: Option<Vec<String>>,
+    columns: usize,
+) -> Result<(Option<String>, Vec<String>)> {
     let is_time = |l: &str| {
         let l = l.to_ascii_lowercase();
         l == "time" || l == "samples" || unit_fs(&l).is_some()
     };
     let default_names = |n: usize| (0..n).map(|i| format!("D{i}")).collect::<Vec<_>>();
     if let Some(mut labels) = labels {
-        let time = if labels.first().is_some_and(|l| is_time(l)) { Some(labels.remove(0)) } else { None };
+        let time = if labels.first().is_some_and(|l| is_time(l)) {
+            Some(labels.remove(0))
+        } else {
+            None
+        };
         let names = if labels.iter().all(|l| l == "logic") {
             match comment_names {
                 Some(names) if names.len() == labels.len() => names,
@@ -238,7 +278,10 @@ fn layout(labels: Option<Vec<String>>, comment_names: Option<Vec<String>>, colum
     match comment_names {
         Some(names) if columns == names.len() + 1 => Ok((Some("Time".into()), names)),
         Some(names) if columns == names.len() => Ok((None, names)),
-        Some(names) => bail!("CSV rows have {columns} columns but the header names {} channels", names.len()),
+        Some(names) => bail!(
+            "CSV rows have {columns} columns but the header names {} channels",
+            names.len()
+        ),
         None => Ok((None, default_names(columns))),
     }
 }

@@ -25,11 +25,23 @@ fn cross(o: (i64, i64), a: (i64, i64), b: (i64, i64)) -> i128 {
 impl Hull {
     // add a point right of every earlier one
     fn push(&mut self, p: (i64, i64)) {
-        while self.upper.len() >= 2 && cross(self.upper[self.upper.len() - 2], self.upper[self.upper.len() - 1], p) >= 0 {
+        while self.upper.len() >= 2
+            && cross(
+                self.upper[self.upper.len() - 2],
+                self.upper[self.upper.len() - 1],
+                p,
+            ) >= 0
+        {
             self.upper.pop();
         }
         self.upper.push(p);
-        while self.lower.len() >= 2 && cross(self.lower[self.lower.len() - 2], self.lower[self.lower.len() - 1], p) <= 0 {
+        while self.lower.len() >= 2
+            && cross(
+                self.lower[self.lower.len() - 2],
+                self.lower[self.lower.len() - 1],
+                p,
+            ) <= 0
+        {
             self.lower.pop();
         }
         self.lower.push(p);
@@ -55,7 +67,10 @@ pub struct DeviationTracker {
 impl DeviationTracker {
     // create a tracker for `axes` axes
     pub fn new(axes: usize) -> Self {
-        Self { axes, hulls: vec![Hull::default(); axes * axes] }
+        Self {
+            axes,
+            hulls: vec![Hull::default(); axes * axes],
+        }
     }
 
     // record the counts of every axis at a step of `master`
@@ -106,13 +121,19 @@ mod tests {
             tracker.master_step(0, &[k, s]);
         }
         let got = tracker.max_deviation(0, 1, &[50, s]);
-        assert!((got - brute(&slave)).abs() < 1e-12, "{got} vs {}", brute(&slave));
+        assert!(
+            (got - brute(&slave)).abs() < 1e-12,
+            "{got} vs {}",
+            brute(&slave)
+        );
         assert!(got <= 0.5 + 1e-12);
     }
 
     #[test]
     fn hull_matches_brute_force_on_a_lagging_slave() {
-        let slave: Vec<i64> = (1..=40).map(|k: i64| if k < 20 { k / 4 } else { k - 10 }).collect();
+        let slave: Vec<i64> = (1..=40)
+            .map(|k: i64| if k < 20 { k / 4 } else { k - 10 })
+            .collect();
         let mut tracker = DeviationTracker::new(2);
         for (i, &s) in slave.iter().enumerate() {
             tracker.master_step(0, &[(i + 1) as u64, s as u64]);

@@ -82,7 +82,11 @@ impl GlitchFilter {
                     Observed::Glitch
                 } else {
                     line.pending = true;
-                    self.queue.push_back(Edge { time_ps, channel, level });
+                    self.queue.push_back(Edge {
+                        time_ps,
+                        channel,
+                        level,
+                    });
                     Observed::Queued
                 }
             }
@@ -138,15 +142,31 @@ mod tests {
     #[test]
     fn first_level_is_not_an_edge() {
         let (edges, glitches) = run(0, &[(0, 0, true), (10, 0, false), (20, 0, false)]);
-        assert_eq!(edges, vec![Edge { time_ps: 10, channel: 0, level: false }]);
+        assert_eq!(
+            edges,
+            vec![Edge {
+                time_ps: 10,
+                channel: 0,
+                level: false
+            }]
+        );
         assert_eq!(glitches, 0);
     }
 
     #[test]
     fn change_and_back_at_one_timestamp_is_a_glitch() {
-        let (edges, glitches) =
-            run(0, &[(0, 0, false), (5, 0, true), (5, 0, false), (9, 0, true)]);
-        assert_eq!(edges, vec![Edge { time_ps: 9, channel: 0, level: true }]);
+        let (edges, glitches) = run(
+            0,
+            &[(0, 0, false), (5, 0, true), (5, 0, false), (9, 0, true)],
+        );
+        assert_eq!(
+            edges,
+            vec![Edge {
+                time_ps: 9,
+                channel: 0,
+                level: true
+            }]
+        );
         assert_eq!(glitches, 1);
     }
 
@@ -161,7 +181,10 @@ mod tests {
             (200, 0, false), // 100 ps pulse: kept
         ];
         let (edges, glitches) = run(50, &reports);
-        let times: Vec<_> = edges.iter().map(|e| (e.time_ps, e.channel, e.level)).collect();
+        let times: Vec<_> = edges
+            .iter()
+            .map(|e| (e.time_ps, e.channel, e.level))
+            .collect();
         assert_eq!(times, vec![(100, 0, true), (200, 0, false)]);
         assert_eq!(glitches, 1);
     }

@@ -15,8 +15,9 @@ pub fn parse_pairs(text: &str) -> Result<Vec<(String, String)>> {
     text.split(',')
         .filter(|p| !p.trim().is_empty())
         .map(|pair| {
-            let (axis, channel) =
-                pair.split_once('=').ok_or_else(|| anyhow!("{pair:?} is not AXIS=CHANNEL (e.g. X=D0)"))?;
+            let (axis, channel) = pair
+                .split_once('=')
+                .ok_or_else(|| anyhow!("{pair:?} is not AXIS=CHANNEL (e.g. X=D0)"))?;
             let (axis, channel) = (axis.trim(), channel.trim());
             if axis.is_empty() || channel.is_empty() {
                 bail!("{pair:?} is not AXIS=CHANNEL (e.g. X=D0)");
@@ -30,7 +31,11 @@ pub fn parse_pairs(text: &str) -> Result<Vec<(String, String)>> {
 pub fn parse_ratio(text: &str) -> Result<Vec<u64>> {
     let terms: Vec<u64> = text
         .split(':')
-        .map(|t| t.trim().parse::<u64>().map_err(|_| anyhow!("{text:?} is not a ratio like 5:3:2")))
+        .map(|t| {
+            t.trim()
+                .parse::<u64>()
+                .map_err(|_| anyhow!("{text:?} is not a ratio like 5:3:2"))
+        })
         .collect::<Result<_>>()?;
     if terms.iter().all(|&t| t == 0) {
         bail!("ratio {text:?} is all zero");
@@ -40,16 +45,28 @@ pub fn parse_ratio(text: &str) -> Result<Vec<u64>> {
 
 // index of a channel by name: exact, then ignoring case
 fn find(channels: &[String], name: &str) -> Option<usize> {
-    channels.iter().position(|c| c == name).or_else(|| channels.iter().position(|c| c.eq_ignore_ascii_case(name)))
+    channels
+        .iter()
+        .position(|c| c == name)
+        .or_else(|| channels.iter().position(|c| c.eq_ignore_ascii_case(name)))
 }
 
 // index of a channel that must exist
 fn require(channels: &[String], name: &str) -> Result<usize> {
-    find(channels, name).ok_or_else(|| anyhow!("no channel named {name:?} (capture has: {})", channels.join(", ")))
+    find(channels, name).ok_or_else(|| {
+        anyhow!(
+            "no channel named {name:?} (capture has: {})",
+            channels.join(", ")
+        )
+    })
 }
 
 // the axes of a capture from its channel names and the --map / --dir options
-pub fn resolve(channels: &[String], map: &[(String, String)], dir: &[(String, String)]) -> Result<Vec<AxisChannels>> {
+pub fn resolve(
+    channels: &[String],
+    map: &[(String, String)],
+    dir: &[(String, String)],
+) -> Result<Vec<AxisChannels>> {
     let mut axes: Vec<AxisChannels> = if map.is_empty() {
         channels
             .iter()
@@ -61,13 +78,21 @@ pub fn resolve(channels: &[String], map: &[(String, String)], dir: &[(String, St
             })
             .collect()
     } else {
-        map.iter().map(|(axis, channel)| Ok(AxisChannels::new(axis, require(channels, channel)?, None))).collect::<Result<_>>()?
+        map.iter()
+            .map(|(axis, channel)| Ok(AxisChannels::new(axis, require(channels, channel)?, None)))
+            .collect::<Result<_>>()?
     };
     if axes.is_empty() {
-        bail!("no channels named <AXIS>_STEP; map them with --map X=D0,Y=D1 (capture has: {})", channels.join(", "));
+        bail!(
+            "no channels named <AXIS>_STEP; map them with --map X=D0,Y=D1 (capture has: {})",
+            channels.join(", ")
+        );
     }
     for (i, axis) in axes.iter().enumerate() {
-        if axes[..i].iter().any(|a| a.name.eq_ignore_ascii_case(&axis.name)) {
+        if axes[..i]
+            .iter()
+            .any(|a| a.name.eq_ignore_ascii_case(&axis.name))
+        {
             bail!("axis {} is mapped twice", axis.name);
         }
     }
@@ -99,18 +124,31 @@ mod tests {
         let axes = resolve(&channels, &[], &[]).unwrap();
         assert_eq!(
             axes,
-            vec![AxisChannels::new("X", 0, Some(1)), AxisChannels::new("Y", 2, Some(3)), AxisChannels::new("u", 5, None)]
+            vec![
+                AxisChannels::new("X", 0, Some(1)),
+                AxisChannels::new("Y", 2, Some(3)),
+                AxisChannels::new("u", 5, None)
+            ]
         );
     }
 
     #[test]
     fn sigrok_names_need_a_map() {
         let channels = names(&["D0", "D1", "D2", "D3"]);
-        assert!(resolve(&channels, &[], &[]).unwrap_err().to_string().contains("--map"));
+        assert!(resolve(&channels, &[], &[])
+            .unwrap_err()
+            .to_string()
+            .contains("--map"));
         let map = parse_pairs("Y=D1, X=d0").unwrap();
         let dir = parse_pairs("X=D3").unwrap();
         let axes = resolve(&channels, &map, &dir).unwrap();
-        assert_eq!(axes, vec![AxisChannels::new("Y", 1, None), AxisChannels::new("X", 0, Some(3))]);
+        assert_eq!(
+            axes,
+            vec![
+                AxisChannels::new("Y", 1, None),
+                AxisChannels::new("X", 0, Some(3))
+            ]
+        );
         assert!(resolve(&channels, &parse_pairs("X=D9").unwrap(), &[]).is_err());
         assert!(resolve(&channels, &map, &parse_pairs("Z=D2").unwrap()).is_err());
     }

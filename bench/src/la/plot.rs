@@ -37,12 +37,17 @@ pub fn write_png(report: &Report, title: &str, path: &Path) -> Result<()> {
     register();
     let root = BitMapBackend::new(path, (1200, 800)).into_drawing_area();
     draw(report, title, &root).map_err(|e| anyhow!("cannot draw {}: {e}", path.display()))?;
-    root.present().map_err(|e| anyhow!("cannot write {}: {e}", path.display()))?;
+    root.present()
+        .map_err(|e| anyhow!("cannot write {}: {e}", path.display()))?;
     Ok(())
 }
 
 // the two charts, top rate and bottom deviation
-fn draw<DB: DrawingBackend>(report: &Report, title: &str, root: &DrawingArea<DB, plotters::coord::Shift>) -> Result<(), Box<dyn std::error::Error>>
+fn draw<DB: DrawingBackend>(
+    report: &Report,
+    title: &str,
+    root: &DrawingArea<DB, plotters::coord::Shift>,
+) -> Result<(), Box<dyn std::error::Error>>
 where
     DB::ErrorType: 'static,
 {
@@ -52,29 +57,55 @@ where
     let bins = report.series.rate_hz.first().map_or(0, Vec::len);
     let x_end = (bins.max(1) as f64) * report.bin_ms;
 
-    let max_khz = report.axes.iter().map(|a| a.max_rate_hz / 1e3).fold(0.0, f64::max);
+    let max_khz = report
+        .axes
+        .iter()
+        .map(|a| a.max_rate_hz / 1e3)
+        .fold(0.0, f64::max);
     let mut rate = ChartBuilder::on(&top)
         .caption("step rate per axis", ("sans-serif", 18))
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(70)
         .build_cartesian_2d(0.0..x_end, 0.0..(max_khz * 1.1).max(1.0))?;
-    rate.configure_mesh().x_desc("time (ms)").y_desc("rate (kHz)").label_style(("sans-serif", 14)).draw()?;
+    rate.configure_mesh()
+        .x_desc("time (ms)")
+        .y_desc("rate (kHz)")
+        .label_style(("sans-serif", 14))
+        .draw()?;
     for (i, axis) in report.axes.iter().enumerate() {
         let color = PALETTE[i % PALETTE.len()];
         // A bin's rate is drawn at its middle.
-        let points = report.series.rate_hz[i].iter().enumerate().map(|(b, &r)| ((b as f64 + 0.5) * report.bin_ms, r / 1e3));
+        let points = report.series.rate_hz[i]
+            .iter()
+            .enumerate()
+            .map(|(b, &r)| ((b as f64 + 0.5) * report.bin_ms, r / 1e3));
         rate.draw_series(LineSeries::new(points, color.stroke_width(2)))?
             .label(format!("{} ({} steps)", axis.name, axis.steps))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(3)));
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(3))
+            });
     }
-    rate.configure_series_labels().background_style(WHITE.mix(0.85)).border_style(BLACK).label_font(("sans-serif", 14)).draw()?;
+    rate.configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 14))
+        .draw()?;
 
     let deviations = &report.series.deviation_steps;
-    let extent = deviations.iter().flatten().fold(0.5f64, |m, d| m.max(d.abs())) * 1.2;
-    let master = report.master.map_or("none".to_string(), |m| report.axes[m].name.clone());
+    let extent = deviations
+        .iter()
+        .flatten()
+        .fold(0.5f64, |m, d| m.max(d.abs()))
+        * 1.2;
+    let master = report
+        .master
+        .map_or("none".to_string(), |m| report.axes[m].name.clone());
     let mut dev = ChartBuilder::on(&bottom)
-        .caption(format!("slave - ideal (steps), master {master}"), ("sans-serif", 18))
+        .caption(
+            format!("slave - ideal (steps), master {master}"),
+            ("sans-serif", 18),
+        )
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(70)
@@ -91,13 +122,26 @@ where
         }
         let color = PALETTE[i % PALETTE.len()];
         // A bin's deviation is the one at its end.
-        let points = deviations[i].iter().enumerate().map(|(b, &d)| ((b as f64 + 1.0) * report.bin_ms, d));
+        let points = deviations[i]
+            .iter()
+            .enumerate()
+            .map(|(b, &d)| ((b as f64 + 1.0) * report.bin_ms, d));
         dev.draw_series(LineSeries::new(points, color.stroke_width(2)))?
-            .label(format!("{} max {:.2}", axis.name, axis.max_deviation_steps.unwrap_or(0.0)))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(3)));
+            .label(format!(
+                "{} max {:.2}",
+                axis.name,
+                axis.max_deviation_steps.unwrap_or(0.0)
+            ))
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(3))
+            });
     }
     if deviations.iter().any(|d| !d.is_empty()) {
-        dev.configure_series_labels().background_style(WHITE.mix(0.85)).border_style(BLACK).label_font(("sans-serif", 14)).draw()?;
+        dev.configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 14))
+            .draw()?;
     }
     Ok(())
 }

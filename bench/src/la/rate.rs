@@ -32,7 +32,11 @@ impl PeriodStats {
         let delta = x - self.mean;
         self.mean += delta / self.n as f64;
         self.m2 += delta * (x - self.mean);
-        self.min_ps = if self.n == 1 { period_ps } else { self.min_ps.min(period_ps) };
+        self.min_ps = if self.n == 1 {
+            period_ps
+        } else {
+            self.min_ps.min(period_ps)
+        };
         self.max_ps = self.max_ps.max(period_ps);
     }
 
@@ -130,7 +134,9 @@ impl RateBins {
         // Walk backwards so an empty bin can take the period that spans it.
         let mut spanning: Option<u64> = None;
         for i in (0..len).rev() {
-            let Some(bin) = self.bins.get(i) else { continue };
+            let Some(bin) = self.bins.get(i) else {
+                continue;
+            };
             rates[i] = match bin.periods.mean_ps() {
                 Some(mean) => 1e12 / mean,
                 None => spanning.map_or(0.0, |p| 1e12 / p as f64),
@@ -185,7 +191,7 @@ pub fn cruise_bins(rates: &[f64], fraction: f64) -> Option<Range<usize>> {
         match (rate >= floor, start) {
             (true, None) => start = Some(i),
             (false, Some(s)) => {
-                if best.as_ref().map_or(true, |b| i - s > b.len()) {
+                if best.as_ref().is_none_or(|b| i - s > b.len()) {
                     best = Some(s..i);
                 }
                 start = None;
@@ -223,7 +229,10 @@ mod tests {
             bins.rise(t, (t / BIN_PS) as usize);
         }
         let rates = bins.rates_hz(9);
-        assert!(rates[1..].iter().all(|r| (r - 30_000.0).abs() < 0.01), "{rates:?}");
+        assert!(
+            rates[1..].iter().all(|r| (r - 30_000.0).abs() < 0.01),
+            "{rates:?}"
+        );
     }
 
     #[test]
@@ -235,7 +244,10 @@ mod tests {
             bins.rise(t, (t / BIN_PS) as usize);
         }
         let rates = bins.rates_hz(12);
-        assert!(rates[..11].iter().all(|r| (r - 400.0).abs() < 1e-6), "{rates:?}");
+        assert!(
+            rates[..11].iter().all(|r| (r - 400.0).abs() < 1e-6),
+            "{rates:?}"
+        );
         assert_eq!(rates[11], 0.0);
     }
 

@@ -81,14 +81,19 @@ pub struct Series {
 impl Report {
     // true when every requested check passed
     pub fn passed(&self) -> bool {
-        self.expect.as_ref().map_or(true, |e| e.pass)
+        self.expect.as_ref().is_none_or(|e| e.pass)
     }
 
     // "X:Y:Z = 5000:3000:2000 = 5:3:2 exact, cruise 50.0 kHz, ..."
     pub fn summary(&self) -> String {
         let names: Vec<_> = self.axes.iter().map(|a| a.name.as_str()).collect();
         let counts: Vec<_> = self.axes.iter().map(|a| a.steps).collect();
-        let mut line = format!("{} = {} = {}", names.join(":"), join(&counts), join(&self.ratio));
+        let mut line = format!(
+            "{} = {} = {}",
+            names.join(":"),
+            join(&counts),
+            join(&self.ratio)
+        );
         if let Some(expect) = &self.expect {
             if expect.pass {
                 line += " exact";
@@ -100,7 +105,10 @@ impl Report {
             line += &format!(", cruise {}", hz(cruise.rate_hz));
         }
         let min = |f: fn(&AxisReport) -> Option<f64>| {
-            self.axes.iter().filter_map(f).fold(None, |m: Option<f64>, v| Some(m.map_or(v, |m| m.min(v))))
+            self.axes
+                .iter()
+                .filter_map(f)
+                .fold(None, |m: Option<f64>, v| Some(m.map_or(v, |m| m.min(v))))
         };
         line += &format!(", min pulse {}", ns(min(|a| a.min_high_ns)));
         line += &format!(", dir setup {}", ns(min(|a| a.min_dir_setup_ns)));
@@ -113,12 +121,20 @@ impl Report {
 
 // "5:3:2"
 fn join(values: &[u64]) -> String {
-    values.iter().map(u64::to_string).collect::<Vec<_>>().join(":")
+    values
+        .iter()
+        .map(u64::to_string)
+        .collect::<Vec<_>>()
+        .join(":")
 }
 
 // a rate in Hz or kHz
 fn hz(rate: f64) -> String {
-    if rate >= 1000.0 { format!("{:.1} kHz", rate / 1000.0) } else { format!("{rate:.1} Hz") }
+    if rate >= 1000.0 {
+        format!("{:.1} kHz", rate / 1000.0)
+    } else {
+        format!("{rate:.1} Hz")
+    }
 }
 
 // a time in ns, µs or ms, or "-"
@@ -143,8 +159,18 @@ impl fmt::Display for Report {
         writeln!(
             f,
             "{:<6} {:>9} {:>9} {:>5} {:>10} {:>10} {:>9} {:>9} {:>9} {:>9} {:>8} {:>16}",
-            "axis", "steps", "net", "dirs", "max rate", "cruise", "min high", "min low", "setup",
-            "hold", "dev", "jitter σ / p-p"
+            "axis",
+            "steps",
+            "net",
+            "dirs",
+            "max rate",
+            "cruise",
+            "min high",
+            "min low",
+            "setup",
+            "hold",
+            "dev",
+            "jitter σ / p-p"
         )?;
         for (i, a) in self.axes.iter().enumerate() {
             let dev = match a.max_deviation_steps {

@@ -27,12 +27,22 @@ pub struct AxisTrace {
 
 // a coordinated move: the axis with most steps steps every `period_ns` from `start_ns`, the
 // others step at the same instants by Bresenham (accumulator starting at half the master count)
-pub fn dda_move(names: &[&str], counts: &[u64], start_ns: u64, period_ns: u64, width_ns: u64) -> Vec<AxisTrace> {
+pub fn dda_move(
+    names: &[&str],
+    counts: &[u64],
+    start_ns: u64,
+    period_ns: u64,
+    width_ns: u64,
+) -> Vec<AxisTrace> {
     let master = counts.iter().copied().max().unwrap_or(0);
     let mut accumulators = vec![master / 2; counts.len()];
     let mut axes: Vec<AxisTrace> = names
         .iter()
-        .map(|n| AxisTrace { name: n.to_string(), dir_start: true, ..AxisTrace::default() })
+        .map(|n| AxisTrace {
+            name: n.to_string(),
+            dir_start: true,
+            ..AxisTrace::default()
+        })
         .collect();
     for k in 0..master {
         let rise_ns = start_ns + k * period_ns;
@@ -54,7 +64,10 @@ pub fn write_vcd(axes: &[AxisTrace], end_ns: u64, out: impl Write) -> io::Result
     w.add_module("ddastep")?;
     let mut ids: Vec<(IdCode, IdCode)> = Vec::new();
     for axis in axes {
-        ids.push((w.add_wire(1, &format!("{}_STEP", axis.name))?, w.add_wire(1, &format!("{}_DIR", axis.name))?));
+        ids.push((
+            w.add_wire(1, &format!("{}_STEP", axis.name))?,
+            w.add_wire(1, &format!("{}_DIR", axis.name))?,
+        ));
     }
     let enable = w.add_wire(1, "EN")?;
     w.upscope()?;

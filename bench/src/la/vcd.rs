@@ -90,7 +90,11 @@ impl<R: BufRead> VcdReader<R> {
     pub fn new(reader: R) -> Result<Self> {
         let mut me = Self {
             tokens: Tokens { reader, line: 0 },
-            info: CaptureInfo { format: Format::Vcd, channels: Vec::new(), sample_rate_hz: None },
+            info: CaptureInfo {
+                format: Format::Vcd,
+                channels: Vec::new(),
+                sample_rate_hz: None,
+            },
             unit_fs: 1_000_000,
             short_ids: vec![None; 128],
             long_ids: HashMap::new(),
@@ -108,24 +112,32 @@ impl<R: BufRead> VcdReader<R> {
                 b"$timescale" => me.unit_fs = parse_timescale(&me.tokens.until_end(&mut token)?)?,
                 b"$var" => {
                     let decl = me.tokens.until_end(&mut token)?;
-                    me.declare(&decl).with_context(|| format!("line {}: $var {decl}", me.tokens.line + 1))?;
+                    me.declare(&decl)
+                        .with_context(|| format!("line {}: $var {decl}", me.tokens.line + 1))?;
                 }
                 // sigrok-cli puts "META samplerate: N" first when converting a file.
                 b"META" => {
                     let key = me.tokens.next(&mut token).map(|_| token.clone())?;
                     me.tokens.next(&mut token)?;
                     if key == b"samplerate:" {
-                        me.info.sample_rate_hz = std::str::from_utf8(&token).ok().and_then(|v| v.parse().ok());
+                        me.info.sample_rate_hz = std::str::from_utf8(&token)
+                            .ok()
+                            .and_then(|v| v.parse().ok());
                     }
                 }
                 b"$comment" => {
                     let text = me.tokens.until_end(&mut token)?;
-                    me.info.sample_rate_hz = me.info.sample_rate_hz.or_else(|| sigrok_sample_rate(&text));
+                    me.info.sample_rate_hz =
+                        me.info.sample_rate_hz.or_else(|| sigrok_sample_rate(&text));
                 }
                 t if t.starts_with(b"$") => {
                     me.tokens.until_end(&mut token)?;
                 }
-                t => bail!("line {}: unexpected {:?} in VCD header", me.tokens.line + 1, String::from_utf8_lossy(t)),
+                t => bail!(
+                    "line {}: unexpected {:?} in VCD header",
+                    me.tokens.line + 1,
+                    String::from_utf8_lossy(t)
+                ),
             }
         }
         if me.info.channels.is_empty() {
@@ -142,19 +154,30 @@ impl<R: BufRead> VcdReader<R> {
     // add the channels of one `$var type width id name [range]` declaration
     fn declare(&mut self, decl: &str) -> Result<()> {
         let fields: Vec<&str> = decl.split_whitespace().collect();
-        let [_kind, width, id, name, rest @ ..] = fields.as_slice() else { bail!("too few fields") };
+        let [_kind, width, id, name, rest @ ..] = fields.as_slice() else {
+            bail!("too few fields")
+        };
         let width: usize = width.parse().map_err(|_| anyhow!("bad width {width:?}"))?;
         if width == 0 {
             bail!("zero width");
         }
-        let var = Var { first: self.info.channels.len(), width };
+        let var = Var {
+            first: self.info.channels.len(),
+            width,
+        };
         let range = rest.first().filter(|r| r.starts_with('['));
         if width == 1 {
-            self.info.channels.push(format!("{name}{}", range.copied().unwrap_or("")));
+            self.info
+                .channels
+                .push(format!("{name}{}", range.copied().unwrap_or("")));
         } else {
             let (base, lsb, ascending) = bit_names(name, range.copied());
             for bit in 0..width {
-                let index = if ascending { lsb + bit } else { lsb.saturating_sub(bit) };
+                let index = if ascending {
+                    lsb + bit
+                } else {
+                    lsb.saturating_sub(bit)
+                };
                 self.info.channels.push(format!("{base}[{index}]"));
             }
         }
@@ -177,7 +200,11 @@ impl<R: BufRead> VcdReader<R> {
             _ => self.long_ids.get(id).copied(),
         };
         var.ok_or_else(|| {
-            anyhow!("line {}: unknown identifier code {:?}", self.tokens.line + 1, String::from_utf8_lossy(id))
+            anyhow!(
+                "line {}: unknown identifier code {:?}",
+                self.tokens.line + 1,
+                String::from_utf8_lossy(id)
+            )
         })
     }
 
@@ -193,7 +220,12 @@ impl<R: BufRead> VcdReader<R> {
                     let raw: u64 = std::str::from_utf8(&token[1..])
                         .ok()
                         .and_then(|s| s.parse().ok())
-                        .ok_or_else(|| anyhow!("line {line}: bad time {:?}", String::from_utf8_lossy(&token)))?;
+                        .ok_or_else(|| {
+                            anyhow!(
+                                "line {line}: bad time {:?}",
+                                String::from_utf8_lossy(&token)
+                            )
+                        })?;
                     let ps = u64::try_from((raw as u128 * self.unit_fs + 500) / 1000)
                         .map_err(|_| anyhow!("line {line}: time {raw} overflows"))?;
                     if now.is_some_and(|n| ps < n) {
@@ -217,7 +249,8 @@ impl<R: BufRead> VcdReader<R> {
                         bail!("line {line}: vector value without identifier");
                     }
                     let var = self.lookup(&id)?;
-                    apply_bits(&token[1..], var, time, sink).with_context(|| format!("line {line}"))?;
+                    apply_bits(&token[1..], var, time, sink)
+                        .with_context(|| format!("line {line}"))?;
                 }
                 b'r' | b'R' | b's' | b'S' => {
                     self.tokens.next(&mut id)?;
@@ -228,7 +261,10 @@ impl<R: BufRead> VcdReader<R> {
                         self.tokens.until_end(&mut id)?;
                     }
                 },
-                _ => bail!("line {line}: unexpected {:?}", String::from_utf8_lossy(&token)),
+                _ => bail!(
+                    "line {line}: unexpected {:?}",
+                    String::from_utf8_lossy(&token)
+                ),
             }
         }
         Ok(now.unwrap_or(0))
@@ -238,12 +274,20 @@ impl<R: BufRead> VcdReader<R> {
 // report the bits of a vector value, least significant last in the text
 fn apply_bits(bits: &[u8], var: Var, time_ps: u64, sink: &mut impl Sink) -> Result<()> {
     if bits.is_empty() || bits.len() > var.width {
-        bail!("vector value of {} bits for a {}-bit signal", bits.len(), var.width);
+        bail!(
+            "vector value of {} bits for a {}-bit signal",
+            bits.len(),
+            var.width
+        );
     }
     // Shorter values are left-extended with 0, or with x/z when they start with x/z.
     let pad = if bits[0] == b'1' { b'0' } else { bits[0] };
     for bit in 0..var.width {
-        let c = if bit < bits.len() { bits[bits.len() - 1 - bit] } else { pad };
+        let c = if bit < bits.len() {
+            bits[bits.len() - 1 - bit]
+        } else {
+            pad
+        };
         match c {
             b'0' | b'1' => sink.level(time_ps, var.first + bit, c == b'1'),
             b'x' | b'X' | b'z' | b'Z' => {}
@@ -260,7 +304,11 @@ fn bit_names<'a>(name: &'a str, range: Option<&'a str>) -> (&'a str, usize, bool
         (None, Some(i)) => (&name[..i], &name[i..]),
         (None, None) => return (name, 0, true),
     };
-    let bounds: Vec<usize> = range.trim_matches(['[', ']']).split(':').filter_map(|s| s.parse().ok()).collect();
+    let bounds: Vec<usize> = range
+        .trim_matches(['[', ']'])
+        .split(':')
+        .filter_map(|s| s.parse().ok())
+        .collect();
     match bounds.as_slice() {
         // `[7:0]`: bit 0 is index 0; `[0:7]`: bit 0 is index 7.
         [msb, lsb] => (base, *lsb, msb >= lsb),
@@ -272,7 +320,9 @@ fn bit_names<'a>(name: &'a str, range: Option<&'a str>) -> (&'a str, usize, bool
 pub fn parse_timescale(text: &str) -> Result<u128> {
     let text: String = text.split_whitespace().collect();
     let digits = text.chars().take_while(char::is_ascii_digit).count();
-    let number: u128 = text[..digits].parse().map_err(|_| anyhow!("bad $timescale {text:?}"))?;
+    let number: u128 = text[..digits]
+        .parse()
+        .map_err(|_| anyhow!("bad $timescale {text:?}"))?;
     let unit: u128 = match &text[digits..] {
         "s" => 1_000_000_000_000_000,
         "ms" => 1_000_000_000_000,
