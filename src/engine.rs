@@ -30,6 +30,7 @@ use crate::board::PinMap;
 use crate::interp::Dda;
 use crate::queue::{Move, Shared, State};
 use crate::ramp::{Period, RampSlot, RAMP_LEN};
+use crate::timing::Timing;
 use crate::TICKS_PER_MS;
 
 /// Longest timer period one tick can set (ARR is 16 bits).
@@ -389,7 +390,10 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
         self.cruise = mv.cruise;
         let profile = self.ramp.profile();
         self.cruise_idx = profile.ramp.cruise_index(mv.cruise);
-        let t = profile.timing;
+        let t = match profile.timing {
+            Timing::UNSET => Timing::DEFAULT,
+            t => t,
+        };
         self.min_period = Period::from_bits(t.min_period_ticks.saturating_mul(16));
         self.dir_setup = t.dir_setup_ticks.max(t.min_period_ticks);
         self.idx = 0;

@@ -260,12 +260,13 @@ pub struct Profile<const L: usize = RAMP_LEN> {
 /// without locks: the writer asks, the engine parks between moves, the writer rebuilds.
 ///
 /// Protocol: [`RampSlot::try_write`] raises `writer`; the engine, which reads the table only
-/// while a move runs, sees the flag when it would load the next move, sets `parked` and loads
-/// nothing; once parked the writer gets the table, and dropping the guard lowers `writer`.
+/// while a move runs, sees the flag when it would load the next move, clears `reading` and
+/// loads nothing; once it is not reading the writer gets the table, and dropping the guard
+/// lowers `writer`. (Both flags start false, so the slot lives in .bss, not 4 KiB of .data.)
 pub struct RampSlot<const L: usize = RAMP_LEN> {
     table: UnsafeCell<Profile<L>>,
     writer: AtomicBool,
-    parked: AtomicBool,
+    reading: AtomicBool,
 }
 
 // SAFETY: the table is read only by the engine while `writer` is low (checked before each
@@ -282,9 +283,10 @@ impl<const L: usize> RampSlot<L> {
     /// An empty slot; the engine starts parked, so the first write needs no handshake.
     pub const fn new() -> Self {
         RampSlot {
-            table: UnsafeCell::new(Profile { ramp: RampTable::new(), timing: Timing::DEFAULT }),
+            // Zero timing keeps the slot in .bss; the engine reads it as `Timing::DEFAULT`.
+            table: UnsafeCell::new(Profile { ramp: RampTable::new(), timing: Timing::UNSET }),
             writer: AtomicBool::new(false),
-            parked: AtomicBool::new(true),
+            reading: AtomicBool::new(false),
         }
     }
 
@@ -292,7 +294,7 @@ impl<const L: usize> RampSlot<L> {
     /// `None` (try again after the running move ends).
     pub fn try_write(&self) -> Option<RampWriteGuard<'_, L>> {
         self.writer.store(true, Ordering::SeqCst);
-        if self.parked.load(Ordering::SeqCst) {
+        if !self.reading.load(Ordering::SeqCst) {
             Some(RampWriteGuard { slot: self })
         } else {
             None
@@ -303,10 +305,10 @@ impl<const L: usize> RampSlot<L> {
     #[inline]
     pub(crate) fn enter(&self) -> bool {
         if self.writer.load(Ordering::SeqCst) {
-            self.parked.store(true, Ordering::SeqCst);
+            self.reading.store(false, Ordering::SeqCst);
             false
         } else {
-            self.parked.store(false, Ordering::SeqCst);
+            self.reading.store(true, Ordering::SeqCst);
             true
         }
     }

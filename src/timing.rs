@@ -51,6 +51,9 @@ impl Timing {
     /// [`crate::timing`] until settings say otherwise.
     pub const DEFAULT: Timing = Timing::new(216, 360, 144);
 
+    /// All zero: "not set yet"; the engine uses [`Timing::DEFAULT`] in its place.
+    pub const UNSET: Timing = Timing { pulse_ticks: 0, dir_setup_ticks: 0, min_period_ticks: 0 };
+
     /// Timing from its parts (ticks); the shortest period is never below twice the pulse.
     pub const fn new(pulse_ticks: u32, dir_setup_ticks: u32, min_period_ticks: u32) -> Self {
         let floor = 2 * pulse_ticks;

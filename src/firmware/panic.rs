@@ -1,0 +1,33 @@
+//! Panic and fault handling: drivers off, step pins low, then stop.
+
+use core::panic::PanicInfo;
+
+use ddastep::board;
+
+/// Disables the drivers (EN high) and drives every step pin low: one BSRR store.
+fn safe_outputs() {
+    let mut word = 1u32 << board::ENABLE_PIN;
+    for p in board::STEP_PINS {
+        word |= 1 << (p + 16);
+    }
+    super::hw::gpiob().bsrr().write(|w| unsafe { w.bits(word) });
+}
+
+#[panic_handler]
+fn panic(info: &PanicInfo) -> ! {
+    cortex_m::interrupt::disable();
+    safe_outputs();
+    defmt::error!("panic: {}", defmt::Display2Format(info));
+    loop {
+        core::hint::spin_loop();
+    }
+}
+
+#[cortex_m_rt::exception]
+unsafe fn HardFault(_ef: &cortex_m_rt::ExceptionFrame) -> ! {
+    safe_outputs();
+    defmt::error!("hard fault");
+    loop {
+        core::hint::spin_loop();
+    }
+}

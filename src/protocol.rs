@@ -1,0 +1,276 @@
+//! Grbl 1.1 wire format: realtime bytes, the line assembler, error codes and the byte sink that
+//! replies go to.
+//!
+//! Who uses it: the firmware's USART RX interrupt calls [`realtime`] on every byte and keeps the
+//! others for [`crate::controller::Controller::byte`]; the controller uses the rest.
+//!
+//! Flow control is Grbl's character counting: a sender keeps at most 128 unacknowledged bytes in
+//! flight and counts one `ok`/`error:N` per line, so every line (also an empty one, and `\r\n`
+//! counted as one ending) gets exactly one reply, sent only once the line has been acted on.
+
+/// Longest line kept (after whitespace and comments are stripped); Grbl keeps 80.
+pub const LINE_LEN: usize = 128;
+/// RX buffer size we announce in `$I` (the firmware's ring must hold at least this many bytes).
+pub const RX_BUFFER_LEN: usize = 128;
+
+/// A realtime command: acted on in the RX interrupt, never part of a line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Realtime {
+    /// `?`: status report ([`crate::controller::Controller::status_request`]).
+    Status,
+    /// `!`: feed hold (`Shared::set_hold(true)`).
+    Hold,
+    /// `~`: cycle start / resume (`Shared::set_hold(false)`).
+    Resume,
+    /// Ctrl-X (0x18): soft reset ([`crate::controller::Controller::soft_reset`]).
+    Reset,
+    /// Grbl's extended realtime bytes (0x80..=0xFF: overrides, jog cancel, door): ignored.
+    Extended(u8),
+}
+
+/// Classifies one received byte: `Some` for a realtime command, `None` for a line byte.
+pub const fn realtime(b: u8) -> Option<Realtime> {
+    match b {
+        b'?' => Some(Realtime::Status),
+        b'!' => Some(Realtime::Hold),
+        b'~' => Some(Realtime::Resume),
+        0x18 => Some(Realtime::Reset),
+        0x80..=0xFF => Some(Realtime::Extended(b)),
+        _ => None,
+    }
+}
+
+/// Grbl 1.1 error codes (`error:N`), numbered as in Grbl's `doc/csv/error_codes_en_US.csv`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+pub enum Error {
+    /// A word without its letter (or a byte that is no letter).
+    ExpectedCommandLetter = 1,
+    /// Missing or malformed number (also: more than 15 significant digits).
+    BadNumberFormat = 2,
+    /// Unknown or malformed `$` command, or a setting value out of range.
+    InvalidStatement = 3,
+    /// Negative value where only positive ones make sense.
+    NegativeValue = 4,
+    /// Homing is not enabled (we have no homing yet).
+    SettingDisabled = 5,
+    /// Step pulse shorter than the minimum (1 µs here; Grbl says 3 µs).
+    StepPulseMin = 6,
+    /// `$` command that needs the machine idle.
+    NotIdle = 8,
+    /// G-code locked out in alarm state (`$X` unlocks).
+    AlarmLock = 9,
+    /// Soft limits need homing.
+    SoftLimitNeedsHoming = 10,
+    /// Line longer than [`LINE_LEN`].
+    LineOverflow = 11,
+    /// G/M code or word we do not support.
+    UnsupportedCommand = 20,
+    /// Two commands of one modal group in a block.
+    ModalGroupViolation = 21,
+    /// G1 without a feed rate.
+    UndefinedFeedRate = 22,
+    /// G/M command needs an integer value.
+    CommandValueNotInteger = 23,
+    /// Two commands that both use the axis words.
+    AxisCommandConflict = 24,
+    /// A word given twice in a block.
+    WordRepeated = 25,
+    /// A command that needs axis words has none.
+    NoAxisWords = 26,
+    /// Line number out of range.
+    InvalidLineNumber = 27,
+    /// A command misses its value word (G4 without P).
+    ValueWordMissing = 28,
+    /// Axis words with no command to use them.
+    AxisWordsExist = 31,
+    /// Target out of range (beyond ±1e6 mm or ±(2^31 - 1) steps).
+    InvalidTarget = 33,
+    /// Value words no command uses.
+    UnusedWords = 36,
+}
+
+/// Where replies go: a bounded buffer that drops what does not fit (never blocks, never
+/// panics). Replies are short, so a full TX ring only truncates a report.
+pub trait Out {
+    /// Writes as many of `bytes` as fit.
+    fn put(&mut self, bytes: &[u8]);
+}
+
+impl<const C: usize> Out for heapless::Vec<u8, C> {
+    fn put(&mut self, bytes: &[u8]) {
+        let n = bytes.len().min(C - self.len());
+        let _ = self.extend_from_slice(&bytes[..n]);
+    }
+}
+
+impl Out for heapless::spsc::Producer<'_, u8> {
+    fn put(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            if self.enqueue(b).is_err() {
+                break;
+            }
+        }
+    }
+}
+
+/// Writes `ok`.
+pub fn put_ok(out: &mut impl Out) {
+    out.put(b"ok\r\n");
+}
+
+/// Writes `error:N`.
+pub fn put_error(out: &mut impl Out, e: Error) {
+    out.put(b"error:");
+    put_u32(out, e as u32);
+    out.put(b"\r\n");
+}
+
+/// Writes an unsigned decimal.
+pub fn put_u32(out: &mut impl Out, v: u32) {
+    put_u64(out, v as u64);
+}
+
+/// Writes an unsigned decimal.
+pub fn put_u64(out: &mut impl Out, mut v: u64) {
+    let mut buf = [0u8; 20];
+    let mut i = buf.len();
+    loop {
+        i -= 1;
+        buf[i] = b'0' + (v % 10) as u8;
+        v /= 10;
+        if v == 0 {
+            break;
+        }
+    }
+    out.put(&buf[i..]);
+}
+
+/// Writes `x` rounded to `decimals` places (0..=3), e.g. `-1.250`. Non-finite values and
+/// magnitudes beyond 1e15 are written as 0 (reports only; never reached by settings).
+pub fn put_fixed(out: &mut impl Out, x: f64, decimals: u32) {
+    let scale = 10u64.pow(decimals.min(3));
+    let scaled = libm::round(x * scale as f64);
+    let scaled = if scaled.is_finite() && libm::fabs(scaled) < 1e15 { scaled as i64 } else { 0 };
+    if scaled < 0 {
+        out.put(b"-");
+    }
+    let a = scaled.unsigned_abs();
+    put_u64(out, a / scale);
+    if decimals > 0 {
+        out.put(b".");
+        let frac = a % scale;
+        let mut div = scale / 10;
+        while div > 0 {
+            out.put(&[b'0' + (frac / div % 10) as u8]);
+            div /= 10;
+        }
+    }
+}
+
+/// What one received byte completed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LineEvent {
+    /// Nothing yet.
+    More,
+    /// A line of this many bytes is ready in [`LineBuf::line`] (0: empty line).
+    Line(usize),
+    /// The line ended but cannot run (too long, or a byte that is not printable ASCII).
+    Bad(Error),
+}
+
+/// Assembles lines the way Grbl does: whitespace and control bytes dropped, `( … )` and
+/// `; …` comments stripped, `/` (block delete) ignored, letters upper-cased; `\r`, `\n` and
+/// `\r\n` each end one line.
+pub struct LineBuf {
+    buf: [u8; LINE_LEN],
+    len: usize,
+    overflow: bool,
+    bad: bool,
+    paren: bool,
+    semicolon: bool,
+    after_cr: bool,
+    ended: bool,
+}
+
+impl Default for LineBuf {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl LineBuf {
+    pub const fn new() -> Self {
+        LineBuf {
+            buf: [0; LINE_LEN],
+            len: 0,
+            overflow: false,
+            bad: false,
+            paren: false,
+            semicolon: false,
+            after_cr: false,
+            ended: false,
+        }
+    }
+
+    /// Takes one byte (not a realtime one).
+    pub fn push(&mut self, b: u8) -> LineEvent {
+        if self.ended {
+            self.reset_flags();
+        }
+        let after_cr = core::mem::replace(&mut self.after_cr, b == b'\r');
+        if b == b'\n' && after_cr {
+            return LineEvent::More; // second half of "\r\n"
+        }
+        if b == b'\n' || b == b'\r' {
+            let ev = if self.overflow {
+                LineEvent::Bad(Error::LineOverflow)
+            } else if self.bad {
+                LineEvent::Bad(Error::ExpectedCommandLetter)
+            } else {
+                LineEvent::Line(self.len)
+            };
+            self.ended = true;
+            return ev;
+        }
+        if self.semicolon {
+            return LineEvent::More;
+        }
+        if self.paren {
+            self.paren = b != b')';
+            return LineEvent::More;
+        }
+        match b {
+            0..=b' ' | b'/' => {}
+            b'(' => self.paren = true,
+            b';' => self.semicolon = true,
+            0x7F..=0xFF => self.bad = true,
+            _ if self.len == LINE_LEN => self.overflow = true,
+            _ => {
+                self.buf[self.len] = b.to_ascii_uppercase();
+                self.len += 1;
+            }
+        }
+        LineEvent::More
+    }
+
+    /// The line just completed (valid until the next [`Self::push`]).
+    pub fn line(&self) -> &[u8] {
+        &self.buf[..self.len]
+    }
+
+    /// Drops any partial line (soft reset). A `\n` right after is still one empty line.
+    pub fn clear(&mut self) {
+        self.reset_flags();
+        self.after_cr = false;
+    }
+
+    fn reset_flags(&mut self) {
+        self.len = 0;
+        self.overflow = false;
+        self.bad = false;
+        self.paren = false;
+        self.semicolon = false;
+        self.ended = false;
+    }
+}

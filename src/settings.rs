@@ -1,0 +1,494 @@
+//! Grbl-numbered settings (`$N=value`), their flash image, and what the engine derives from
+//! them: the step [`Timing`] and the ramp table.
+//!
+//! Who uses it: the controller (`$$`, `$N=`), the firmware shell (flash load/save via
+//! [`Settings::from_bytes`] / [`Settings::to_bytes`]).
+//!
+//! One ramp table serves every move, so its acceleration is the smallest axis limit in master
+//! steps/s² (`min_i $120+i × $100+i`): a slave has at most the master's steps, so it never
+//! accelerates faster than its own limit. Its top is the fastest axis limit in steps/s
+//! (`max_i $110+i × $100+i / 60`), capped by the timing's fastest rate and by what fits in the
+//! table's 1.024 s.
+
+use crate::protocol::Error;
+use crate::ramp::{Profile, RampConfig, RampError, Shape, MAX_RATE_HZ};
+use crate::timing::{ns_to_ticks, Timing};
+use crate::MAX_AXES;
+
+/// Bytes of the flash image.
+pub const SETTINGS_LEN: usize = 140;
+const MAGIC: u8 = 0xD5;
+const VERSION: u8 = 1;
+/// Shortest step period the step interrupt sustains (ticks): the interrupt floor that
+/// `Timing::DEFAULT` is built with (144 ticks = 2 µs, 500 kHz), before the 2 × pulse rule.
+pub const ISR_FLOOR_TICKS: u32 = 144;
+
+/// Setting numbers of our own (free in Grbl 1.1, which uses 0-6, 10-13, 20-27, 30-32, 100+).
+pub const DIR_SETUP: u16 = 29; // grblHAL's number for the direction-to-step delay
+pub const RAMP_START: u16 = 40;
+pub const RAMP_SHAPE: u16 = 41;
+
+/// Grbl settings we report but do not implement, with the only value they accept.
+const FIXED: [(u16, f32, u8); 15] = [
+    (10, 1.0, 0),    // status report mask: MPos
+    (11, 0.010, 3),  // junction deviation: every move stops (no look-ahead)
+    (12, 0.002, 3),  // arc tolerance: no arcs
+    (13, 0.0, 0),    // report inches: no
+    (20, 0.0, 0),    // soft limits: not implemented
+    (21, 0.0, 0),    // hard limits: not implemented
+    (22, 0.0, 0),    // homing: not implemented
+    (23, 0.0, 0),    // homing direction mask
+    (24, 25.0, 3),   // homing feed
+    (25, 500.0, 3),  // homing seek
+    (26, 250.0, 0),  // homing debounce
+    (27, 1.0, 3),    // homing pull-off
+    (30, 1000.0, 0), // spindle max: no spindle
+    (31, 0.0, 0),    // spindle min
+    (32, 0.0, 0),    // laser mode
+];
+
+/// Persistent settings. Axis arrays are indexed X Y Z A B C U; only the firmware's first N
+/// axes are reported and used.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Settings {
+    /// `$0` step pulse width, µs (1..=100).
+    pub pulse_us: f32,
+    /// `$1` step idle delay, ms: drivers are disabled this long after motion stops; 255 keeps
+    /// them enabled.
+    pub idle_delay_ms: u8,
+    /// `$2` step pulse invert mask (bit i = axis i).
+    pub step_invert: u8,
+    /// `$3` direction invert mask.
+    pub dir_invert: u8,
+    /// `$4` enable pin invert (the board's enable is active low).
+    pub enable_invert: bool,
+    /// `$5` limit pins invert (stored only: no limit inputs yet).
+    pub limit_invert: bool,
+    /// `$6` probe pin invert (stored only).
+    pub probe_invert: bool,
+    /// `$29` direction setup before the next step edge, µs (0..=1000).
+    pub dir_setup_us: f32,
+    /// `$40` ramp start rate v0, master steps/s.
+    pub ramp_start_hz: u32,
+    /// `$41` ramp shape: 0 trapezoid, 1 S-curve.
+    pub shape: Shape,
+    /// `$100+i` steps per unit (mm, or degree on rotary axes).
+    pub steps_per_mm: [f32; MAX_AXES],
+    /// `$110+i` max rate, unit/min.
+    pub max_rate: [f32; MAX_AXES],
+    /// `$120+i` acceleration, unit/s².
+    pub accel: [f32; MAX_AXES],
+    /// `$130+i` max travel, unit (stored only: no soft limits).
+    pub max_travel: [f32; MAX_AXES],
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// What one accepted `$N=value` changed, so the caller knows what to redo.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Change {
+    /// Nothing (a fixed setting written with its own value).
+    None,
+    /// Only the firmware shell's view (idle delay, enable invert, stored-only settings).
+    Shell,
+    /// Timing or ramp: the profile must be rebuilt.
+    Profile,
+    /// `$2`/`$3`: the engine's pin map, fixed when the engine is built.
+    Pins,
+}
+
+/// The ramp the profile was built with, for `$I` and the planner's clamp.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Ramped {
+    pub cfg: RampConfig,
+    /// Fastest master rate the timing allows.
+    pub max_rate_hz: u32,
+    /// The axis limits asked for a faster top than fits in the table.
+    pub table_limited: bool,
+}
+
+impl Settings {
+    /// Defaults for the seed paper's bench: 100 steps/mm, 36 000 mm/min (60 kHz) and
+    /// 10 000 mm/s² (10⁶ steps/s², 50 kHz in 49 ms) on every axis; 3 µs pulses and 5 µs
+    /// direction setup (TB6600-safe); trapezoid from 1 kHz.
+    pub const DEFAULT: Settings = Settings {
+        pulse_us: 3.0,
+        idle_delay_ms: 25,
+        step_invert: 0,
+        dir_invert: 0,
+        enable_invert: false,
+        limit_invert: false,
+        probe_invert: false,
+        dir_setup_us: 5.0,
+        ramp_start_hz: 1000,
+        shape: Shape::Trapezoid,
+        steps_per_mm: [100.0; MAX_AXES],
+        max_rate: [36_000.0; MAX_AXES],
+        accel: [10_000.0; MAX_AXES],
+        max_travel: [1000.0; MAX_AXES],
+    };
+
+    /// Setting numbers in `$$` order for `axes` axes.
+    pub fn ids(axes: usize) -> impl Iterator<Item = u16> {
+        let axes = axes.min(MAX_AXES) as u16;
+        [0u16, 1, 2, 3, 4, 5, 6]
+            .into_iter()
+            .chain(FIXED.iter().map(|f| f.0).take_while(|&n| n < 30))
+            .chain([DIR_SETUP])
+            .chain(FIXED.iter().map(|f| f.0).skip_while(|&n| n < 30))
+            .chain([RAMP_START, RAMP_SHAPE])
+            .chain((0..4u16).flat_map(move |g| (0..axes).map(move |i| 100 + 10 * g + i)))
+    }
+
+    /// Value of setting `id` and its decimals for `$$`, if it exists for `axes` axes.
+    pub fn get(&self, id: u16, axes: usize) -> Option<(f64, u32)> {
+        let v = match id {
+            0 => (self.pulse_us as f64, 3),
+            1 => (self.idle_delay_ms as f64, 0),
+            2 => (self.step_invert as f64, 0),
+            3 => (self.dir_invert as f64, 0),
+            4 => (self.enable_invert as u8 as f64, 0),
+            5 => (self.limit_invert as u8 as f64, 0),
+            6 => (self.probe_invert as u8 as f64, 0),
+            DIR_SETUP => (self.dir_setup_us as f64, 3),
+            RAMP_START => (self.ramp_start_hz as f64, 0),
+            RAMP_SHAPE => ((self.shape == Shape::SCurve) as u8 as f64, 0),
+            100..=139 => {
+                let (g, i) = ((id - 100) / 10, (id % 10) as usize);
+                if i >= axes.min(MAX_AXES) {
+                    return None;
+                }
+                let arr = [&self.steps_per_mm, &self.max_rate, &self.accel, &self.max_travel];
+                (arr[g as usize][i] as f64, 3)
+            }
+            _ => {
+                let f = FIXED.iter().find(|f| f.0 == id)?;
+                (f.1 as f64, f.2 as u32)
+            }
+        };
+        Some(v)
+    }
+
+    /// `$id=value`: checks and stores one setting (Grbl's rules: negative values refused,
+    /// masks and flags truncated to integers).
+    pub fn set(&mut self, id: u16, value: f64, axes: usize) -> Result<Change, Error> {
+        if !value.is_finite() {
+            return Err(Error::BadNumberFormat);
+        }
+        if value < 0.0 {
+            return Err(Error::NegativeValue);
+        }
+        let int = libm::trunc(value);
+        let byte = || if int <= 255.0 { Ok(int as u8) } else { Err(Error::InvalidStatement) };
+        let range = |lo: f64, hi: f64| {
+            if (lo..=hi).contains(&value) {
+                Ok(value as f32)
+            } else {
+                Err(Error::InvalidStatement)
+            }
+        };
+        match id {
+            0 => {
+                if value < 1.0 {
+                    return Err(Error::StepPulseMin);
+                }
+                self.pulse_us = range(1.0, 100.0)?;
+                Ok(Change::Profile)
+            }
+            1 => {
+                self.idle_delay_ms = byte()?;
+                Ok(Change::Shell)
+            }
+            2 => {
+                self.step_invert = byte()?;
+                Ok(Change::Pins)
+            }
+            3 => {
+                self.dir_invert = byte()?;
+                Ok(Change::Pins)
+            }
+            4 => {
+                self.enable_invert = int != 0.0;
+                Ok(Change::Shell)
+            }
+            5 => {
+                self.limit_invert = int != 0.0;
+                Ok(Change::Shell)
+            }
+            6 => {
+                self.probe_invert = int != 0.0;
+                Ok(Change::Shell)
+            }
+            DIR_SETUP => {
+                self.dir_setup_us = range(0.0, 1000.0)?;
+                Ok(Change::Profile)
+            }
+            RAMP_START => {
+                self.ramp_start_hz = range(1.0, MAX_RATE_HZ as f64)? as u32;
+                Ok(Change::Profile)
+            }
+            RAMP_SHAPE => {
+                self.shape = match int as u32 {
+                    0 => Shape::Trapezoid,
+                    1 => Shape::SCurve,
+                    _ => return Err(Error::InvalidStatement),
+                };
+                Ok(Change::Profile)
+            }
+            100..=139 => {
+                let (g, i) = ((id - 100) / 10, (id % 10) as usize);
+                if i >= axes.min(MAX_AXES) {
+                    return Err(Error::InvalidStatement);
+                }
+                let (arr, v) = match g {
+                    0 => (&mut self.steps_per_mm, range(1e-3, 1e5)?),
+                    1 => (&mut self.max_rate, range(1e-3, 1e8)?),
+                    2 => (&mut self.accel, range(1e-3, 1e8)?),
+                    _ => (&mut self.max_travel, range(0.0, 1e6)?),
+                };
+                arr[i] = v;
+                Ok(if g == 3 { Change::Shell } else { Change::Profile })
+            }
+            _ => {
+                let f = FIXED.iter().find(|f| f.0 == id).ok_or(Error::InvalidStatement)?;
+                if libm::fabs(value - f.1 as f64) < 1e-6 {
+                    Ok(Change::None)
+                } else if id == 20 {
+                    Err(Error::SoftLimitNeedsHoming)
+                } else {
+                    Err(Error::InvalidStatement)
+                }
+            }
+        }
+    }
+
+    /// True when every field is in the range [`Self::set`] accepts.
+    pub fn is_valid(&self) -> bool {
+        let mut probe = *self;
+        let mut ok = true;
+        for id in Self::ids(MAX_AXES) {
+            if let Some((v, _)) = self.get(id, MAX_AXES) {
+                ok &= probe.set(id, v, MAX_AXES).is_ok();
+            }
+        }
+        ok && probe == *self
+    }
+
+    /// Step timing in timer ticks.
+    pub fn timing(&self) -> Timing {
+        let pulse = ns_to_ticks(libm::roundf(self.pulse_us * 1000.0) as u32);
+        let dir = ns_to_ticks(libm::roundf(self.dir_setup_us * 1000.0) as u32);
+        Timing::new(pulse, dir, ISR_FLOOR_TICKS)
+    }
+
+    /// The ramp asked for by the first `axes` axes (before the table's length is considered).
+    pub fn ramp_config(&self, axes: usize, timing: &Timing) -> RampConfig {
+        let axes = axes.clamp(1, MAX_AXES);
+        let mut accel = f64::MAX;
+        let mut top = 0.0f64;
+        for i in 0..axes {
+            let spm = self.steps_per_mm[i] as f64;
+            accel = accel.min(self.accel[i] as f64 * spm);
+            top = top.max(self.max_rate[i] as f64 * spm / 60.0);
+        }
+        let vmax = (top as u32).clamp(1, timing.max_rate_hz());
+        RampConfig {
+            v0: self.ramp_start_hz.clamp(1, vmax),
+            vmax,
+            accel: (accel as u32).max(1),
+            shape: self.shape,
+        }
+    }
+
+    /// Rebuilds `profile` (table and timing) for `axes` axes. A ramp too long for the table is
+    /// rebuilt with the fastest top that fits.
+    pub fn build_profile<const L: usize>(&self, axes: usize, profile: &mut Profile<L>) -> Ramped {
+        let timing = self.timing();
+        let mut cfg = self.ramp_config(axes, &timing);
+        let mut table_limited = false;
+        profile.timing = timing;
+        for _ in 0..4 {
+            match profile.ramp.build(cfg) {
+                Err(RampError::TooLong { reachable_vmax }) => {
+                    table_limited = true;
+                    cfg.vmax = reachable_vmax.max(cfg.v0);
+                }
+                // Unreachable with the ranges `set` enforces; an empty table means every move
+                // cruises at its own (clamped) rate, so the clamp falls to the start rate.
+                Err(_) => cfg.vmax = cfg.v0,
+                Ok(()) => break,
+            }
+        }
+        Ramped { cfg, max_rate_hz: timing.max_rate_hz(), table_limited }
+    }
+
+    /// The flash image: magic, version, fields (little-endian), CRC-32.
+    pub fn to_bytes(&self) -> [u8; SETTINGS_LEN] {
+        let mut b = [0u8; SETTINGS_LEN];
+        b[0] = MAGIC;
+        b[1] = VERSION;
+        b[2..4].copy_from_slice(&(SETTINGS_LEN as u16).to_le_bytes());
+        b[4..8].copy_from_slice(&self.pulse_us.to_le_bytes());
+        b[8..12].copy_from_slice(&self.dir_setup_us.to_le_bytes());
+        b[12..16].copy_from_slice(&self.ramp_start_hz.to_le_bytes());
+        b[16] = self.idle_delay_ms;
+        b[17] = self.step_invert;
+        b[18] = self.dir_invert;
+        b[19] = self.enable_invert as u8 | (self.limit_invert as u8) << 1 | (self.probe_invert as u8) << 2;
+        b[20] = (self.shape == Shape::SCurve) as u8;
+        let arrays = [&self.steps_per_mm, &self.max_rate, &self.accel, &self.max_travel];
+        for (g, arr) in arrays.iter().enumerate() {
+            for (i, v) in arr.iter().enumerate() {
+                let at = 24 + 4 * (g * MAX_AXES + i);
+                b[at..at + 4].copy_from_slice(&v.to_le_bytes());
+            }
+        }
+        let crc = crc32(&b[..SETTINGS_LEN - 4]);
+        b[SETTINGS_LEN - 4..].copy_from_slice(&crc.to_le_bytes());
+        b
+    }
+
+    /// Settings from a flash image, or `None` if it is not one (erased, other version, bad
+    /// checksum, a value out of range).
+    pub fn decode(b: &[u8]) -> Option<Settings> {
+        let b: &[u8; SETTINGS_LEN] = b.get(..SETTINGS_LEN)?.try_into().ok()?;
+        let word = |at: usize| [b[at], b[at + 1], b[at + 2], b[at + 3]];
+        if b[0] != MAGIC || b[1] != VERSION || b[2..4] != (SETTINGS_LEN as u16).to_le_bytes() {
+            return None;
+        }
+        if crc32(&b[..SETTINGS_LEN - 4]) != u32::from_le_bytes(word(SETTINGS_LEN - 4)) {
+            return None;
+        }
+        let mut s = Settings {
+            pulse_us: f32::from_le_bytes(word(4)),
+            dir_setup_us: f32::from_le_bytes(word(8)),
+            ramp_start_hz: u32::from_le_bytes(word(12)),
+            idle_delay_ms: b[16],
+            step_invert: b[17],
+            dir_invert: b[18],
+            enable_invert: b[19] & 1 != 0,
+            limit_invert: b[19] & 2 != 0,
+            probe_invert: b[19] & 4 != 0,
+            shape: match b[20] {
+                0 => Shape::Trapezoid,
+                1 => Shape::SCurve,
+                _ => return None,
+            },
+            ..Settings::DEFAULT
+        };
+        let arrays = [&mut s.steps_per_mm, &mut s.max_rate, &mut s.accel, &mut s.max_travel];
+        for (g, arr) in arrays.into_iter().enumerate() {
+            for (i, v) in arr.iter_mut().enumerate() {
+                *v = f32::from_le_bytes(word(24 + 4 * (g * MAX_AXES + i)));
+            }
+        }
+        s.is_valid().then_some(s)
+    }
+
+    /// Settings from a flash image, or the defaults if it is not a valid one.
+    pub fn from_bytes(b: &[u8]) -> Settings {
+        Self::decode(b).unwrap_or(Settings::DEFAULT)
+    }
+}
+
+/// CRC-32 (IEEE 802.3, reflected), bitwise: small code, run only on load and save.
+pub fn crc32(data: &[u8]) -> u32 {
+    let mut crc = !0u32;
+    for &b in data {
+        crc ^= b as u32;
+        for _ in 0..8 {
+            crc = if crc & 1 != 0 { (crc >> 1) ^ 0xEDB8_8320 } else { crc >> 1 };
+        }
+    }
+    !crc
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ramp::RampSlot;
+
+    #[test]
+    fn defaults_survive_flash_and_bad_images_fall_back() {
+        let mut s = Settings::DEFAULT;
+        s.set(100, 80.5, 3).unwrap();
+        s.set(RAMP_SHAPE, 1.0, 3).unwrap();
+        s.set(4, 1.0, 3).unwrap();
+        let b = s.to_bytes();
+        assert_eq!(Settings::decode(&b), Some(s));
+        let mut flipped = b;
+        flipped[30] ^= 1;
+        assert_eq!(Settings::decode(&flipped), None);
+        assert_eq!(Settings::from_bytes(&flipped), Settings::DEFAULT);
+        assert_eq!(Settings::from_bytes(&[0xFF; SETTINGS_LEN]), Settings::DEFAULT);
+        assert_eq!(Settings::from_bytes(&b[..10]), Settings::DEFAULT);
+        assert!(Settings::DEFAULT.is_valid());
+        assert_eq!(crc32(b"123456789"), 0xCBF4_3926);
+    }
+
+    #[test]
+    fn set_follows_grbl_rules() {
+        let mut s = Settings::DEFAULT;
+        assert_eq!(s.set(0, 0.5, 3), Err(Error::StepPulseMin));
+        assert_eq!(s.set(100, -1.0, 3), Err(Error::NegativeValue));
+        assert_eq!(s.set(103, 10.0, 3), Err(Error::InvalidStatement));
+        assert_eq!(s.set(103, 10.0, 4), Ok(Change::Profile));
+        assert_eq!(s.set(2, 5.7, 3), Ok(Change::Pins));
+        assert_eq!(s.step_invert, 5);
+        assert_eq!(s.set(2, 256.0, 3), Err(Error::InvalidStatement));
+        assert_eq!(s.set(20, 1.0, 3), Err(Error::SoftLimitNeedsHoming));
+        assert_eq!(s.set(20, 0.0, 3), Ok(Change::None));
+        assert_eq!(s.set(7, 0.0, 3), Err(Error::InvalidStatement));
+        assert_eq!(s.set(RAMP_SHAPE, 2.0, 3), Err(Error::InvalidStatement));
+        assert_eq!(s.set(110, f64::NAN, 3), Err(Error::BadNumberFormat));
+    }
+
+    #[test]
+    fn ids_cover_every_gettable_setting_once() {
+        let s = Settings::DEFAULT;
+        let ids: heapless::Vec<u16, 64> = Settings::ids(3).collect();
+        assert_eq!(ids.len(), 7 + 15 + 3 + 12);
+        assert!(ids.windows(2).all(|w| w[0] < w[1]), "{ids:?}");
+        assert!(ids.iter().all(|&id| s.get(id, 3).is_some()));
+        assert_eq!(s.get(133, 3), None);
+        assert_eq!(Settings::ids(7).count(), 7 + 15 + 3 + 28);
+    }
+
+    #[test]
+    fn profile_uses_the_slowest_accel_and_the_fastest_axis() {
+        let mut s = Settings::DEFAULT;
+        s.set(121, 500.0, 3).unwrap(); // Y: 50 000 steps/s²
+        s.set(112, 60_000.0, 3).unwrap(); // Z: 100 kHz
+        s.set(120, 1.0, 3).unwrap();
+        s.set(120, 10_000.0, 3).unwrap();
+        let t = s.timing();
+        assert_eq!((t.pulse_ticks, t.dir_setup_ticks, t.min_period_ticks), (216, 360, 432));
+        let cfg = s.ramp_config(3, &t);
+        assert_eq!((cfg.v0, cfg.vmax, cfg.accel), (1000, 100_000, 50_000));
+        // 99 kHz at 50 000 steps/s² needs 1.98 s: the table caps the top.
+        let slot: &'static RampSlot = Box::leak(Box::new(RampSlot::new()));
+        let mut g = slot.try_write().unwrap();
+        let r = s.build_profile(3, &mut g);
+        assert!(r.table_limited);
+        assert_eq!(r.cfg.vmax, 1000 + 50_000 * 1024 / 1000 - 1);
+        assert_eq!(g.ramp.config(), r.cfg);
+        assert_eq!(r.max_rate_hz, 166_666);
+        // Defaults fit: 59 ms to 60 kHz.
+        let r = Settings::DEFAULT.build_profile(3, &mut g);
+        assert!(!r.table_limited);
+        assert_eq!((r.cfg.vmax, g.ramp.len()), (60_000, 59));
+    }
+
+    #[test]
+    fn short_pulses_raise_the_rate_limit() {
+        let mut s = Settings::DEFAULT;
+        s.set(0, 2.0, 3).unwrap();
+        assert_eq!(s.timing().max_rate_hz(), 250_000);
+        s.set(0, 1.0, 3).unwrap();
+        assert_eq!(s.timing().max_rate_hz(), 500_000);
+    }
+}
