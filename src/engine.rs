@@ -54,11 +54,11 @@ enum Phase {
 }
 
 /// One slave axis of the running move.
-#[derive(Clone, Copy, Debug, Default)]
-struct Slave {
+#[derive(Clone, Copy, Debug)]
+struct Slave<'a> {
     dda: Dda,
     on: u32,
-    axis: u8,
+    pos: &'a AtomicI32,
     sign: i8,
 }
 
@@ -87,9 +87,9 @@ pub struct Engine<'a, const N: usize, const L: usize = RAMP_LEN> {
     total: u32,
     ramp_steps: u32,
     master_on: u32,
-    master_axis: u8,
+    master_pos: &'a AtomicI32,
     master_sign: i8,
-    slaves: [Slave; N],
+    slaves: [Slave<'a>; N],
     n_slaves: u8,
     dir_neg: u32,
     dir_known: u32,
@@ -125,9 +125,9 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
             total: 0,
             ramp_steps: 0,
             master_on: 0,
-            master_axis: 0,
+            master_pos: &shared.position[0],
             master_sign: 0,
-            slaves: [Slave::default(); N],
+            slaves: [Slave { dda: Dda::new(0, 0), on: 0, pos: &shared.position[0], sign: 0 }; N],
             n_slaves: 0,
             dir_neg: 0,
             dir_known: 0,
@@ -211,10 +211,10 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
         for s in self.slaves[..self.n_slaves as usize].iter_mut() {
             if s.dda.step(total) {
                 word |= s.on;
-                bump(&self.shared.position[s.axis as usize], s.sign);
+                bump(s.pos, s.sign);
             }
         }
-        bump(&self.shared.position[self.master_axis as usize], self.master_sign);
+        bump(self.master_pos, self.master_sign);
         self.left -= 1;
         match self.phase {
             Phase::Accel => self.ramp_steps += 1,
@@ -233,7 +233,7 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
     }
 
     /// One millisecond has passed: move one entry along the ramp.
-    #[inline(always)]
+    #[inline(never)]
     fn walk_ramp(&mut self) {
         match self.phase {
             Phase::Accel => {
@@ -260,7 +260,7 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
     /// Turns round on the ramp so the way down mirrors the way up: from cruise, the next entry
     /// down gets a whole millisecond; mid-ramp, the current entry gets as long again as it has
     /// had, so the steps down equal the steps up (`ramp_steps`).
-    #[inline(always)]
+    #[inline(never)]
     fn start_decel(&mut self) {
         if self.phase == Phase::Cruise {
             if self.idx > 0 {
@@ -291,6 +291,14 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
     fn check_hold(&mut self) {
         let hold = self.shared.hold.load(Relaxed);
         if hold != self.hold_stop {
+            self.toggle_hold(hold);
+        }
+    }
+
+    /// A feed-hold request changed.
+    #[inline(never)]
+    fn toggle_hold(&mut self, hold: bool) {
+        {
             self.hold_stop = hold;
             if hold {
                 if self.phase != Phase::Decel {
@@ -307,6 +315,7 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
     }
 
     /// Leaves a completed feed hold: accelerate again from the bottom of the table.
+    #[inline(never)]
     fn resume(&mut self) {
         self.hold_stop = false;
         self.ramp_steps = 0;
@@ -322,6 +331,7 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
     }
 
     /// Ends the running move (counted as done only when completed).
+    #[inline(never)]
     fn end_move(&mut self, completed: bool) {
         if completed {
             self.shared.moves_done.fetch_add(1, Relaxed);
@@ -334,6 +344,7 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
     }
 
     /// Loads the next move, if any (queue refill; never in the step path).
+    #[inline(never)]
     fn refill(&mut self) -> (u32, u32) {
         if self.shared.hold.load(Relaxed) {
             self.publish(State::Held);
@@ -355,7 +366,7 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
     /// Sets up a move: master, slaves, ramp; returns a direction event when a pin must change.
     fn load(&mut self, mv: &Move<N>) -> (u32, u32) {
         let m = mv.master as usize;
-        self.master_axis = mv.master;
+        self.master_pos = &self.shared.position[m];
         self.total = mv.steps[m].unsigned_abs();
         self.left = self.total;
         self.master_on = self.pins.step_on[m];
@@ -378,7 +389,7 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
                 self.slaves[n] = Slave {
                     dda: Dda::new(s.unsigned_abs(), self.total),
                     on: self.pins.step_on[i],
-                    axis: i as u8,
+                    pos: &self.shared.position[i],
                     sign: sign(s),
                 };
                 n += 1;
