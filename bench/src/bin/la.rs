@@ -133,12 +133,14 @@ fn run(args: &Args) -> Result<bool> {
         }
     }
     if let Some(path) = &args.plot {
+        let summary = report.summary();
+        let ratio_and_cruise = summary.split(", min pulse").next().unwrap_or(&summary);
         let title = format!(
             "{}: {}",
             args.capture
                 .file_name()
                 .map_or("capture".into(), |n| n.to_string_lossy()),
-            report.summary()
+            ratio_and_cruise
         );
         la::plot::write_png(&report, &title, path)?;
     }

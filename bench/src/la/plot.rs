@@ -52,7 +52,9 @@ where
     DB::ErrorType: 'static,
 {
     root.fill(&WHITE)?;
-    let root = root.titled(title, ("sans-serif", 22))?;
+    // Long titles (big counts, a mismatch) get a smaller font to fit 1200 px.
+    let size = if title.chars().count() > 90 { 15 } else { 20 };
+    let root = root.titled(title, ("sans-serif", size))?;
     let (top, bottom) = root.split_vertically(460);
     let bins = report.series.rate_hz.first().map_or(0, Vec::len);
     let x_end = (bins.max(1) as f64) * report.bin_ms;

@@ -141,6 +141,7 @@ fn hz(rate: f64) -> String {
 fn ns(time: Option<f64>) -> String {
     match time {
         None => "-".into(),
+        Some(t) if t >= 1e9 => format!("{:.3} s", t / 1e9),
         Some(t) if t >= 1e6 => format!("{:.3} ms", t / 1e6),
         Some(t) if t >= 1e3 => format!("{:.3} µs", t / 1e3),
         Some(t) => format!("{t:.0} ns"),
@@ -214,6 +215,7 @@ mod tests {
         assert_eq!(ns(Some(4_125.0)), "4.125 µs");
         assert_eq!(ns(Some(41.7)), "42 ns");
         assert_eq!(ns(None), "-");
+        assert_eq!(ns(Some(1e10)), "10.000 s");
         assert_eq!(join(&[5, 3, 2]), "5:3:2");
     }
 }
