@@ -149,6 +149,22 @@ fn csv_without_time_counts_rows_and_needs_a_rate() {
 }
 
 #[test]
+fn csv_without_any_header_finds_the_time_column() {
+    // -O csv:time=true:dedup=true:header=false:label=off at 24 MHz, --samplerate 24m
+    let (channels, rec) = read("41,0,1\n984,1,1\n", Some(Format::Csv), Some(24e6));
+    assert_eq!(channels, vec!["D0", "D1"]);
+    let t23 = (23.0 * 1e12 / 24e6_f64).round() as u64;
+    assert_eq!(
+        rec.levels,
+        vec![(0, 0, false), (0, 1, true), (t23, 0, true)]
+    );
+    assert!(
+        from_text("41,0,1\n", Some(Format::Csv), None).is_err(),
+        "unit unknown"
+    );
+}
+
+#[test]
 fn csv_rejects_bad_rows() {
     for (text, message) in [
         (

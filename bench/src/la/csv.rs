@@ -2,7 +2,8 @@
 //!
 //! Understands the `;` comment header (`; Channels (4/8): X_STEP, ...`, `; Samplerate: 24 MHz`),
 //! sigrok-cli's `META samplerate: N` line, a label row of units (`nanoseconds,logic,...`) or of
-//! names (`Time,X_STEP,...`) or none, an optional time column, and `dedup` (rows only on change).
+//! names (`Time,X_STEP,...`) or none, an optional time column (with no header at all, a first
+//! field other than 0/1 marks it), and `dedup` (rows only on change).
 //!
 //! Time: libsigrok writes `sample × floor(unit / sample period)` in the label's unit, so at
 //! 24 MHz every row is 41 ns after the last instead of 41.67 ns (1.6 % slow). When the sample
@@ -130,7 +131,11 @@ impl<R: BufRead> CsvReader<R> {
             (None, Some(r)) => r.split(',').count(),
             (None, None) => bail!("CSV has no data rows"),
         };
-        let (time_label, names) = layout(labels, comment_names, columns)?;
+        let first_is_level = first_row
+            .as_deref()
+            .and_then(|r| r.split(',').next())
+            .is_some_and(|f| matches!(f.trim(), "0" | "1"));
+        let (time_label, names) = layout(labels, comment_names, columns, first_is_level)?;
         let clock = match time_label.as_deref() {
             Some(label) => match unit_fs(&label.to_ascii_lowercase()) {
                 Some(unit_fs) => Clock::Column { unit_fs },
@@ -253,6 +258,7 @@ fn layout(
     labels: Option<Vec<String>>,
     comment_names: Option<Vec<String>>,
     columns: usize,
+    first_is_level: bool,
 ) -> Result<(Option<String>, Vec<String>)> {
     let is_time = |l: &str| {
         let l = l.to_ascii_lowercase();
@@ -282,6 +288,8 @@ fn layout(
             "CSV rows have {columns} columns but the header names {} channels",
             names.len()
         ),
+        // No header at all: a first field that is not 0/1 must be time.
+        None if !first_is_level => Ok((Some("Time".into()), default_names(columns - 1))),
         None => Ok((None, default_names(columns))),
     }
 }
