@@ -55,6 +55,12 @@ fn passing_expect_exits_0_with_the_summary() {
 }
 
 #[test]
+fn a_leading_double_dash_from_the_cargo_alias_is_ignored() {
+    let out = la(&["--", &fixture("bresenham_532.vcd"), "--expect", "5:3:2"]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out).1);
+}
+
+#[test]
 fn ratio_wrong_by_one_step_exits_1() {
     let out = la(&[&fixture("wrong_ratio_51_30_20.vcd"), "--expect", "5:3:2"]);
     let (stdout, _) = text(&out);

@@ -183,7 +183,13 @@ fn print_human(output: &Output) {
 
 // run and map the outcome to the exit code
 fn main() -> ExitCode {
-    let args = Args::parse();
+    // `cargo la` already ends in `--`, so `cargo la -- CAPTURE --expect ..` passes a second
+    // one: drop a leading `--` so options after the capture still count.
+    let argv = std::env::args_os()
+        .enumerate()
+        .filter(|(i, a)| !(*i == 1 && a == "--"))
+        .map(|(_, a)| a);
+    let args = Args::parse_from(argv);
     match run(&args) {
         Ok(true) => ExitCode::SUCCESS,
         Ok(false) => ExitCode::from(1),
