@@ -187,3 +187,19 @@ fn s_curve_table_rises_smoothly_to_vmax() {
     assert!(rates[1] - rates[0] < steepest / 10.0);
     assert!((rates[rates.len() - 1] - 50_000.0).abs() < 600.0);
 }
+
+#[test]
+fn dithering_makes_the_average_cruise_rate_exact() {
+    // 47 kHz is 1531.9 ticks: no whole period gives it; the average over 16 000 steps must.
+    let mut rig = Rig::<1>::trapezoid(47_000, 47_000, 1_000);
+    rig.push([20_000], 47_000);
+    rig.run_to_idle(1_000_000);
+    let t = rig.times(0);
+    let periods: std::collections::BTreeSet<u64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+    assert_eq!(periods.into_iter().collect::<Vec<_>>(), vec![1531, 1532]);
+    let span = (t[18_000] - t[2_000]) as f64;
+    let exact = 16_000.0 * TIMER_HZ as f64 / 47_000.0;
+    // Periods are kept to 1/16 tick, so the average is exact to 1/32 tick per period (here
+    // 0.002 %), plus one tick at the ends; whole-tick periods alone would be off by 6 %.
+    assert!((span - exact).abs() <= 16_000.0 / 32.0 + 1.0, "{span} vs {exact}");
+}
