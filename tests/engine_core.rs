@@ -200,6 +200,6 @@ fn dithering_makes_the_average_cruise_rate_exact() {
     let span = (t[18_000] - t[2_000]) as f64;
     let exact = 16_000.0 * TIMER_HZ as f64 / 47_000.0;
     // Periods are kept to 1/16 tick, so the average is exact to 1/32 tick per period (here
-    // 0.002 %), plus one tick at the ends; whole-tick periods alone would be off by 6 %.
+    // 0.002 %), plus one tick at the ends; rounding to whole ticks alone would be off by 0.006 %.
     assert!((span - exact).abs() <= 16_000.0 / 32.0 + 1.0, "{span} vs {exact}");
 }
