@@ -147,7 +147,8 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
     }
 
     /// Computes the next edge's word; returns the ARR value to preload now.
-    #[inline]
+    /// Not inlined, so the handler's own prologue stays small and the BSRR store comes first.
+    #[inline(never)]
     pub fn tick(&mut self) -> u16 {
         if self.extend == 0 {
             let (word, ticks) = self.next_event();
