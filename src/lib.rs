@@ -15,10 +15,16 @@
 #![cfg_attr(not(test), deny(warnings))]
 
 pub mod board;
+pub mod controller;
 pub mod engine;
+pub mod gcode;
 pub mod interp;
+pub mod planner;
+pub mod protocol;
 pub mod queue;
 pub mod ramp;
+pub mod report;
+pub mod settings;
 pub mod sim;
 pub mod timing;
 

@@ -88,19 +88,36 @@ pub enum Error {
     InvalidTarget = 33,
     /// Value words no command uses.
     UnusedWords = 36,
+    /// A value beyond its maximum (tool number > 255).
+    MaxValueExceeded = 38,
 }
 
 /// Where replies go: a bounded buffer that drops what does not fit (never blocks, never
 /// panics). Replies are short, so a full TX ring only truncates a report.
+///
+/// The controller checks [`Out::room`] before it starts a reply, so with a sink that reports
+/// its room no `ok` is ever lost: it takes no line byte unless [`REPLY_ROOM`] bytes are free,
+/// writes long listings (`$$`, `$#`) a line at a time as room appears, and delays a status
+/// report until it fits. The TX ring should hold at least 256 bytes.
 pub trait Out {
     /// Writes as many of `bytes` as fit.
     fn put(&mut self, bytes: &[u8]);
+    /// Bytes that fit now (`usize::MAX` for a sink that cannot tell).
+    fn room(&self) -> usize {
+        usize::MAX
+    }
 }
+
+/// Free TX bytes needed before a line byte is taken: the longest single reply (`$I`).
+pub const REPLY_ROOM: usize = 160;
 
 impl<const C: usize> Out for heapless::Vec<u8, C> {
     fn put(&mut self, bytes: &[u8]) {
         let n = bytes.len().min(C - self.len());
         let _ = self.extend_from_slice(&bytes[..n]);
+    }
+    fn room(&self) -> usize {
+        C - self.len()
     }
 }
 
@@ -111,6 +128,9 @@ impl Out for heapless::spsc::Producer<'_, u8> {
                 break;
             }
         }
+    }
+    fn room(&self) -> usize {
+        self.capacity() - self.len()
     }
 }
 

@@ -183,6 +183,11 @@ impl<'a, const N: usize> Feeder<'a, N> {
         Ok(())
     }
 
+    /// Moves the queue holds at most.
+    pub fn capacity(&self) -> usize {
+        self.producer.capacity()
+    }
+
     /// True when another move fits.
     pub fn ready(&self) -> bool {
         self.producer.ready()

@@ -111,6 +111,14 @@ pub struct Ramped {
     pub table_limited: bool,
 }
 
+impl Ramped {
+    /// What `s` asks for on `axes` axes, before the table is built.
+    pub fn wanted(s: &Settings, axes: usize) -> Ramped {
+        let timing = s.timing();
+        Ramped { cfg: s.ramp_config(axes, &timing), max_rate_hz: timing.max_rate_hz(), table_limited: false }
+    }
+}
+
 impl Settings {
     /// Defaults for the seed paper's bench: 100 steps/mm, 36 000 mm/min (60 kHz) and
     /// 10 000 mm/s² (10⁶ steps/s², 50 kHz in 49 ms) on every axis; 3 µs pulses and 5 µs
@@ -470,8 +478,8 @@ mod tests {
         let cfg = s.ramp_config(3, &t);
         assert_eq!((cfg.v0, cfg.vmax, cfg.accel), (1000, 100_000, 50_000));
         // 99 kHz at 50 000 steps/s² needs 1.98 s: the table caps the top.
-        let slot: &'static RampSlot = Box::leak(Box::new(RampSlot::new()));
-        let mut g = slot.try_write().unwrap();
+        static SLOT: RampSlot = RampSlot::new();
+        let mut g = SLOT.try_write().unwrap();
         let r = s.build_profile(3, &mut g);
         assert!(r.table_limited);
         assert_eq!(r.cfg.vmax, 1000 + 50_000 * 1024 / 1000 - 1);

@@ -1,0 +1,492 @@
+//! G-code: numbers, blocks and the modal state, for Grbl 1.1's straight-line subset.
+//!
+//! Who uses it: the controller, on each line from [`crate::protocol::LineBuf`] (upper case, no
+//! whitespace, no comments).
+//!
+//! A block is checked in full before anything happens (Grbl's rule): [`parse`] reads the words
+//! and catches word-level errors in line order; [`Modal::interpret`] applies the block to a copy
+//! of the modal state and yields the [`Effects`] to carry out, so a refused line changes nothing.
+//! Numbers are read exactly: up to 15 significant digits as an integer, divided once by a power
+//! of ten, which is the nearest `f64` to the decimal (as `str::parse` gives).
+
+use crate::protocol::Error;
+use crate::AXIS_NAMES;
+
+/// Largest axis target accepted, mm (beyond it: `error:33`).
+pub const MAX_MM: f64 = 1e6;
+/// Largest line number (Grbl's MAX_LINE_NUMBER).
+pub const MAX_LINE_NUMBER: f64 = 10_000_000.0;
+/// Longest dwell, s (keeps the wrapping millisecond clock unambiguous).
+pub const MAX_DWELL_S: f64 = 1_000_000.0;
+/// Largest significand read: 15 decimal digits are exact in `f64`.
+const MAX_SIGNIFICAND: u64 = 999_999_999_999_999;
+/// Exact powers of ten in `f64`.
+const POW10: [f64; 23] = [
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+    1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+];
+
+/// Reads a decimal number at `s[*i..]` (optional sign, digits, at most one point) and moves
+/// `*i` past it. No exponent, no `inf`/`nan`: anything else is [`Error::BadNumberFormat`].
+pub fn parse_number(s: &[u8], i: &mut usize) -> Result<f64, Error> {
+    let mut j = *i;
+    let neg = s.get(j) == Some(&b'-');
+    if matches!(s.get(j), Some(b'-' | b'+')) {
+        j += 1;
+    }
+    let (mut sig, mut frac, mut zeros, mut digits, mut point) = (0u64, 0usize, 0usize, 0, false);
+    while let Some(&c) = s.get(j) {
+        match c {
+            b'0'..=b'9' => {
+                digits += 1;
+                let d = (c - b'0') as u64;
+                if !point {
+                    sig = sig.checked_mul(10).ok_or(Error::BadNumberFormat)? + d;
+                } else if d == 0 {
+                    zeros += 1; // trailing zeros after the point cost nothing unless followed
+                } else {
+                    frac += zeros + 1;
+                    sig = match sig {
+                        0 => d,
+                        _ => 10u64
+                            .checked_pow(zeros as u32 + 1)
+                            .and_then(|k| sig.checked_mul(k))
+                            .ok_or(Error::BadNumberFormat)?
+                            + d,
+                    };
+                    zeros = 0;
+                }
+                if sig > MAX_SIGNIFICAND || frac >= POW10.len() {
+                    return Err(Error::BadNumberFormat);
+                }
+            }
+            b'.' if !point => point = true,
+            _ => break,
+        }
+        j += 1;
+    }
+    if digits == 0 {
+        return Err(Error::BadNumberFormat);
+    }
+    *i = j;
+    let v = sig as f64 / POW10[frac];
+    Ok(if neg { -v } else { v })
+}
+
+/// Motion mode (group 1).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Motion {
+    /// G0: at the axes' max rates.
+    Rapid,
+    /// G1: at the feed rate.
+    Linear,
+    /// G80: no motion mode (axis words are an error).
+    Cancel,
+}
+
+/// Non-modal command (group 0).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NonModal {
+    /// G4 P<seconds>.
+    Dwell,
+    /// G92: set the current position.
+    SetPosition,
+}
+
+/// Program flow (group 4).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stop {
+    /// M0: feed hold once the queue has run out; `~` resumes.
+    Pause,
+    /// M1: optional stop, ignored (as in Grbl without the option).
+    Optional,
+    /// M2 / M30: program end, modal state back to Grbl's program-end defaults.
+    End,
+}
+
+/// Modal group bits, for the one-command-per-group rule.
+mod group {
+    pub const MOTION: u16 = 1 << 0;
+    pub const NON_MODAL: u16 = 1 << 1;
+    pub const PLANE: u16 = 1 << 2;
+    pub const DISTANCE: u16 = 1 << 3;
+    pub const ARC_DISTANCE: u16 = 1 << 4;
+    pub const FEED_MODE: u16 = 1 << 5;
+    pub const UNITS: u16 = 1 << 6;
+    pub const CUTTER: u16 = 1 << 7;
+    pub const TOOL_LENGTH: u16 = 1 << 8;
+    pub const COORD: u16 = 1 << 9;
+    pub const PATH: u16 = 1 << 10;
+    pub const STOP: u16 = 1 << 11;
+    pub const SPINDLE: u16 = 1 << 12;
+    pub const COOLANT: u16 = 1 << 13;
+    pub const DRIVERS: u16 = 1 << 14;
+}
+
+/// One parsed line: commands by group and value words.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Block<const N: usize> {
+    groups: u16,
+    axis_cmd: bool,
+    pub motion: Option<Motion>,
+    pub non_modal: Option<NonModal>,
+    pub plane: Option<u8>,
+    pub relative: Option<bool>,
+    pub inches: Option<bool>,
+    pub stop: Option<Stop>,
+    /// M17 (`true`) / M18, M84 (`false`): drivers on or off.
+    pub drivers: Option<bool>,
+    pub axes: [Option<f64>; N],
+    pub f: Option<f64>,
+    pub p: Option<f64>,
+    pub s: Option<f64>,
+    pub t: Option<f64>,
+    pub n: Option<f64>,
+}
+
+impl<const N: usize> Block<N> {
+    const EMPTY: Self = Block {
+        groups: 0,
+        axis_cmd: false,
+        motion: None,
+        non_modal: None,
+        plane: None,
+        relative: None,
+        inches: None,
+        stop: None,
+        drivers: None,
+        axes: [None; N],
+        f: None,
+        p: None,
+        s: None,
+        t: None,
+        n: None,
+    };
+
+    /// Claims a modal group: a second command of one group is an error.
+    fn claim(&mut self, g: u16) -> Result<(), Error> {
+        if self.groups & g != 0 {
+            return Err(Error::ModalGroupViolation);
+        }
+        self.groups |= g;
+        Ok(())
+    }
+
+    /// Claims the axis words for a command (G0/G1 or G92): only one may use them.
+    fn axis_command(&mut self) -> Result<(), Error> {
+        if self.axis_cmd {
+            return Err(Error::AxisCommandConflict);
+        }
+        self.axis_cmd = true;
+        Ok(())
+    }
+
+    fn has_axes(&self) -> bool {
+        self.axes.iter().any(Option::is_some)
+    }
+}
+
+/// Parses a cleaned line (upper case, no whitespace or comments) into a block.
+pub fn parse<const N: usize>(line: &[u8]) -> Result<Block<N>, Error> {
+    let mut b = Block::<N>::EMPTY;
+    let mut i = 0;
+    while i < line.len() {
+        let letter = line[i];
+        if !letter.is_ascii_uppercase() {
+            return Err(Error::ExpectedCommandLetter);
+        }
+        i += 1;
+        let v = parse_number(line, &mut i)?;
+        match letter {
+            b'G' => g_word(&mut b, v)?,
+            b'M' => m_word(&mut b, v)?,
+            _ => value_word(&mut b, letter, v)?,
+        }
+    }
+    Ok(b)
+}
+
+/// Splits a command number into its integer part and Grbl's two-digit mantissa (G91.1 → 91, 10).
+fn split_code(v: f64) -> Result<(u32, u32), Error> {
+    if !(0.0..1000.0).contains(&v) {
+        return Err(Error::UnsupportedCommand);
+    }
+    let int = libm::trunc(v);
+    Ok((int as u32, libm::round(100.0 * (v - int)) as u32))
+}
+
+fn g_word<const N: usize>(b: &mut Block<N>, v: f64) -> Result<(), Error> {
+    use group::*;
+    let (code, mut mantissa) = split_code(v)?;
+    let g = match code {
+        0 | 1 | 80 => {
+            if code != 80 {
+                b.axis_command()?;
+            }
+            b.motion = Some(match code {
+                0 => Motion::Rapid,
+                1 => Motion::Linear,
+                _ => Motion::Cancel,
+            });
+            MOTION
+        }
+        4 => {
+            b.non_modal = Some(NonModal::Dwell);
+            NON_MODAL
+        }
+        92 if mantissa == 0 => {
+            b.axis_command()?;
+            b.non_modal = Some(NonModal::SetPosition);
+            NON_MODAL
+        }
+        17..=19 => {
+            b.plane = Some(code as u8);
+            PLANE
+        }
+        20 | 21 => {
+            b.inches = Some(code == 20);
+            UNITS
+        }
+        90 | 91 if mantissa == 0 => {
+            b.relative = Some(code == 91);
+            DISTANCE
+        }
+        91 if mantissa == 10 => {
+            mantissa = 0;
+            ARC_DISTANCE
+        }
+        94 => FEED_MODE,
+        40 => CUTTER,
+        49 => TOOL_LENGTH,
+        54 => COORD,
+        61 => PATH,
+        // Arcs, probing, G10/G28/G30/G53, G92.1, G43.1, other coordinate systems, inverse time.
+        _ => return Err(Error::UnsupportedCommand),
+    };
+    if mantissa != 0 {
+        return Err(Error::CommandValueNotInteger);
+    }
+    b.claim(g)
+}
+
+fn m_word<const N: usize>(b: &mut Block<N>, v: f64) -> Result<(), Error> {
+    use group::*;
+    let (code, mantissa) = split_code(v)?;
+    if mantissa != 0 {
+        return Err(Error::CommandValueNotInteger);
+    }
+    let g = match code {
+        0 | 1 | 2 | 30 => {
+            b.stop = Some(match code {
+                0 => Stop::Pause,
+                1 => Stop::Optional,
+                _ => Stop::End,
+            });
+            STOP
+        }
+        5 => SPINDLE,
+        9 => COOLANT,
+        17 | 18 | 84 => {
+            b.drivers = Some(code == 17);
+            DRIVERS
+        }
+        // Spindle/coolant on, tool change and the rest: nothing here could do them.
+        _ => return Err(Error::UnsupportedCommand),
+    };
+    b.claim(g)
+}
+
+fn value_word<const N: usize>(b: &mut Block<N>, letter: u8, v: f64) -> Result<(), Error> {
+    let slot = match letter {
+        b'F' => &mut b.f,
+        b'N' => &mut b.n,
+        b'P' => &mut b.p,
+        b'S' => &mut b.s,
+        b'T' => &mut b.t,
+        _ => match AXIS_NAMES[..N].iter().position(|&a| a as u8 == letter) {
+            Some(i) => &mut b.axes[i],
+            None => return Err(Error::UnsupportedCommand),
+        },
+    };
+    if slot.is_some() {
+        return Err(Error::WordRepeated);
+    }
+    if v < 0.0 && matches!(letter, b'F' | b'N' | b'P' | b'S' | b'T') {
+        return Err(Error::NegativeValue);
+    }
+    *slot = Some(v);
+    Ok(())
+}
+
+/// What a block asks for, in Grbl's execution order: dwell, set position, motion, then
+/// drivers off / pause / end.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Effects<const N: usize> {
+    /// M17 (before the motion) / M18, M84 (after it).
+    pub drivers: Option<bool>,
+    /// G4: dwell this many ms once the queue has run out.
+    pub dwell_ms: Option<u32>,
+    /// G92: new position of the named axes, mm.
+    pub set_position: Option<[Option<f64>; N]>,
+    /// G0/G1: absolute target (mm) of every axis, and whether it is a rapid.
+    pub motion: Option<([f64; N], bool)>,
+    pub stop: Option<Stop>,
+}
+
+/// The parser state that outlives a line (Grbl's `gc_state.modal` plus F, S, T).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Modal {
+    pub motion: Motion,
+    pub plane: u8,
+    pub relative: bool,
+    pub inches: bool,
+    /// Feed rate, mm/min (0: none yet).
+    pub feed: f64,
+    pub spindle: f64,
+    pub tool: u32,
+}
+
+impl Default for Modal {
+    fn default() -> Self {
+        Self::RESET
+    }
+}
+
+impl Modal {
+    /// After power-up or soft reset: G0 G17 G90 G21 G94, no feed.
+    pub const RESET: Modal =
+        Modal { motion: Motion::Rapid, plane: 17, relative: false, inches: false, feed: 0.0, spindle: 0.0, tool: 0 };
+
+    /// Applies `b` to a copy of the state, given the current position (mm): the new state and
+    /// what to do. Nothing changes on error.
+    pub fn interpret<const N: usize>(&self, b: &Block<N>, pos: &[f64; N]) -> Result<(Modal, Effects<N>), Error> {
+        let mut m = *self;
+        if b.n.is_some_and(|n| n > MAX_LINE_NUMBER) {
+            return Err(Error::InvalidLineNumber);
+        }
+        m.inches = b.inches.unwrap_or(m.inches);
+        m.relative = b.relative.unwrap_or(m.relative);
+        m.plane = b.plane.unwrap_or(m.plane);
+        m.motion = b.motion.unwrap_or(m.motion);
+        let unit = if m.inches { 25.4 } else { 1.0 };
+        if let Some(f) = b.f {
+            m.feed = f * unit;
+        }
+        if let Some(s) = b.s {
+            m.spindle = s;
+        }
+        if let Some(t) = b.t {
+            if t > 255.0 {
+                return Err(Error::MaxValueExceeded);
+            }
+            m.tool = t as u32;
+        }
+        let mut fx = Effects { drivers: b.drivers, dwell_ms: None, set_position: None, motion: None, stop: b.stop };
+        match (b.non_modal, b.p) {
+            (Some(NonModal::Dwell), None) => return Err(Error::ValueWordMissing),
+            (Some(NonModal::Dwell), Some(p)) if p > MAX_DWELL_S => return Err(Error::BadNumberFormat),
+            (Some(NonModal::Dwell), Some(p)) => fx.dwell_ms = Some(libm::round(p * 1000.0) as u32),
+            (_, Some(_)) => return Err(Error::UnusedWords),
+            _ => {}
+        }
+        let in_range = |v: f64| if libm::fabs(v) <= MAX_MM { Ok(v) } else { Err(Error::InvalidTarget) };
+        if b.non_modal == Some(NonModal::SetPosition) {
+            if !b.has_axes() {
+                return Err(Error::NoAxisWords);
+            }
+            let mut set = [None; N];
+            for (s, a) in set.iter_mut().zip(&b.axes) {
+                *s = a.map(|v| in_range(v * unit)).transpose()?;
+            }
+            fx.set_position = Some(set);
+        } else if b.has_axes() {
+            let rapid = match m.motion {
+                Motion::Cancel => return Err(Error::AxisWordsExist),
+                Motion::Linear if m.feed <= 0.0 => return Err(Error::UndefinedFeedRate),
+                mo => mo == Motion::Rapid,
+            };
+            let mut target = *pos;
+            for (t, a) in target.iter_mut().zip(&b.axes) {
+                if let Some(v) = a {
+                    *t = in_range(if m.relative { *t + v * unit } else { v * unit })?;
+                }
+            }
+            fx.motion = Some((target, rapid));
+        }
+        if b.stop == Some(Stop::End) {
+            m = Modal { motion: Motion::Linear, plane: 17, relative: false, ..m };
+        }
+        Ok((m, fx))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn num(s: &str) -> Result<f64, Error> {
+        let mut i = 0;
+        let v = parse_number(s.as_bytes(), &mut i)?;
+        assert_eq!(i, s.len(), "{s}");
+        Ok(v)
+    }
+
+    #[test]
+    fn numbers_match_std_and_refuse_junk() {
+        for s in ["0", "-0.5", "+12.25", "123456.789", ".5", "5.", "0.000001", "999999999999999", "1.10000000000000000000"] {
+            assert_eq!(num(s), Ok(s.parse::<f64>().unwrap()), "{s}");
+        }
+        for s in ["", "-", "--5", ".", "+.", "1000000000000000", "0.0000000000000000000001234"] {
+            assert_eq!(num(s), Err(Error::BadNumberFormat), "{s}");
+        }
+        let mut i = 0;
+        assert_eq!(parse_number(b"1.2.3", &mut i), Ok(1.2));
+        assert_eq!(i, 3);
+    }
+
+    #[test]
+    fn words_follow_grbl_error_codes() {
+        let e = |s: &str| parse::<3>(s.as_bytes()).err();
+        assert_eq!(e("G1X10F100"), None);
+        assert_eq!(e("1"), Some(Error::ExpectedCommandLetter));
+        assert_eq!(e("XNAN"), Some(Error::BadNumberFormat));
+        assert_eq!(e("X1E999"), Some(Error::UnsupportedCommand));
+        assert_eq!(e("G0G1"), Some(Error::AxisCommandConflict)); // as Grbl: both use the axes
+        assert_eq!(e("G0G80"), Some(Error::ModalGroupViolation));
+        assert_eq!(e("G20G21"), Some(Error::ModalGroupViolation));
+        assert_eq!(e("X1X2"), Some(Error::WordRepeated));
+        assert_eq!(e("F-1"), Some(Error::NegativeValue));
+        assert_eq!(e("G1.5"), Some(Error::CommandValueNotInteger));
+        assert_eq!(e("G2X1"), Some(Error::UnsupportedCommand));
+        assert_eq!(e("G91.1"), None);
+        assert_eq!(e("A1"), Some(Error::UnsupportedCommand));
+        assert_eq!(parse::<4>(b"A1").err(), None);
+        assert_eq!(e("M3"), Some(Error::UnsupportedCommand));
+        assert_eq!(e("G92G1X0"), Some(Error::AxisCommandConflict));
+        assert_eq!(e("G1G92X0"), Some(Error::AxisCommandConflict));
+        assert_eq!(e("G4G92"), Some(Error::ModalGroupViolation));
+    }
+
+    #[test]
+    fn modal_state_follows_grbl() {
+        let pos = [1.0, 2.0, 3.0];
+        let run = |m: &Modal, s: &str| m.interpret::<3>(&parse::<3>(s.as_bytes()).unwrap(), &pos);
+        let m = Modal::RESET;
+        assert_eq!(run(&m, "G1X5").err(), Some(Error::UndefinedFeedRate));
+        assert_eq!(run(&m, "G1").unwrap().1.motion, None); // no axis words: just the mode
+        let (m2, fx) = run(&m, "G20G91G1X1F10").unwrap();
+        assert_eq!(fx.motion, Some(([26.4, 2.0, 3.0], false)));
+        assert_eq!((m2.feed, m2.relative, m2.inches), (254.0, true, true));
+        assert_eq!(run(&m, "G80X1").err(), Some(Error::AxisWordsExist));
+        assert_eq!(run(&m, "G4").err(), Some(Error::ValueWordMissing));
+        assert_eq!(run(&m, "G4P1.5").unwrap().1.dwell_ms, Some(1500));
+        assert_eq!(run(&m, "G0X1P1").err(), Some(Error::UnusedWords));
+        assert_eq!(run(&m, "G92").err(), Some(Error::NoAxisWords));
+        assert_eq!(run(&m, "G92Y7").unwrap().1.set_position, Some([None, Some(7.0), None]));
+        assert_eq!(run(&m, "X1000001").err(), Some(Error::InvalidTarget));
+        assert_eq!(run(&m, "N10000001").err(), Some(Error::InvalidLineNumber));
+        let (m3, _) = run(&m2, "M30").unwrap();
+        assert_eq!((m3.motion, m3.relative, m3.feed), (Motion::Linear, false, 254.0));
+        assert_eq!(run(&m, "F300").unwrap().0.feed, 300.0);
+    }
+}

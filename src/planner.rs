@@ -1,0 +1,219 @@
+//! The planner: G-code targets in mm to [`Move`]s (signed steps and a master cruise rate).
+//!
+//! Who uses it: the controller, once per G0/G1/G92 (outside any interrupt; `f64` math).
+//!
+//! Invariant: the planner keeps the programmed target in mm and the absolute step position
+//! `round(target × steps/mm)` of every axis; a move is the difference between two such step
+//! positions, so rounding never accumulates (a thousand G91 moves of 0.001 mm at 100 steps/mm
+//! make exactly 100 steps, in ten single steps).
+//!
+//! Rates: a G1 takes `length / F` (length over all moving axes, from the rounded steps); a G0
+//! takes as long as its slowest axis at `$110+i`; no axis may exceed its `$110+i`, so the whole
+//! move slows down when one would. The master's cruise rate is its steps over that time,
+//! rounded to whole steps/s and clamped to `1 ..= vmax_hz` (the ramp table's top, itself at most
+//! the timing's fastest rate; both are printed by `$I`). Every move starts and ends at rest (no
+//! look-ahead).
+
+use crate::protocol::Error;
+use crate::queue::Move;
+use crate::settings::Settings;
+
+/// What the planner needs from the settings, for `N` axes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Limits<const N: usize> {
+    /// `$100+i`, steps/mm.
+    pub steps_per_mm: [f64; N],
+    /// `$110+i`, mm/min.
+    pub max_rate: [f64; N],
+    /// Fastest master cruise, steps/s.
+    pub vmax_hz: u32,
+}
+
+impl<const N: usize> Limits<N> {
+    /// Limits from settings and the ramp's top rate.
+    pub fn new(s: &Settings, vmax_hz: u32) -> Self {
+        Limits {
+            steps_per_mm: core::array::from_fn(|i| s.steps_per_mm[i] as f64),
+            max_rate: core::array::from_fn(|i| s.max_rate[i] as f64),
+            vmax_hz: vmax_hz.max(1),
+        }
+    }
+}
+
+/// A planned move and what status reports need to know about it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Planned<const N: usize> {
+    pub mv: Move<N>,
+    /// Path length per master step, mm (turns the master rate into a feed).
+    pub mm_per_step: f32,
+    /// The master rate the feed and axis limits allow, before rounding and clamping (steps/s).
+    pub wanted_hz: f64,
+}
+
+/// Planner position: programmed mm and absolute steps.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Planner<const N: usize> {
+    mm: [f64; N],
+    steps: [i64; N],
+}
+
+impl<const N: usize> Default for Planner<N> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const N: usize> Planner<N> {
+    /// At the origin.
+    pub const fn new() -> Self {
+        Planner { mm: [0.0; N], steps: [0; N] }
+    }
+
+    /// Programmed position, mm.
+    pub fn position_mm(&self) -> &[f64; N] {
+        &self.mm
+    }
+
+    /// Absolute step position of the last planned target.
+    pub fn position_steps(&self) -> &[i64; N] {
+        &self.steps
+    }
+
+    /// Takes the engine's step counters as the position (after a reset or new steps/mm).
+    pub fn sync(&mut self, steps: [i32; N], lim: &Limits<N>) {
+        for i in 0..N {
+            self.steps[i] = steps[i] as i64;
+            self.mm[i] = steps[i] as f64 / lim.steps_per_mm[i];
+        }
+    }
+
+    /// G92: the named axes are now at the given mm. Returns the step position to publish
+    /// (`Shared::set_positions`, once the engine is idle).
+    pub fn set_position(&mut self, set: &[Option<f64>; N], lim: &Limits<N>) -> Result<[i32; N], Error> {
+        let mut steps = self.steps;
+        for i in 0..N {
+            if let Some(mm) = set[i] {
+                steps[i] = to_steps(mm, lim.steps_per_mm[i])?;
+            }
+        }
+        for i in 0..N {
+            if let Some(mm) = set[i] {
+                self.mm[i] = mm;
+            }
+        }
+        self.steps = steps;
+        Ok(core::array::from_fn(|i| steps[i] as i32))
+    }
+
+    /// A straight move to `target` (mm): `feed` in mm/min for G1, `None` for G0. `Ok(None)` when
+    /// no axis moves a whole step (the position still advances, so nothing is lost).
+    pub fn line(&mut self, target: &[f64; N], feed: Option<f64>, lim: &Limits<N>) -> Result<Option<Planned<N>>, Error> {
+        let mut to = [0i64; N];
+        for i in 0..N {
+            to[i] = to_steps(target[i], lim.steps_per_mm[i])?;
+        }
+        let delta: [i64; N] = core::array::from_fn(|i| to[i] - self.steps[i]);
+        let master_steps = delta.iter().map(|d| d.unsigned_abs()).max().unwrap_or(0);
+        if master_steps == 0 {
+            self.mm = *target;
+            return Ok(None);
+        }
+        // Time in minutes: the feed over the path, and each axis at no more than its max rate.
+        let mut len2 = 0.0;
+        let mut minutes = 0.0f64;
+        for i in 0..N {
+            let d = delta[i] as f64 / lim.steps_per_mm[i];
+            len2 += d * d;
+            if delta[i] != 0 {
+                minutes = minutes.max(libm::fabs(d) / lim.max_rate[i]);
+            }
+        }
+        let len = libm::sqrt(len2);
+        if let Some(f) = feed {
+            minutes = minutes.max(len / f);
+        }
+        let wanted_hz = master_steps as f64 / (minutes * 60.0);
+        let cruise = libm::round(wanted_hz).clamp(1.0, lim.vmax_hz as f64) as u32;
+        let mv = Move::new(delta, cruise).map_err(|_| Error::InvalidTarget)?;
+        self.mm = *target;
+        self.steps = to;
+        Ok(Some(Planned { mv, mm_per_step: (len / master_steps as f64) as f32, wanted_hz }))
+    }
+}
+
+/// Absolute steps of a position in mm: `round(mm × steps/mm)`, within ±(2^31 - 1).
+pub fn to_steps(mm: f64, steps_per_mm: f64) -> Result<i64, Error> {
+    let s = libm::round(mm * steps_per_mm);
+    if s.is_finite() && libm::fabs(s) <= i32::MAX as f64 {
+        Ok(s as i64)
+    } else {
+        Err(Error::InvalidTarget)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ramp::period_of_hz;
+
+    fn lim() -> Limits<3> {
+        Limits::new(&Settings::DEFAULT, 60_000)
+    }
+
+    #[test]
+    fn many_small_moves_never_accumulate_rounding() {
+        let mut p = Planner::<3>::new();
+        let l = lim();
+        let mut steps = [0i64; 3];
+        let mut mm = [0.0f64; 3];
+        for _ in 0..1000 {
+            mm[0] += 0.001;
+            mm[1] -= 0.0049;
+            if let Some(pl) = p.line(&mm, Some(100.0), &l).unwrap() {
+                for (s, d) in steps.iter_mut().zip(pl.mv.steps()) {
+                    *s += *d as i64;
+                }
+            }
+        }
+        assert_eq!(steps, [100, -490, 0]);
+        assert_eq!(p.position_steps(), &steps);
+    }
+
+    #[test]
+    fn g1_rate_follows_the_feed_and_axis_limits() {
+        let mut p = Planner::<3>::new();
+        let l = lim();
+        // 50:30:20 mm at F = 600·√3800 mm/min: X runs 500 mm/s = 50 kHz.
+        let f = 600.0 * libm::sqrt(3800.0);
+        let pl = p.line(&[50.0, 30.0, 20.0], Some(f), &l).unwrap().unwrap();
+        assert_eq!(pl.mv.steps(), &[5000, 3000, 2000]);
+        assert_eq!(pl.mv.cruise(), period_of_hz(50_000));
+        // A feed above X's 36 000 mm/min limit: X is held at 60 kHz.
+        let pl = p.line(&[150.0, 30.0, 20.0], Some(1e9), &l).unwrap().unwrap();
+        assert_eq!(pl.mv.cruise(), period_of_hz(60_000));
+        // G0 on one axis: its max rate.
+        let pl = p.line(&[150.0, 40.0, 20.0], None, &l).unwrap().unwrap();
+        assert_eq!(pl.mv.cruise(), period_of_hz(60_000));
+        // A table that tops out lower clamps the cruise (documented in $I).
+        let slow = Limits { vmax_hz: 20_000, ..l };
+        let pl = p.line(&[0.0, 40.0, 20.0], None, &slow).unwrap().unwrap();
+        assert_eq!(pl.mv.cruise(), period_of_hz(20_000));
+        assert!(pl.wanted_hz > 59_000.0);
+        // Very slow feeds stop at 1 step/s.
+        let pl = p.line(&[0.01, 40.0, 20.0], Some(1e-6), &l).unwrap().unwrap();
+        assert_eq!(pl.mv.cruise(), period_of_hz(1));
+    }
+
+    #[test]
+    fn out_of_range_targets_change_nothing() {
+        let mut p = Planner::<3>::new();
+        let l = lim();
+        assert_eq!(p.line(&[3e7, 0.0, 0.0], None, &l), Err(Error::InvalidTarget));
+        assert_eq!(p.line(&[f64::NAN, 0.0, 0.0], None, &l), Err(Error::InvalidTarget));
+        assert_eq!(p.position_steps(), &[0, 0, 0]);
+        assert_eq!(p.line(&[0.004, 0.0, 0.0], None, &l), Ok(None));
+        assert_eq!(p.position_mm(), &[0.004, 0.0, 0.0]);
+        assert_eq!(p.set_position(&[None, Some(-2.0), None], &l), Ok([0, -200, 0]));
+        assert_eq!(p.position_mm(), &[0.004, -2.0, 0.0]);
+    }
+}
