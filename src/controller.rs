@@ -146,6 +146,16 @@ impl<'a, const N: usize> Controller<'a, N> {
         &self.ramped
     }
 
+    /// Moves queued or running.
+    pub fn pending_moves(&self) -> u32 {
+        self.feeder.pending()
+    }
+
+    /// The planner's absolute step position: where the engine ends once the queue runs out.
+    pub fn planned_steps(&self) -> [i64; N] {
+        *self.planner.position_steps()
+    }
+
     /// True while a line is being carried out: [`Self::byte`] takes nothing until it is done.
     pub fn busy(&self) -> bool {
         self.job.is_some()
