@@ -133,7 +133,8 @@ impl<const N: usize> Planner<N> {
             minutes = minutes.max(len / f);
         }
         let wanted_hz = master_steps as f64 / (minutes * 60.0);
-        let cruise = libm::round(wanted_hz).clamp(1.0, lim.vmax_hz as f64) as u32;
+        // max/min, not f64::clamp: its panic message would link float formatting into the firmware.
+        let cruise = libm::round(wanted_hz).max(1.0).min(lim.vmax_hz as f64) as u32;
         let mv = Move::new(delta, cruise).map_err(|_| Error::InvalidTarget)?;
         self.mm = *target;
         self.steps = to;

@@ -68,9 +68,10 @@ pub enum RampError {
 const S_CURVE_SPAN: f64 = 4.0;
 
 /// Period of a rate given in milli-steps per second (rounded to the nearest 1/16 tick).
+/// (f64, exact here below 2^53: it keeps 64-bit integer division out of the firmware.)
 pub fn period_of_millihz(milli_hz: u64) -> Period {
-    let num = TIMER_HZ as u64 * 16 * 1000;
-    Period::from_bits(((num + milli_hz / 2) / milli_hz.max(1)).min(u32::MAX as u64) as u32)
+    let q4 = (TIMER_HZ as f64 * 16_000.0) / (milli_hz.max(1) as f64) + 0.5;
+    Period::from_bits(if q4 >= u32::MAX as f64 { u32::MAX } else { q4 as u32 })
 }
 
 /// Period of a whole rate in steps/s.
@@ -108,8 +109,8 @@ impl<const L: usize> RampTable<L> {
 
     /// Milliseconds the ramp from `v0` to `vmax` takes with this shape.
     pub fn ramp_ms(cfg: &RampConfig) -> u64 {
-        let dv = (cfg.vmax - cfg.v0) as u64;
-        let ms = (dv * 1000).div_ceil(cfg.accel as u64);
+        let dv = (cfg.vmax - cfg.v0) as f64;
+        let ms = libm::ceil(dv * 1000.0 / cfg.accel as f64) as u64;
         match cfg.shape {
             Shape::Trapezoid => ms,
             // The logistic's steepest slope is span/2 / norm of the mean slope.
@@ -208,7 +209,24 @@ fn s_curve_stretch() -> f64 {
 }
 
 fn logistic(x: f64) -> f64 {
-    1.0 / (1.0 + libm::exp(-x))
+    1.0 / (1.0 + exp_small(-x))
+}
+
+/// e^x for |x| ≲ 700, relative error < 1e-8: 2^k · e^r with |r| ≤ ½·ln 2 and a degree-8
+/// Taylor series. Smaller in flash than `libm::exp` (the firmware budget is 32 KiB), and the
+/// table only needs entries good to far better than 0.5 %.
+fn exp_small(x: f64) -> f64 {
+    const LN2: f64 = core::f64::consts::LN_2;
+    let t = x / LN2;
+    let k = if t >= 0.0 { (t + 0.5) as i32 } else { (t - 0.5) as i32 };
+    let r = x - k as f64 * LN2;
+    let mut term = 1.0;
+    let mut sum = 1.0;
+    for n in 1..=8 {
+        term *= r / n as f64;
+        sum += term;
+    }
+    sum * f64::from_bits(((1023 + k.clamp(-1022, 1023)) as u64) << 52)
 }
 
 /// Ideal profile's normalized progress (0..=1) at fraction `u` (0..=1) of the ramp.
@@ -345,5 +363,20 @@ impl<const L: usize> core::ops::DerefMut for RampWriteGuard<'_, L> {
 impl<const L: usize> Drop for RampWriteGuard<'_, L> {
     fn drop(&mut self) {
         self.slot.writer.store(false, Ordering::SeqCst);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn exp_small_matches_libm() {
+        let mut x = -30.0;
+        while x < 30.0 {
+            let (a, b) = (exp_small(x), libm::exp(x));
+            assert!(((a - b) / b).abs() < 1e-8, "exp({x}): {a} vs {b}");
+            x += 0.01;
+        }
     }
 }

@@ -72,7 +72,10 @@ impl Timing {
 
 /// Converts nanoseconds to timer ticks, rounding up so a minimum is never undercut.
 pub const fn ns_to_ticks(ns: u32) -> u32 {
-    ((ns as u64 * TIMER_HZ as u64).div_ceil(1_000_000_000)) as u32
+    // 72 ticks per µs is 9 per 125 ns (32-bit math: no 64-bit division in the firmware).
+    const _: () = assert!(TIMER_HZ == 72_000_000);
+    let ns = if ns > u32::MAX / 9 { u32::MAX / 9 } else { ns };
+    (ns * 9).div_ceil(125)
 }
 
 /// Converts timer ticks to nanoseconds (rounded down).

@@ -3,6 +3,8 @@
 use cortex_m::peripheral::syst::SystClkSource;
 use ddastep::board;
 use ddastep::engine::IDLE_TICKS;
+use ddastep::settings::{Settings, SETTINGS_LEN};
+use stm32f1xx_hal::flash;
 use stm32f1xx_hal::pac;
 use stm32f1xx_hal::prelude::*;
 use stm32f1xx_hal::rcc::Config;
@@ -32,6 +34,48 @@ pub fn gpiob() -> &'static pac::gpiob::RegisterBlock {
 pub struct Board {
     pub tx: Tx<pac::USART1>,
     pub rx: Rx<pac::USART1>,
+    pub flash: flash::Parts,
+}
+
+/// Settings live in the last 1 KiB flash page (memory.x keeps the program out of it).
+const SETTINGS_OFFSET: u32 = 63 * 1024;
+
+/// Settings from flash, or the defaults when the page is blank or corrupt.
+pub fn load_settings() -> Settings {
+    // SAFETY: the settings page is mapped flash, read-only here.
+    let bytes = unsafe {
+        core::slice::from_raw_parts((0x0800_0000 + SETTINGS_OFFSET) as *const u8, SETTINGS_LEN)
+    };
+    Settings::from_bytes(bytes)
+}
+
+/// Writes settings to their flash page (the CPU stalls while flash is busy: only when idle).
+pub fn save_settings(parts: &mut flash::Parts, bytes: &[u8; SETTINGS_LEN]) {
+    let mut w = parts.writer(flash::SectorSize::Sz1K, flash::FlashSize::Sz64K);
+    let ok = w.erase(SETTINGS_OFFSET, 1024).is_ok() && w.write(SETTINGS_OFFSET, bytes).is_ok();
+    if !ok {
+        defmt::warn!("settings: flash write failed");
+    }
+}
+
+/// Drives the shared enable pin.
+pub fn set_enable(high: bool) {
+    let bit = 1u32 << board::ENABLE_PIN;
+    gpiob().bsrr().write(|w| unsafe { w.bits(if high { bit } else { bit << 16 }) });
+}
+
+/// New step pulse width: CCR1 is preloaded, so it takes effect at the next update event.
+pub fn set_pulse_ticks(ticks: u32) {
+    tim2().ccr1().write(|w| unsafe { w.bits(ticks.min(0xFFFF)) });
+}
+
+/// PC13 LED (active low): on for 100 ms of every second.
+pub fn heartbeat(now_ms: u32) {
+    let on = now_ms % 1000 < 100;
+    let bit = 1u32 << board::LED_PIN;
+    // SAFETY: BSRR stores are atomic; only idle drives PC13.
+    let gpioc = unsafe { &*pac::GPIOC::ptr() };
+    gpioc.bsrr().write(|w| unsafe { w.bits(if on { bit << 16 } else { bit }) });
 }
 
 impl Board {
@@ -44,38 +88,10 @@ impl Board {
         );
         let mut afio = dp.AFIO.constrain(&mut rcc);
         let mut gpioa = dp.GPIOA.split(&mut rcc);
-        let mut gpiob = dp.GPIOB.split(&mut rcc);
-        let mut gpioc = dp.GPIOC.split(&mut rcc);
-        let (_pa15, pb3, pb4) = afio.mapr.disable_jtag(gpioa.pa15, gpiob.pb3, gpiob.pb4);
-
-        // Step/dir/enable: push-pull outputs on GPIOB, all low but EN high (drivers off).
-        let crl = &mut gpiob.crl;
-        let crh = &mut gpiob.crh;
-        let _ = gpiob.pb0.into_push_pull_output(crl);
-        let _ = gpiob.pb1.into_push_pull_output(crl);
-        let _ = pb3.into_push_pull_output(crl);
-        let _ = pb4.into_push_pull_output(crl);
-        let _ = gpiob.pb5.into_push_pull_output(crl);
-        let _ = gpiob.pb6.into_push_pull_output(crl);
-        let _ = gpiob.pb7.into_push_pull_output(crl);
-        let _ = gpiob.pb8.into_push_pull_output_with_state(crh, stm32f1xx_hal::gpio::PinState::High);
-        let _ = gpiob.pb9.into_push_pull_output(crh);
-        let _ = gpiob.pb10.into_push_pull_output(crh);
-        let _ = gpiob.pb11.into_push_pull_output(crh);
-        let _ = gpiob.pb12.into_push_pull_output(crh);
-        let _ = gpiob.pb13.into_push_pull_output(crh);
-        let _ = gpiob.pb14.into_push_pull_output(crh);
-        let _ = gpiob.pb15.into_push_pull_output(crh);
-        // Limit switches (reserved): inputs with pull-ups.
-        let _ = gpioa.pa0.into_pull_up_input(&mut gpioa.crl);
-        let _ = gpioa.pa1.into_pull_up_input(&mut gpioa.crl);
-        let _ = gpioa.pa2.into_pull_up_input(&mut gpioa.crl);
-        let _ = gpioa.pa3.into_pull_up_input(&mut gpioa.crl);
-        let _ = gpioa.pa4.into_pull_up_input(&mut gpioa.crl);
-        let _ = gpioa.pa5.into_pull_up_input(&mut gpioa.crl);
-        let _ = gpioa.pa8.into_pull_up_input(&mut gpioa.crh);
-        let _ = gpioc.pc13.into_push_pull_output_with_state(&mut gpioc.crh, stm32f1xx_hal::gpio::PinState::High);
-        let _ = board::LED_PIN;
+        let gpiob = dp.GPIOB.split(&mut rcc);
+        let _gpioc = dp.GPIOC.split(&mut rcc);
+        let _ = afio.mapr.disable_jtag(gpioa.pa15, gpiob.pb3, gpiob.pb4);
+        setup_pins();
 
         // USART1 on PA9/PA10.
         let tx_pin = gpioa.pa9.into_alternate_push_pull(&mut gpioa.crh);
@@ -98,8 +114,34 @@ impl Board {
         syst.enable_interrupt();
         core::mem::forget(syst);
 
-        Board { tx, rx }
+        Board { tx, rx, flash }
     }
+}
+
+/// Step/dir/enable outputs, limit inputs and the LED, written as whole CRL/CRH words (one
+/// nibble per pin: 0x3 push-pull 50 MHz, 0x2 push-pull 2 MHz, 0x8 input with pull, 0x4 input
+/// floating). The HAL's per-pin calls cost ~1 KiB of flash for the same result.
+fn setup_pins() {
+    // SAFETY: init owns the GPIO ports; the HAL configured only PA9/PA10 (USART1).
+    let (a, c) = unsafe { (&*pac::GPIOA::ptr(), &*pac::GPIOC::ptr()) };
+    let b = gpiob();
+    // Outputs start low, but EN high (drivers off, active low).
+    b.bsrr().write(|w| unsafe { w.bits((0xFFFF & !(1 << board::ENABLE_PIN)) << 16 | 1 << board::ENABLE_PIN) });
+    // PB0,1,3..7 dir (PB2 = BOOT1 stays an input), PB8 EN, PB9..15 step.
+    b.crl().write(|w| unsafe { w.bits(0x3333_3433) });
+    b.crh().write(|w| unsafe { w.bits(0x3333_3333) });
+    // Limits PA0..PA5, PA8 pulled up; PA6/PA7 (encoder, later) floating; PA9/PA10 as the HAL
+    // left them; PA11..PA15 untouched (USB, SWD).
+    let mut pull = 0u32;
+    for p in board::LIMIT_PINS {
+        pull |= 1 << p;
+    }
+    a.bsrr().write(|w| unsafe { w.bits(pull) });
+    a.crl().write(|w| unsafe { w.bits(0x4488_8888) });
+    a.crh().modify(|r, w| unsafe { w.bits((r.bits() & !0xF) | 0x8) });
+    // PC13 LED (active low): off.
+    c.bsrr().write(|w| unsafe { w.bits(1 << board::LED_PIN) });
+    c.crh().modify(|r, w| unsafe { w.bits((r.bits() & !(0xF << 20)) | 0x2 << 20) });
 }
 
 /// TIM2 as the step timer: 72 MHz, no prescaler, buffered ARR, update and compare-1 interrupts.

@@ -7,10 +7,12 @@ use defmt_rtt as _;
 
 #[rtic::app(device = stm32f1xx_hal::pac, peripherals = true, dispatchers = [SPI1, SPI2])]
 mod app {
-    use core::sync::atomic::{AtomicU32, Ordering::Relaxed};
+    use core::sync::atomic::{AtomicBool, AtomicU32, Ordering::Relaxed};
 
     use ddastep::board;
+    use ddastep::controller::Controller;
     use ddastep::engine::Engine;
+    use ddastep::protocol::{realtime, Realtime};
     use ddastep::queue::{Feeder, Move, Shared};
     use ddastep::ramp::RampSlot;
     use heapless::spsc::{Consumer, Producer, Queue};
@@ -28,6 +30,10 @@ mod app {
     pub static PROFILE: RampSlot = RampSlot::new();
     /// Milliseconds since boot (SysTick).
     pub static MILLIS: AtomicU32 = AtomicU32::new(0);
+    /// `?` arrived (set by the USART interrupt, taken by `idle`).
+    static STATUS_REQ: AtomicBool = AtomicBool::new(false);
+    /// Ctrl-X arrived.
+    static RESET_REQ: AtomicBool = AtomicBool::new(false);
 
     #[shared]
     struct SharedRes {
@@ -42,7 +48,8 @@ mod app {
         rx_out: Consumer<'static, u8>,
         tx_in: Producer<'static, u8>,
         tx_out: Consumer<'static, u8>,
-        feeder: Feeder<'static, AXES>,
+        controller: Controller<'static, AXES>,
+        flash: stm32f1xx_hal::flash::Parts,
     }
 
     #[init(local = [
@@ -51,13 +58,15 @@ mod app {
         txq: Queue<u8, 512> = Queue::new(),
     ])]
     fn init(cx: init::Context) -> (SharedRes, Local) {
-        let dp = cx.device;
-        let board = hw::Board::setup(dp, cx.core.SYST);
+        let board = hw::Board::setup(cx.device, cx.core.SYST);
+        let settings = hw::load_settings();
         let (mv_in, mv_out) = cx.local.moves.split();
         let (rx_in, rx_out) = cx.local.rxq.split();
         let (tx_in, tx_out) = cx.local.txq.split();
-        let engine = Engine::new(&SHARED, mv_out, &PROFILE, board::pin_map::<AXES>(0, 0));
-        defmt::info!("ddastep up: 72 MHz, TIM2 step timer");
+        let pins = board::pin_map::<AXES>(settings.step_invert, settings.dir_invert);
+        let engine = Engine::new(&SHARED, mv_out, &PROFILE, pins);
+        let controller = Controller::new(Feeder::new(mv_in, &SHARED), &SHARED, &PROFILE, settings);
+        defmt::info!("ddastep up: 72 MHz, {} axes", AXES);
         (
             SharedRes { tx: board.tx },
             Local {
@@ -67,7 +76,8 @@ mod app {
                 rx_out,
                 tx_in,
                 tx_out,
-                feeder: Feeder::new(mv_in, &SHARED),
+                controller,
+                flash: board.flash,
             },
         )
     }
@@ -90,11 +100,21 @@ mod app {
         }
     }
 
-    /// USART1: received bytes into the RX ring, TX ring out to the wire.
+    /// USART1: realtime bytes act at once, line bytes go to the RX ring, the TX ring drains.
     #[task(binds = USART1, priority = 2, local = [rx, rx_in, tx_out], shared = [tx])]
     fn usart(mut cx: usart::Context) {
         while let Ok(b) = cx.local.rx.read() {
-            let _ = cx.local.rx_in.enqueue(b);
+            match realtime(b) {
+                Some(Realtime::Hold) => SHARED.set_hold(true),
+                Some(Realtime::Resume) => SHARED.set_hold(false),
+                Some(Realtime::Status) => STATUS_REQ.store(true, Relaxed),
+                Some(Realtime::Reset) => RESET_REQ.store(true, Relaxed),
+                Some(Realtime::Extended(_)) => {}
+                // A full ring drops the byte: a character-counting sender never fills it.
+                None => {
+                    let _ = cx.local.rx_in.enqueue(b);
+                }
+            }
         }
         let tx_out = cx.local.tx_out;
         cx.shared.tx.lock(|tx| {
@@ -118,20 +138,54 @@ mod app {
         MILLIS.store(MILLIS.load(Relaxed).wrapping_add(1), Relaxed);
     }
 
-    #[idle(local = [rx_out, tx_in, feeder], shared = [tx])]
+    /// The protocol loop: bytes into the controller, its actions onto the pins and flash.
+    #[idle(local = [rx_out, tx_in, controller, flash], shared = [tx])]
     fn idle(mut cx: idle::Context) -> ! {
+        let ctl = cx.local.controller;
+        let tx_in = cx.local.tx_in;
+        let rx_out = cx.local.rx_out;
+        ctl.welcome(tx_in);
         loop {
-            let mut sent = false;
-            while let Some(b) = cx.local.rx_out.dequeue() {
-                // Bring-up: echo until the protocol lands.
-                let _ = cx.local.tx_in.enqueue(b);
-                sent = true;
+            let now = MILLIS.load(Relaxed);
+            if RESET_REQ.swap(false, Relaxed) {
+                // Bytes before the Ctrl-X belong to the old stream.
+                while rx_out.dequeue().is_some() {}
+                ctl.soft_reset(tx_in);
             }
-            if sent {
+            if STATUS_REQ.swap(false, Relaxed) {
+                ctl.status_request();
+            }
+            while let Some(&b) = rx_out.peek() {
+                if !ctl.byte(b, tx_in) {
+                    break;
+                }
+                rx_out.dequeue();
+            }
+            let act = ctl.poll(now, tx_in);
+            hw::set_enable(act.enable_pin_high);
+            if let Some(ticks) = act.pulse_ticks {
+                hw::set_pulse_ticks(ticks);
+            }
+            if act.save || act.restart {
+                hw::save_settings(cx.local.flash, &ctl.settings().to_bytes());
+            }
+            if act.restart {
+                // Let the reply leave, then reset: the engine takes the pin map at boot.
+                while !tx_in_empty(tx_in) {}
+                cortex_m::peripheral::SCB::sys_reset();
+            }
+            hw::heartbeat(now);
+            if tx_in.len() > 0 {
                 cx.shared.tx.lock(|tx| tx.listen());
             }
-            let _ = &cx.local.feeder;
-            cortex_m::asm::wfi();
+            if rx_out.len() == 0 && !RESET_REQ.load(Relaxed) && !STATUS_REQ.load(Relaxed) {
+                cortex_m::asm::wfi();
+            }
         }
+    }
+
+    /// True once the TX ring has drained.
+    fn tx_in_empty(tx_in: &Producer<'static, u8>) -> bool {
+        tx_in.len() == 0
     }
 }

@@ -17,7 +17,10 @@ fn safe_outputs() {
 fn panic(info: &PanicInfo) -> ! {
     cortex_m::interrupt::disable();
     safe_outputs();
-    defmt::error!("panic: {}", defmt::Display2Format(info));
+    // Location only: formatting the message would link core's float formatting (~20 KiB).
+    if let Some(l) = info.location() {
+        defmt::error!("panic at {=str}:{=u32}", l.file(), l.line());
+    }
     loop {
         core::hint::spin_loop();
     }
