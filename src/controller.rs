@@ -13,13 +13,15 @@
 //! character-counting sender never overruns us and nothing accepted is lost. G4, G92, M0, M2
 //! and M18 wait until the queue has run out and the engine is idle.
 
+mod system;
+
 use crate::gcode::{self, Modal, Stop};
 use crate::planner::{Limits, Planned, Planner};
 use crate::protocol::{put_error, put_ok, Error, LineBuf, LineEvent, Out, LINE_LEN, REPLY_ROOM};
 use crate::queue::{Feeder, Shared, State};
 use crate::ramp::RampSlot;
-use crate::report::{self, PARAM_LINES, SETTING_LEN};
-use crate::settings::{Change, Ramped, Settings};
+use crate::report;
+use crate::settings::{Ramped, Settings};
 
 /// Time from enabling the drivers to the first step, in poll milliseconds (2 ≥ 1 ms real).
 pub const ENABLE_SETTLE_MS: u32 = 2;
@@ -352,33 +354,6 @@ impl<'a, const N: usize> Controller<'a, N> {
         done
     }
 
-    /// Writes listing lines while they fit; the listing left, if any.
-    fn list(&self, mut l: Listing, out: &mut impl Out) -> Option<Listing> {
-        loop {
-            match l {
-                Listing::Settings(i) => {
-                    let Some(id) = Settings::ids(N).nth(i as usize) else { return None };
-                    if out.room() < SETTING_LEN + 4 {
-                        return Some(l);
-                    }
-                    let (v, d) = self.settings.get(id, N).unwrap_or((0.0, 0));
-                    report::setting(out, id, v, d);
-                    l = Listing::Settings(i + 1);
-                }
-                Listing::Params(i) => {
-                    if i as usize >= PARAM_LINES {
-                        return None;
-                    }
-                    if out.room() < report::param_len(N) + 4 {
-                        return Some(l);
-                    }
-                    report::param::<N>(out, i as usize);
-                    l = Listing::Params(i + 1);
-                }
-            }
-        }
-    }
-
     /// Starts a job and carries it as far as it goes now.
     fn start(&mut self, job: Job<N>, out: &mut impl Out) {
         self.job = Some(job);
@@ -415,80 +390,6 @@ impl<'a, const N: usize> Controller<'a, N> {
         };
         self.start(job, out);
         Ok(())
-    }
-
-    /// A `$` line (without the `$`).
-    fn system(&mut self, cmd: &[u8], out: &mut impl Out) -> Result<(), Error> {
-        let idle = self.drained();
-        let need_idle = |idle: bool| if idle { Ok(()) } else { Err(Error::NotIdle) };
-        match cmd {
-            b"" => out.put(report::HELP),
-            b"G" => report::modes(out, &self.modal),
-            b"X" if self.alarm => {
-                self.alarm = false;
-                out.put(report::UNLOCKED);
-            }
-            b"X" => {}
-            b"H" => return Err(Error::SettingDisabled),
-            b"$" => {
-                need_idle(idle)?;
-                self.start(Job { listing: Some(Listing::Settings(0)), ..Job::NONE }, out);
-            }
-            b"#" => {
-                need_idle(idle)?;
-                self.start(Job { listing: Some(Listing::Params(0)), ..Job::NONE }, out);
-            }
-            b"I" => {
-                need_idle(idle)?;
-                report::build_info(out, self.feeder.capacity(), &self.ramped);
-            }
-            b"N" => {
-                need_idle(idle)?;
-                out.put(b"$N0=\r\n$N1=\r\n");
-            }
-            b"RST=$" | b"RST=*" | b"RST=#" => {
-                need_idle(idle)?;
-                if cmd != b"RST=#" {
-                    self.settings = Settings::DEFAULT;
-                    self.settings_changed(Change::Pins);
-                    self.settings_changed(Change::Profile);
-                }
-                out.put(report::RESTORED);
-            }
-            // Jogging ($J=) is not implemented yet.
-            [b'J', b'=', ..] => return Err(Error::UnsupportedCommand),
-            [b'0'..=b'9', ..] => {
-                let mut i = 0;
-                let id = gcode::parse_number(cmd, &mut i)?;
-                if cmd.get(i) != Some(&b'=') {
-                    return Err(Error::InvalidStatement);
-                }
-                i += 1;
-                let value = gcode::parse_number(cmd, &mut i)?;
-                if i != cmd.len() || id > 255.0 || id != libm::trunc(id) {
-                    return Err(Error::InvalidStatement);
-                }
-                need_idle(idle)?;
-                let change = self.settings.set(id as u16, value, N)?;
-                self.settings_changed(change);
-            }
-            _ => return Err(Error::InvalidStatement),
-        }
-        Ok(())
-    }
-
-    /// Follows a settings change through (only ever called while idle).
-    fn settings_changed(&mut self, change: Change) {
-        self.save |= change != Change::None;
-        match change {
-            Change::None | Change::Shell => {}
-            Change::Pins => self.restart = true,
-            Change::Profile => {
-                self.limits = Limits::new(&self.settings, self.ramped.cfg.vmax);
-                self.apply_profile();
-                self.planner.sync(self.shared.positions(), &self.limits);
-            }
-        }
     }
 
     /// `<State|MPos:…|FS:feed,0>`: feed from the master rate and the running move's mm/step.

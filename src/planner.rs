@@ -81,25 +81,21 @@ impl<const N: usize> Planner<N> {
 
     /// Takes the engine's step counters as the position (after a reset or new steps/mm).
     pub fn sync(&mut self, steps: [i32; N], lim: &Limits<N>) {
-        for i in 0..N {
-            self.steps[i] = steps[i] as i64;
-            self.mm[i] = steps[i] as f64 / lim.steps_per_mm[i];
-        }
+        self.steps = steps.map(i64::from);
+        self.mm = core::array::from_fn(|i| steps[i] as f64 / lim.steps_per_mm[i]);
     }
 
     /// G92: the named axes are now at the given mm. Returns the step position to publish
     /// (`Shared::set_positions`, once the engine is idle).
     pub fn set_position(&mut self, set: &[Option<f64>; N], lim: &Limits<N>) -> Result<[i32; N], Error> {
         let mut steps = self.steps;
-        for i in 0..N {
-            if let Some(mm) = set[i] {
-                steps[i] = to_steps(mm, lim.steps_per_mm[i])?;
+        for ((s, mm), spm) in steps.iter_mut().zip(set).zip(&lim.steps_per_mm) {
+            if let Some(mm) = mm {
+                *s = to_steps(*mm, *spm)?;
             }
         }
-        for i in 0..N {
-            if let Some(mm) = set[i] {
-                self.mm[i] = mm;
-            }
+        for (m, v) in self.mm.iter_mut().zip(set) {
+            *m = v.unwrap_or(*m);
         }
         self.steps = steps;
         Ok(core::array::from_fn(|i| steps[i] as i32))
@@ -109,8 +105,8 @@ impl<const N: usize> Planner<N> {
     /// no axis moves a whole step (the position still advances, so nothing is lost).
     pub fn line(&mut self, target: &[f64; N], feed: Option<f64>, lim: &Limits<N>) -> Result<Option<Planned<N>>, Error> {
         let mut to = [0i64; N];
-        for i in 0..N {
-            to[i] = to_steps(target[i], lim.steps_per_mm[i])?;
+        for ((s, mm), spm) in to.iter_mut().zip(target).zip(&lim.steps_per_mm) {
+            *s = to_steps(*mm, *spm)?;
         }
         let delta: [i64; N] = core::array::from_fn(|i| to[i] - self.steps[i]);
         let master_steps = delta.iter().map(|d| d.unsigned_abs()).max().unwrap_or(0);
@@ -121,11 +117,11 @@ impl<const N: usize> Planner<N> {
         // Time in minutes: the feed over the path, and each axis at no more than its max rate.
         let mut len2 = 0.0;
         let mut minutes = 0.0f64;
-        for i in 0..N {
-            let d = delta[i] as f64 / lim.steps_per_mm[i];
+        for ((&steps, spm), rate) in delta.iter().zip(&lim.steps_per_mm).zip(&lim.max_rate) {
+            let d = steps as f64 / spm;
             len2 += d * d;
-            if delta[i] != 0 {
-                minutes = minutes.max(libm::fabs(d) / lim.max_rate[i]);
+            if steps != 0 {
+                minutes = minutes.max(libm::fabs(d) / rate);
             }
         }
         let len = libm::sqrt(len2);

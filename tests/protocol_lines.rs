@@ -213,7 +213,7 @@ fn dwell_waits_for_the_queue_then_the_time() {
     // The next line waits behind the dwell.
     b.send("G0 Y1\n");
     let t = b.now_ms - t0;
-    assert!(t >= 350 && t < 400, "dwell ended after {t} ms");
+    assert!((350..400).contains(&t), "dwell ended after {t} ms");
     b.finish();
     assert_eq!(replies(&b.take()), (2, 0));
     b.run_to_idle(1000);

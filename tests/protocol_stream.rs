@@ -18,7 +18,7 @@ fn stream(b: &mut Bench<3>, lines: &[String]) -> Vec<String> {
     let mut ms = 0;
     while replies.len() < lines.len() {
         // Sender: whole lines while the unacknowledged bytes fit in the RX buffer.
-        while next < lines.len() && in_flight.iter().sum::<usize>() + lines[next].len() + 1 <= RX_BUFFER_LEN {
+        while next < lines.len() && in_flight.iter().sum::<usize>() + lines[next].len() < RX_BUFFER_LEN {
             rx.extend(lines[next].bytes());
             rx.push_back(b'\n');
             in_flight.push_back(lines[next].len() + 1);

@@ -1,0 +1,85 @@
+//! Settings: Grbl's `$N=` rules, the flash image, and the profile derived for the engine.
+
+use ddastep::protocol::Error;
+use ddastep::ramp::RampSlot;
+use ddastep::settings::{crc32, Change, Settings, RAMP_SHAPE, SETTINGS_LEN};
+
+#[test]
+fn defaults_survive_flash_and_bad_images_fall_back() {
+    let mut s = Settings::DEFAULT;
+    s.set(100, 80.5, 3).unwrap();
+    s.set(RAMP_SHAPE, 1.0, 3).unwrap();
+    s.set(4, 1.0, 3).unwrap();
+    let b = s.to_bytes();
+    assert_eq!(Settings::decode(&b), Some(s));
+    let mut flipped = b;
+    flipped[30] ^= 1;
+    assert_eq!(Settings::decode(&flipped), None);
+    assert_eq!(Settings::from_bytes(&flipped), Settings::DEFAULT);
+    assert_eq!(Settings::from_bytes(&[0xFF; SETTINGS_LEN]), Settings::DEFAULT);
+    assert_eq!(Settings::from_bytes(&b[..10]), Settings::DEFAULT);
+    assert!(Settings::DEFAULT.is_valid());
+    assert_eq!(crc32(b"123456789"), 0xCBF4_3926);
+}
+
+#[test]
+fn set_follows_grbl_rules() {
+    let mut s = Settings::DEFAULT;
+    assert_eq!(s.set(0, 0.5, 3), Err(Error::StepPulseMin));
+    assert_eq!(s.set(100, -1.0, 3), Err(Error::NegativeValue));
+    assert_eq!(s.set(103, 10.0, 3), Err(Error::InvalidStatement));
+    assert_eq!(s.set(103, 10.0, 4), Ok(Change::Profile));
+    assert_eq!(s.set(2, 5.7, 3), Ok(Change::Pins));
+    assert_eq!(s.step_invert, 5);
+    assert_eq!(s.set(2, 256.0, 3), Err(Error::InvalidStatement));
+    assert_eq!(s.set(20, 1.0, 3), Err(Error::SoftLimitNeedsHoming));
+    assert_eq!(s.set(20, 0.0, 3), Ok(Change::None));
+    assert_eq!(s.set(7, 0.0, 3), Err(Error::InvalidStatement));
+    assert_eq!(s.set(RAMP_SHAPE, 2.0, 3), Err(Error::InvalidStatement));
+    assert_eq!(s.set(110, f64::NAN, 3), Err(Error::BadNumberFormat));
+}
+
+#[test]
+fn ids_cover_every_gettable_setting_once() {
+    let s = Settings::DEFAULT;
+    let ids: heapless::Vec<u16, 64> = Settings::ids(3).collect();
+    assert_eq!(ids.len(), 7 + 15 + 3 + 12);
+    assert!(ids.windows(2).all(|w| w[0] < w[1]), "{ids:?}");
+    assert!(ids.iter().all(|&id| s.get(id, 3).is_some()));
+    assert_eq!(s.get(133, 3), None);
+    assert_eq!(Settings::ids(7).count(), 7 + 15 + 3 + 28);
+}
+
+#[test]
+fn profile_uses_the_slowest_accel_and_the_fastest_axis() {
+    let mut s = Settings::DEFAULT;
+    s.set(121, 500.0, 3).unwrap(); // Y: 50 000 steps/s²
+    s.set(112, 60_000.0, 3).unwrap(); // Z: 100 kHz
+    s.set(120, 1.0, 3).unwrap();
+    s.set(120, 10_000.0, 3).unwrap();
+    let t = s.timing();
+    assert_eq!((t.pulse_ticks, t.dir_setup_ticks, t.min_period_ticks), (216, 360, 432));
+    let cfg = s.ramp_config(3, &t);
+    assert_eq!((cfg.v0, cfg.vmax, cfg.accel), (1000, 100_000, 50_000));
+    // 99 kHz at 50 000 steps/s² needs 1.98 s: the table caps the top.
+    static SLOT: RampSlot = RampSlot::new();
+    let mut g = SLOT.try_write().unwrap();
+    let r = s.build_profile(3, &mut g);
+    assert!(r.table_limited);
+    assert_eq!(r.cfg.vmax, 1000 + 50_000 * 1024 / 1000 - 1);
+    assert_eq!(g.ramp.config(), r.cfg);
+    assert_eq!(r.max_rate_hz, 166_666);
+    // Defaults fit: 59 ms to 60 kHz.
+    let r = Settings::DEFAULT.build_profile(3, &mut g);
+    assert!(!r.table_limited);
+    assert_eq!((r.cfg.vmax, g.ramp.len()), (60_000, 59));
+}
+
+#[test]
+fn short_pulses_raise_the_rate_limit() {
+    let mut s = Settings::DEFAULT;
+    s.set(0, 2.0, 3).unwrap();
+    assert_eq!(s.timing().max_rate_hz(), 250_000);
+    s.set(0, 1.0, 3).unwrap();
+    assert_eq!(s.timing().max_rate_hz(), 500_000);
+}
