@@ -40,21 +40,19 @@ pub fn parse_number(s: &[u8], i: &mut usize) -> Result<f64, Error> {
             b'0'..=b'9' => {
                 digits += 1;
                 let d = (c - b'0') as u64;
-                if !point {
-                    sig = sig.checked_mul(10).ok_or(Error::BadNumberFormat)? + d;
-                } else if d == 0 {
-                    zeros += 1; // trailing zeros after the point cost nothing unless followed
+                if point && d == 0 {
+                    zeros += 1; // zeros after the point count only once a digit follows
                 } else {
-                    frac += zeros + 1;
-                    sig = match sig {
-                        0 => d,
-                        _ => 10u64
-                            .checked_pow(zeros as u32 + 1)
-                            .and_then(|k| sig.checked_mul(k))
-                            .ok_or(Error::BadNumberFormat)?
-                            + d,
+                    let shift = if point { zeros as u32 + 1 } else { 1 };
+                    if point {
+                        frac += zeros + 1;
+                        zeros = 0;
+                    }
+                    let scaled = match sig {
+                        0 => Some(0),
+                        _ => 10u64.checked_pow(shift).and_then(|k| sig.checked_mul(k)),
                     };
-                    zeros = 0;
+                    sig = scaled.and_then(|v| v.checked_add(d)).ok_or(Error::BadNumberFormat)?;
                 }
                 if sig > MAX_SIGNIFICAND || frac >= POW10.len() {
                     return Err(Error::BadNumberFormat);
