@@ -25,6 +25,8 @@ use crate::settings::{Ramped, Settings};
 
 /// Time from enabling the drivers to the first step, in poll milliseconds (2 ≥ 1 ms real).
 pub const ENABLE_SETTLE_MS: u32 = 2;
+/// Free TX bytes before a held line may finish (`[MSG:Pgm End]` and `ok`).
+const POLL_REPLY_ROOM: usize = 32;
 /// Moves whose feed (mm per master step) is remembered for status reports.
 const FEED_RING: usize = 32;
 
@@ -62,6 +64,9 @@ struct Job<const N: usize> {
     drivers_off: bool,
     pause: bool,
     end: bool,
+    /// Settings changed: report [`Actions::save`] from the poll that sends the `ok`, so the
+    /// flash write (which stalls the CPU) happens before the next line can start a move.
+    save: bool,
 }
 
 impl<const N: usize> Job<N> {
@@ -74,6 +79,7 @@ impl<const N: usize> Job<N> {
         drivers_off: false,
         pause: false,
         end: false,
+        save: false,
     };
 }
 
@@ -232,7 +238,7 @@ impl<'a, const N: usize> Controller<'a, N> {
             self.apply_profile();
         }
         self.drive_enable();
-        if self.job.is_some() && self.advance(true, out) {
+        if self.job.is_some() && out.room() >= POLL_REPLY_ROOM && self.advance(true, out) {
             put_ok(out);
         }
         if self.status_wanted && out.room() >= report::status_len(N) {
@@ -296,6 +302,13 @@ impl<'a, const N: usize> Controller<'a, N> {
     fn advance(&mut self, in_poll: bool, out: &mut impl Out) -> bool {
         let Some(mut job) = self.job else { return false };
         let done = 'run: {
+            if job.save {
+                if !in_poll {
+                    break 'run false;
+                }
+                self.save = true;
+                job.save = false;
+            }
             if let Some(l) = job.listing {
                 job.listing = self.list(l, out);
                 if job.listing.is_some() {

@@ -314,3 +314,30 @@ fn m0_pauses_m2_ends() {
     assert_eq!(b.line("M30"), "[MSG:Pgm End]\r\nok\r\n");
     assert_eq!(b.line("$G"), "[GC:G1 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0]\r\nok\r\n");
 }
+
+#[test]
+fn flash_write_comes_before_the_next_line_moves() {
+    let mut b = Bench::<3>::with_defaults();
+    b.take();
+    // Both lines already in the RX ring: the second waits until the poll that asks for the save.
+    let mut rx: Vec<u8> = b"$100=200\nG0 X1\n".to_vec();
+    let mut taken = 0;
+    while taken < rx.len() && b.ctl.byte(rx[taken], &mut b.tx) {
+        taken += 1;
+    }
+    assert_eq!(taken, 9, "stops after the settings line");
+    assert_eq!(b.take(), "");
+    b.tick_ms();
+    let a = *b.actions.last().unwrap();
+    assert!(a.save && !a.restart);
+    assert_eq!(b.take(), "ok\r\n");
+    assert_eq!(b.ctl.pending_moves(), 0, "no move before the flash write");
+    rx.drain(..taken);
+    for c in rx {
+        assert!(b.ctl.byte(c, &mut b.tx));
+    }
+    b.finish();
+    b.run_to_idle(1000);
+    assert_eq!(b.shared.positions(), [200, 0, 0]);
+    assert!(b.actions.iter().filter(|a| a.save).count() == 1);
+}

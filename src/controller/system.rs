@@ -40,12 +40,12 @@ impl<const N: usize> Controller<'_, N> {
             }
             b"RST=$" | b"RST=*" | b"RST=#" => {
                 need_idle(idle)?;
+                out.put(report::RESTORED);
                 if cmd != b"RST=#" {
                     self.settings = Settings::DEFAULT;
-                    self.settings_changed(Change::Pins);
-                    self.settings_changed(Change::Profile);
+                    self.settings_changed(Change::Pins, out);
+                    self.settings_changed(Change::Profile, out);
                 }
-                out.put(report::RESTORED);
             }
             // Jogging ($J=) is not implemented yet.
             [b'J', b'=', ..] => return Err(Error::UnsupportedCommand),
@@ -62,16 +62,19 @@ impl<const N: usize> Controller<'_, N> {
                 }
                 need_idle(idle)?;
                 let change = self.settings.set(id as u16, value, N)?;
-                self.settings_changed(change);
+                self.settings_changed(change, out);
             }
             _ => return Err(Error::InvalidStatement),
         }
         Ok(())
     }
 
-    /// Follows a settings change through (only ever called while idle).
-    fn settings_changed(&mut self, change: Change) {
-        self.save |= change != Change::None;
+    /// Follows a settings change through (only ever called while idle); the line's `ok` waits
+    /// for the poll that asks for the flash write.
+    fn settings_changed(&mut self, change: Change, out: &mut impl Out) {
+        if change != Change::None {
+            self.start(Job { save: true, ..Job::NONE }, out);
+        }
         match change {
             Change::None | Change::Shell => {}
             Change::Pins => self.restart = true,
