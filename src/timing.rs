@@ -47,8 +47,9 @@ pub struct Timing {
 }
 
 impl Timing {
-    /// 3 µs pulses, 5 µs direction setup, 500 kHz at most: safe for every driver in
-    /// [`crate::timing`] until settings say otherwise.
+    /// 3 µs pulses, 5 µs direction setup: safe for every driver in this module until
+    /// settings say otherwise. The 3 µs pulse (216 ticks) sets the shortest period to 432
+    /// ticks, so this allows about 166 kHz; the interrupt's own floor is 144 ticks (500 kHz).
     pub const DEFAULT: Timing = Timing::new(216, 360, 144);
 
     /// All zero: "not set yet"; the engine uses [`Timing::DEFAULT`] in its place.
