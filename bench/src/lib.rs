@@ -1,2 +1,3 @@
 //! ddastep virtual bench (placeholder until the modules land).
 pub mod la;
+pub mod emu;

@@ -1,0 +1,397 @@
+//! `Board`: the emulated Blue Pill running an ELF, with the run loop that interleaves
+//! unicorn execution, peripheral events, exceptions and sleep. For tests, the `sim` CLI and
+//! the sweep.
+//!
+//! Each loop turn: apply scheduled input flips, bring peripherals to `now`, take a pending
+//! exception that may preempt (or tail-chain), fast-forward through WFI sleep, else run the
+//! CPU until the next event. The block hook stops before a block when an event is due; when
+//! the event falls inside a block, the CPU is restarted with an instruction count so it stops
+//! at the first instruction boundary at or after the event (exact in modeled cycles).
+
+use std::path::Path;
+
+use anyhow::{bail, Context, Result};
+use unicorn_engine::RegisterARM;
+
+use super::bus::{Stop, TIM2_IRQ};
+use super::cpu::{self, Cpu, Image};
+use super::exception::{self, ENTRY_CYCLES, RETURN_CYCLES, TAIL_CHAIN_CYCLES};
+use super::gpio::PinEdge;
+use super::nvic::IRQ0;
+use super::stats::{IsrEntry, Stats};
+
+/// Core clock: modeled cycles per second.
+pub const HZ: u64 = 72_000_000;
+/// Instruction budget per unicorn run when no split is needed.
+const UNLIMITED: usize = 1 << 40;
+
+/// GPIO port of a pin.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Port {
+    A = 0,
+    B = 1,
+    C = 2,
+    D = 3,
+    E = 4,
+}
+
+/// An input level change at a modeled cycle.
+#[derive(Clone, Copy, Debug)]
+pub struct InputFlip {
+    pub cycle: u64,
+    pub port: Port,
+    pub pin: u8,
+    pub level: bool,
+}
+
+/// An emulated Blue Pill with a program loaded.
+pub struct Board {
+    cpu: Cpu,
+    image: Image,
+    pub(crate) stats: Stats,
+    /// Sleeping in WFI (or after an exception return with SLEEPONEXIT).
+    sleeping: bool,
+    /// EXC_RETURN kept while sleeping on exit (frame still stacked).
+    sleep_on_exit: Option<u32>,
+    split: Option<usize>,
+    inputs: Vec<InputFlip>,
+    fault: Option<String>,
+}
+
+impl Board {
+    // load an ELF file
+    pub fn load(elf: impl AsRef<Path>) -> Result<Self> {
+        let path = elf.as_ref();
+        let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
+        Self::from_elf_bytes(&bytes)
+    }
+
+    // load an ELF image from memory
+    pub fn from_elf_bytes(elf: &[u8]) -> Result<Self> {
+        let (mut cpu, image) = cpu::build(elf)?;
+        cpu.reg_write(RegisterARM::PC, (image.reset & !1) as u64).map_err(|e| anyhow::anyhow!("{e:?}"))?;
+        Ok(Self {
+            cpu,
+            image,
+            stats: Stats::default(),
+            sleeping: false,
+            sleep_on_exit: None,
+            split: None,
+            inputs: Vec::new(),
+            fault: None,
+        })
+    }
+
+    // modeled cycles since reset
+    pub fn cycles(&self) -> u64 {
+        self.cpu.get_data().now
+    }
+
+    // simulated seconds since reset
+    pub fn seconds(&self) -> f64 {
+        self.cycles() as f64 / HZ as f64
+    }
+
+    // instructions executed since reset
+    pub fn instructions(&self) -> u64 {
+        self.cpu.get_data().insns
+    }
+
+    // the CPU fault that stopped execution, if any
+    pub fn fault(&self) -> Option<&str> {
+        self.fault.as_deref()
+    }
+
+    // is the CPU asleep in WFI?
+    pub fn is_sleeping(&self) -> bool {
+        self.sleeping
+    }
+
+    // read a core register (e.g. `RegisterARM::R0`)
+    pub fn reg(&self, r: RegisterARM) -> u32 {
+        self.cpu.reg_read(r).unwrap_or(0) as u32
+    }
+
+    // read a 32-bit word of memory
+    pub fn read_u32(&self, addr: u32) -> u32 {
+        let mut b = [0u8; 4];
+        let _ = self.cpu.mem_read(addr as u64, &mut b);
+        u32::from_le_bytes(b)
+    }
+
+    // read memory
+    pub fn read_mem(&self, addr: u32, len: usize) -> Vec<u8> {
+        self.cpu.mem_read_as_vec(addr as u64, len).unwrap_or_default()
+    }
+
+    // run for `cycles` more modeled cycles
+    pub fn run_for(&mut self, cycles: u64) -> Result<()> {
+        let end = self.cycles() + cycles;
+        self.run_until_cycle(end)
+    }
+
+    // run for `s` simulated seconds
+    pub fn run_seconds(&mut self, s: f64) -> Result<()> {
+        self.run_for((s * HZ as f64) as u64)
+    }
+
+    // run until modeled cycle `end`
+    pub fn run_until_cycle(&mut self, end: u64) -> Result<()> {
+        while self.cycles() < end {
+            self.step(end)?;
+        }
+        Ok(())
+    }
+
+    // run until `done(board)` holds or `max_cycles` pass; returns whether it held
+    pub fn run_until(&mut self, max_cycles: u64, mut done: impl FnMut(&Board) -> bool) -> Result<bool> {
+        let end = self.cycles() + max_cycles;
+        while !done(self) {
+            if self.cycles() >= end {
+                return Ok(false);
+            }
+            self.step(end)?;
+        }
+        Ok(true)
+    }
+
+    // queue bytes on the host side of USART1 RX (they arrive at line pace)
+    pub fn serial_send(&mut self, bytes: &[u8]) {
+        let m = self.cpu.get_data_mut();
+        m.usart1.rx_queue.extend(bytes);
+        let now = m.now;
+        m.usart1.start_rx(now);
+    }
+
+    // everything the firmware sent on USART1 TX
+    pub fn serial_output(&self) -> String {
+        String::from_utf8_lossy(&self.cpu.get_data().usart1.transcript).into_owned()
+    }
+
+    // raw TX bytes and the modeled cycle each one finished
+    pub fn serial_bytes(&self) -> (&[u8], &[u64]) {
+        let u = &self.cpu.get_data().usart1;
+        (&u.transcript, &u.tx_times)
+    }
+
+    // send one line (adds '\n') and run until a reply line starts with "ok" or "error"
+    pub fn send_line_wait_ok(&mut self, line: &str) -> Result<String> {
+        self.send_line_wait_ok_within(line, 10 * HZ)
+    }
+
+    // like `send_line_wait_ok` with a timeout in modeled cycles
+    pub fn send_line_wait_ok_within(&mut self, line: &str, max_cycles: u64) -> Result<String> {
+        let mark = self.cpu.get_data().usart1.transcript.len();
+        self.serial_send(format!("{}\n", line.trim_end()).as_bytes());
+        let reply = |b: &Board| {
+            let text = String::from_utf8_lossy(&b.cpu.get_data().usart1.transcript[mark..]).into_owned();
+            let complete = &text[..text.rfind('\n').map_or(0, |i| i + 1)];
+            let last = complete.lines().find(|l| l.starts_with("ok") || l.starts_with("error"));
+            last.map(|l| (text.clone(), l.starts_with("ok")))
+        };
+        let got = self.run_until(max_cycles, |b| reply(b).is_some())?;
+        match reply(self) {
+            Some((text, true)) if got => Ok(text),
+            Some((text, _)) => bail!("{line:?} -> {}", text.trim_end()),
+            None => bail!("no ok/error for {line:?} within {:.3} s (simulated); got {:?}", max_cycles as f64 / HZ as f64, {
+                String::from_utf8_lossy(&self.cpu.get_data().usart1.transcript[mark..]).into_owned()
+            }),
+        }
+    }
+
+    // drive an input pin now (port A limit inputs, ...)
+    pub fn set_input(&mut self, port: Port, pin: u8, level: bool) {
+        let p = &mut self.cpu.get_data_mut().ports[port as usize];
+        p.ext_driven |= 1 << pin;
+        if level {
+            p.ext_level |= 1 << pin;
+        } else {
+            p.ext_level &= !(1 << pin);
+        }
+    }
+
+    // schedule an input change at a modeled cycle
+    pub fn schedule_input(&mut self, flip: InputFlip) {
+        self.inputs.push(flip);
+        self.inputs.sort_by_key(|f| std::cmp::Reverse(f.cycle));
+    }
+
+    // output latch level of a pin
+    pub fn output(&self, port: Port, pin: u8) -> bool {
+        self.cpu.get_data().ports[port as usize].odr & 1 << pin != 0
+    }
+
+    // every output latch change so far
+    pub fn edges(&self) -> &[PinEdge] {
+        &self.cpu.get_data().edges
+    }
+
+    // keep (default) or drop the pin edge history (long sweeps)
+    pub fn record_edges(&mut self, on: bool) {
+        self.cpu.get_data_mut().record_edges = on;
+    }
+
+    // RX bytes lost because the firmware had not read the previous one
+    pub fn usart_rx_overruns(&self) -> u64 {
+        self.cpu.get_data().usart1.rx_overruns
+    }
+
+    // TIM2 events that found their flag still set
+    pub fn overruns(&self) -> u64 {
+        self.cpu.get_data().tim2.overruns
+    }
+
+    // peripheral registers without a model that the program touched (address -> first PC)
+    pub fn unmodeled(&self) -> Vec<(u32, u32)> {
+        self.cpu.get_data().unmodeled.iter().map(|(a, p)| (*a, *p)).collect()
+    }
+
+    // raw bytes in RTT up-buffer 0 (defmt frames, not decoded)
+    pub fn rtt_up(&self) -> Vec<u8> {
+        let Some(cb) = self.image.rtt else { return Vec::new() };
+        // SEGGER_RTT_CB: id[16], max_up, max_down, then up buffers {name, buf, size, wr, rd, flags}.
+        let buf = self.read_u32(cb + 24 + 4);
+        let size = self.read_u32(cb + 24 + 8) as usize;
+        let wr = self.read_u32(cb + 24 + 12) as usize;
+        if buf == 0 || size == 0 || size > 64 * 1024 {
+            return Vec::new();
+        }
+        self.read_mem(buf, wr.min(size))
+    }
+
+    // CPU load (not sleeping) averaged over the 1 ms windows between two cycles
+    pub fn cpu_load(&self, from: u64, to: u64) -> f64 {
+        self.stats.cpu_load_between(from, to)
+    }
+
+    pub(crate) fn stats(&self) -> &Stats {
+        &self.stats
+    }
+
+    // one turn of the run loop, never past cycle `end`
+    fn step(&mut self, end: u64) -> Result<()> {
+        if let Some(f) = &self.fault {
+            bail!("CPU stopped: {f}");
+        }
+        let now = self.cycles();
+        while self.inputs.last().is_some_and(|f| f.cycle <= now) {
+            let f = self.inputs.pop().unwrap();
+            self.set_input(f.port, f.pin, f.level);
+        }
+        self.cpu.get_data_mut().sync(now);
+        let basepri = self.reg(RegisterARM::BASEPRI);
+        let primask = self.reg(RegisterARM::PRIMASK) != 0;
+        let next_input = self.inputs.last().map_or(u64::MAX, |f| f.cycle);
+        let deadline = self.cpu.get_data().next_event().min(next_input).min(end);
+        if self.sleeping {
+            let m = self.cpu.get_data();
+            let wake = m.pending && m.nvic.preempting(basepri, false).is_some();
+            if !wake {
+                let until = deadline.max(now);
+                self.stats.sleep(now, until);
+                self.cpu.get_data_mut().now = until;
+                return Ok(());
+            }
+            self.sleeping = false;
+            if let Some(ret) = self.sleep_on_exit.take() {
+                let n = self.cpu.get_data().nvic.preempting(basepri, primask).unwrap_or(0);
+                self.take(n, ret, TAIL_CHAIN_CYCLES);
+                return Ok(());
+            }
+        }
+        if self.split.is_none() && self.cpu.get_data().pending {
+            if let Some(n) = self.cpu.get_data().nvic.preempting(basepri, primask) {
+                let ret = exception::stack_frame(&mut self.cpu);
+                self.take(n, ret, ENTRY_CYCLES);
+                return Ok(());
+            }
+        }
+        self.run_cpu(deadline)
+    }
+
+    // run unicorn until the block hook, a count limit, WFI, an exception return or a fault
+    fn run_cpu(&mut self, deadline: u64) -> Result<()> {
+        let pc = self.reg(RegisterARM::PC);
+        let count = self.split.take().unwrap_or(UNLIMITED);
+        {
+            let m = self.cpu.get_data_mut();
+            m.deadline = deadline;
+            m.stop = Stop::None;
+            m.cur = None;
+            if count != UNLIMITED {
+                m.armed = Some((pc, m.now));
+            }
+        }
+        let result = self.cpu.emu_start((pc | 1) as u64, 0, 0, count);
+        let start_pc = pc;
+        let pc = self.reg(RegisterARM::PC);
+        if std::env::var_os("EMU_TRACE").is_some() {
+            let m = self.cpu.get_data();
+            eprintln!("run {start_pc:#x} count {count} -> {pc:#x} {result:?} stop {:?} cur {:x?} now {} deadline {deadline}", m.stop, m.cur, m.now);
+        }
+        let m = self.cpu.get_data_mut();
+        m.armed = None;
+        let mut wfi = false;
+        if let Some(b) = m.block() {
+            let (cycles, n) = match b.index_of(pc) {
+                Some(i) => (b.prefix[i], i),
+                None => (if pc >= 0xFFFF_FFF0 { b.prefix[b.insns.len()] } else { b.cost_to(pc) }, b.insns.len()),
+            };
+            wfi = pc == b.end && b.insns.last().is_some_and(|i| i.wfi);
+            m.now += cycles;
+            m.insns += n as u64;
+        }
+        m.cur = None;
+        if let Stop::Split(k) = m.stop {
+            self.split = Some(k);
+        }
+        if pc >= 0xFFFF_FFF0 {
+            self.exception_return(pc | 1);
+        } else if wfi {
+            self.sleeping = true;
+        } else if let Err(e) = result {
+            self.fault = Some(format!("{e:?} at pc {pc:#010x} after {} modeled cycles", self.cycles()));
+            bail!("CPU stopped: {}", self.fault.as_ref().unwrap());
+        }
+        Ok(())
+    }
+
+    // enter exception `n` with `exc_return` in LR, charging `cost` modeled cycles
+    fn take(&mut self, n: u32, exc_return: u32, cost: u64) {
+        let start = self.cycles();
+        exception::enter(&mut self.cpu, n, exc_return);
+        let m = self.cpu.get_data_mut();
+        m.now += cost;
+        if n == IRQ0 + TIM2_IRQ {
+            m.first_bsrr = None;
+            let update = (m.tim2.sr & 1 != 0).then_some(m.tim2.last_update);
+            self.stats.isr = Some(IsrEntry { start, insns: m.insns, update });
+        }
+    }
+
+    // a branch to EXC_RETURN: deactivate, then tail-chain, sleep on exit, or unstack
+    fn exception_return(&mut self, exc_return: u32) {
+        let n = self.cpu.get_data_mut().nvic.deactivate();
+        let now = self.cycles();
+        if n == IRQ0 + TIM2_IRQ {
+            let m = self.cpu.get_data();
+            self.stats.isr_done(now + RETURN_CYCLES, m.insns, m.first_bsrr);
+        }
+        self.cpu.get_data_mut().sync(now);
+        let basepri = self.reg(RegisterARM::BASEPRI);
+        let primask = self.reg(RegisterARM::PRIMASK) != 0;
+        if let Some(next) = self.cpu.get_data().nvic.preempting(basepri, primask) {
+            self.take(next, exc_return, TAIL_CHAIN_CYCLES);
+            return;
+        }
+        let to_thread = exc_return & 8 != 0;
+        if to_thread && self.cpu.get_data().nvic.scr & 2 != 0 {
+            self.sleeping = true;
+            self.sleep_on_exit = Some(exc_return);
+            self.cpu.get_data_mut().now += RETURN_CYCLES;
+            return;
+        }
+        exception::unstack(&mut self.cpu, exc_return);
+        self.cpu.get_data_mut().now += RETURN_CYCLES;
+    }
+}

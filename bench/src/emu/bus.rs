@@ -1,0 +1,257 @@
+//! The emulated Blue Pill's state (time, peripherals, NVIC, traces) and the MMIO dispatch
+//! from unicorn's callbacks to the peripheral models. For `board.rs`, which owns a
+//! `Unicorn<Machine>`.
+//!
+//! Time is modeled cycles. During a block, `block_start` is the cycle the block began and an
+//! access happens at the end of its instruction: `block_start + prefix[i] + cost[i]`.
+//! Registers with no model keep what was written (so read-modify-write works), read 0 until
+//! then, and are logged once with address and PC.
+
+use std::collections::{BTreeMap, HashMap, HashSet};
+
+use super::cost::{Block, BlockCache};
+use super::gpio::{PinEdge, Port};
+use super::nvic::{Nvic, IRQ0};
+use super::systick::SysTick;
+use super::timer::Timer;
+use super::usart::Usart;
+
+/// TIM2 global interrupt (IRQ 28).
+pub const TIM2_IRQ: u32 = 28;
+/// USART1 global interrupt (IRQ 37).
+pub const USART1_IRQ: u32 = 37;
+
+const TIM2: u32 = 0x4000_0000;
+const USART1: u32 = 0x4001_3800;
+const GPIOA: u32 = 0x4001_0800;
+const RCC: u32 = 0x4002_1000;
+const FLASH_IF: u32 = 0x4002_2000;
+const SCS: u32 = 0xE000_E000;
+const DWT_CYCCNT: u32 = 0xE000_1004;
+
+/// Why the block hook stopped the CPU.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stop {
+    None,
+    /// An exception may preempt, or the deadline has passed.
+    Event,
+    /// The deadline falls after the first `k` instructions of the block.
+    Split(usize),
+}
+
+/// Everything the emulator callbacks can see.
+pub struct Machine {
+    /// Cycle at the start of `cur` (or the current PC when stopped).
+    pub now: u64,
+    pub insns: u64,
+    pub cur: Option<u32>,
+    /// The cycle before which the CPU must stop (next peripheral event or run limit).
+    pub deadline: u64,
+    /// Block allowed to run `k` instructions at (addr, cycle) after an exact-stop restart.
+    pub armed: Option<(u32, u64)>,
+    pub stop: Stop,
+    /// Some exception is pending and enabled (cheap check for the block hook).
+    pub pending: bool,
+    pub blocks: BlockCache,
+    pub nvic: Nvic,
+    pub tim2: Timer,
+    pub usart1: Usart,
+    pub systick: SysTick,
+    pub ports: Vec<Port>,
+    pub edges: Vec<PinEdge>,
+    pub record_edges: bool,
+    /// Plain registers (RCC, AFIO, FLASH, unknown).
+    pub regs: HashMap<u32, u32>,
+    pub unmodeled: BTreeMap<u32, u32>,
+    logged: HashSet<u32>,
+    pub dwt_ctrl: u32,
+    pub dwt_base: u64,
+    /// Current PC as synced by unicorn's per-instruction counter hook.
+    pub pc: u32,
+    /// First GPIOB BSRR/BRR store cycle since the last TIM2 entry.
+    pub first_bsrr: Option<u64>,
+    pub flash_erase: Option<u32>,
+}
+
+impl Machine {
+    // power-on state
+    pub fn new() -> Self {
+        let mut regs = HashMap::new();
+        regs.insert(RCC, 0x0000_0083);
+        regs.insert(FLASH_IF, 0x30);
+        Self {
+            now: 0,
+            insns: 0,
+            cur: None,
+            deadline: u64::MAX,
+            armed: None,
+            stop: Stop::None,
+            pending: false,
+            blocks: BlockCache::default(),
+            nvic: Nvic::default(),
+            tim2: Timer::new(),
+            usart1: Usart::default(),
+            systick: SysTick::default(),
+            ports: vec![Port::new(); 5],
+            edges: Vec::new(),
+            record_edges: true,
+            regs,
+            unmodeled: BTreeMap::new(),
+            logged: HashSet::new(),
+            dwt_ctrl: 0,
+            dwt_base: 0,
+            pc: 0,
+            first_bsrr: None,
+            flash_erase: None,
+        }
+    }
+
+    // the block being executed
+    pub fn block(&self) -> Option<&Block> {
+        self.cur.and_then(|a| self.blocks.at(a))
+    }
+
+    // modeled cycle at which the instruction at `self.pc` completes its access
+    pub fn access_cycle(&self) -> u64 {
+        match self.block().and_then(|b| b.index_of(self.pc).map(|i| (b, i))) {
+            Some((b, i)) if i < b.insns.len() => self.now + b.prefix[i + 1],
+            _ => self.now,
+        }
+    }
+
+    // bring peripherals to cycle `t` and refresh the NVIC's interrupt lines
+    pub fn sync(&mut self, t: u64) {
+        self.tim2.advance(t);
+        self.usart1.advance(t);
+        let wraps = self.systick.advance(t);
+        if wraps > 0 {
+            self.nvic.pending[super::nvic::SYSTICK as usize] = true;
+        }
+        self.nvic.level[(IRQ0 + TIM2_IRQ) as usize] = self.tim2.irq();
+        self.nvic.level[(IRQ0 + USART1_IRQ) as usize] = self.usart1.irq();
+        self.pending = self.nvic.any_pending();
+    }
+
+    // the next cycle at which a peripheral changes state
+    pub fn next_event(&self) -> u64 {
+        [self.tim2.next_event(), self.usart1.next_event(), self.systick.next_event()]
+            .into_iter()
+            .flatten()
+            .min()
+            .unwrap_or(u64::MAX)
+    }
+
+    // MMIO read of `size` bytes at `addr`
+    pub fn read(&mut self, addr: u32, size: usize) -> u32 {
+        let t = self.access_cycle();
+        self.sync(t);
+        let word = addr & !3;
+        let shift = (addr & 3) * 8;
+        let v = match word {
+            TIM2..=0x4000_03FF => self.tim2.read(word - TIM2, t),
+            USART1..=0x4001_3BFF => self.usart1.read(word - USART1, t),
+            GPIOA..=0x4001_1BFF => {
+                let p = ((word - GPIOA) / 0x400) as usize;
+                self.ports[p].read((word - GPIOA) % 0x400)
+            }
+            0xE000_E010..=0xE000_E01F => self.systick.read(word - 0xE000_E010, t),
+            DWT_CYCCNT => (t - self.dwt_base) as u32,
+            SCS..=0xE000_EFFF if self.nvic.read(word - SCS).is_some() => self.nvic.read(word - SCS).unwrap(),
+            _ => self.plain_read(word),
+        };
+        self.sync(t);
+        let mask = if size >= 4 { u32::MAX } else { (1u32 << (8 * size)) - 1 };
+        (v >> shift) & mask
+    }
+
+    // MMIO write of `size` bytes at `addr`
+    pub fn write(&mut self, addr: u32, size: usize, value: u32) {
+        let t = self.access_cycle();
+        self.sync(t);
+        let word = addr & !3;
+        let shift = (addr & 3) * 8;
+        let mask = if size >= 4 { u32::MAX } else { ((1u32 << (8 * size)) - 1) << shift };
+        let v = (value << shift) & mask;
+        match word {
+            TIM2..=0x4000_03FF => {
+                let v = if word == TIM2 + 0x10 { v | !mask } else { v };
+                self.tim2.write(word - TIM2, v, t)
+            }
+            USART1..=0x4001_3BFF => self.usart1.write(word - USART1, v, t),
+            GPIOA..=0x4001_1BFF => self.gpio_write(word, v, mask, t),
+            0xE000_E010..=0xE000_E01F => self.systick.write(word - 0xE000_E010, v, t),
+            0xE000_1000 => {
+                if v & 1 != 0 && self.dwt_ctrl & 1 == 0 {
+                    self.dwt_base = t;
+                }
+                self.dwt_ctrl = v;
+            }
+            DWT_CYCCNT => self.dwt_base = t.wrapping_sub(v as u64),
+            SCS..=0xE000_EFFF if self.nvic.read(word - SCS).is_some() || word == SCS + 0xF00 => {
+                let merged = match word - SCS {
+                    0x400..=0x4EF | 0xD18..=0xD23 => (self.nvic.read(word - SCS).unwrap() & !mask) | v,
+                    _ => v,
+                };
+                self.nvic.write(word - SCS, merged);
+            }
+            _ => self.plain_write(word, v, mask),
+        }
+        self.sync(t);
+    }
+
+    fn gpio_write(&mut self, word: u32, v: u32, mask: u32, t: u64) {
+        let p = ((word - GPIOA) / 0x400) as usize;
+        let off = (word - GPIOA) % 0x400;
+        let old = self.ports[p].odr;
+        let v = if matches!(off, 0x00 | 0x04 | 0x0C) { (self.ports[p].read(off) & !mask) | v } else { v };
+        if let Some(new) = self.ports[p].write(off, v) {
+            if p == 1 && matches!(off, 0x10 | 0x14) && self.nvic.ipsr() == IRQ0 + TIM2_IRQ && self.first_bsrr.is_none() {
+                self.first_bsrr = Some(t);
+            }
+            let changed = old ^ new;
+            if self.record_edges && changed != 0 {
+                for pin in 0..16 {
+                    if changed & 1 << pin != 0 {
+                        self.edges.push(PinEdge { cycle: t, port: p as u8, pin, level: new & 1 << pin != 0 });
+                    }
+                }
+            }
+        }
+    }
+
+    fn plain_read(&mut self, word: u32) -> u32 {
+        let v = self.regs.get(&word).copied().unwrap_or(0);
+        match word {
+            RCC => {
+                // Ready bits follow their enables: HSI, HSE, PLL.
+                let mut v = v & !((1 << 1) | (1 << 17) | (1 << 25));
+                v |= (v & 1) << 1 | (v & (1 << 16)) << 1 | (v & (1 << 24)) << 1;
+                v
+            }
+            0x4002_1004 => (v & !0xC) | (v & 3) << 2, // CFGR.SWS = SW
+            0x4002_200C => 0,                          // FLASH_SR: never busy
+            _ => {
+                self.log_unmodeled(word);
+                v
+            }
+        }
+    }
+
+    fn plain_write(&mut self, word: u32, v: u32, mask: u32) {
+        let old = self.regs.get(&word).copied().unwrap_or(0);
+        self.regs.insert(word, (old & !mask) | v);
+        if word == 0x4002_2010 && v & (1 << 6) != 0 && v & (1 << 1) != 0 {
+            self.flash_erase = self.regs.get(&0x4002_2014).copied(); // CR.STRT with PER: AR page
+        }
+        self.log_unmodeled(word);
+    }
+
+    fn log_unmodeled(&mut self, word: u32) {
+        let known = matches!(word, RCC..=0x4002_13FF | FLASH_IF..=0x4002_23FF | 0x4001_0000..=0x4001_03FF)
+            || word == 0xE000_EDFC;
+        if !known && self.logged.insert(word) {
+            self.unmodeled.insert(word, self.pc);
+            eprintln!("emu: unmodeled peripheral register {word:#010x} (first access at pc {:#010x})", self.pc);
+        }
+    }
+}

@@ -1,0 +1,277 @@
+//! Modeled Cortex-M3 cycle costs: decodes a translated block once and caches per-instruction
+//! costs, so the block hook only adds a prefix sum. For the run loop in `board.rs`.
+//!
+//! Costs follow the Cortex-M3 TRM (r1p1, table 18-1 "Cortex-M3 instruction set summary"),
+//! with the STM32F103 flash at 72 MHz (2 wait states, RM0008 §3.3.3) added where the core
+//! refills its pipeline from flash or reads a literal from flash:
+//!
+//! | class                                   | modeled cycles                    |
+//! |-----------------------------------------|-----------------------------------|
+//! | ALU, MOV, shifts, extend, MUL, IT, hints | 1                                 |
+//! | MLA, MLS                                | 2                                 |
+//! | UMULL/SMULL, UMLAL/SMLAL                | 4, 5 (TRM: 3–5, 4–7)              |
+//! | UDIV/SDIV                               | 7 (TRM: 2–12, data dependent)     |
+//! | LDR/STR single                          | 2, or 1 right after a load/store  |
+//! | LDR literal (from flash)                | 2 + 2 wait states                 |
+//! | LDRD/STRD, LDM/STM/PUSH/POP             | 1 + N                             |
+//! | taken branch, write to PC               | 1 + P, P = 1, + 2 if target in flash |
+//! | TBB/TBH                                 | 2 + P (+ 2 for the table read)     |
+//! | not-taken conditional branch            | 1                                 |
+
+use std::collections::HashMap;
+
+/// First address past the flash/boot alias (code below runs from flash).
+const FLASH_END: u32 = 0x2000_0000;
+/// Flash wait states at 72 MHz (RM0008 §3.3.3, FLASH_ACR LATENCY = 2).
+pub const FLASH_WAIT_STATES: u64 = 2;
+/// Pipeline refill without wait states (TRM "P", lower bound).
+const REFILL: u64 = 1;
+
+/// How an instruction ends a block.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Flow {
+    /// Falls through to the next instruction.
+    Next,
+    /// Always branches (B, BL, BX, POP {pc}, LDR pc, ...).
+    Branch,
+    /// Branches only if a condition holds (B<c>, CBZ, CBNZ, or inside an IT block).
+    CondBranch,
+}
+
+/// One decoded instruction.
+#[derive(Clone, Copy, Debug)]
+pub struct Insn {
+    pub addr: u32,
+    /// Modeled cycles when it does not branch.
+    pub cost: u64,
+    pub flow: Flow,
+    pub wfi: bool,
+}
+
+/// A decoded block: instructions and prefix sums of their costs.
+#[derive(Clone, Debug)]
+pub struct Block {
+    pub start: u32,
+    pub end: u32,
+    pub insns: Vec<Insn>,
+    /// `prefix[k]` = cycles of the first `k` instructions (no branch penalty).
+    pub prefix: Vec<u64>,
+}
+
+impl Block {
+    // cycles of the whole block, adding the refill when the last instruction branched to `next`
+    pub fn cost_to(&self, next: u32) -> u64 {
+        let base = self.prefix[self.insns.len()];
+        match self.insns.last() {
+            Some(last) if last.flow == Flow::Branch || (last.flow == Flow::CondBranch && next != self.end) => {
+                base + refill(next)
+            }
+            _ => base,
+        }
+    }
+
+    // index of the instruction at `pc`, or `None` outside this block
+    pub fn index_of(&self, pc: u32) -> Option<usize> {
+        if pc == self.end {
+            return Some(self.insns.len());
+        }
+        self.insns.iter().position(|i| i.addr == pc)
+    }
+
+    // number of leading instructions whose end lies before `cycles` after the block start
+    pub fn insns_before(&self, cycles: u64) -> usize {
+        self.prefix.iter().position(|&p| p >= cycles).unwrap_or(self.insns.len())
+    }
+}
+
+// modeled pipeline refill for a branch to `target`
+pub fn refill(target: u32) -> u64 {
+    if target < FLASH_END {
+        REFILL + FLASH_WAIT_STATES
+    } else {
+        REFILL
+    }
+}
+
+/// Decoded blocks by start address.
+#[derive(Default)]
+pub struct BlockCache {
+    blocks: HashMap<u32, Block>,
+}
+
+impl BlockCache {
+    // is the block at `start` of `size` bytes decoded?
+    pub fn contains(&self, start: u32, size: u32) -> bool {
+        self.blocks.get(&start).is_some_and(|b| b.end == start + size)
+    }
+
+    // decode and keep the block at `start` whose bytes are `code`
+    pub fn insert(&mut self, start: u32, code: &[u8]) {
+        self.blocks.insert(start, decode_block(start, code));
+    }
+
+    // the cached block at `start`
+    pub fn at(&self, start: u32) -> Option<&Block> {
+        self.blocks.get(&start)
+    }
+}
+
+// decode the Thumb-2 instructions in `code` (which starts at `start`)
+pub fn decode_block(start: u32, code: &[u8]) -> Block {
+    let mut insns = Vec::new();
+    let mut prefix = vec![0];
+    let mut off = 0usize;
+    let mut prev_mem = false;
+    let mut it_left = 0u32;
+    while off + 2 <= code.len() {
+        let hw1 = u16::from_le_bytes([code[off], code[off + 1]]);
+        let wide = hw1 >> 11 >= 0b11101;
+        let hw2 = if wide && off + 4 <= code.len() { u16::from_le_bytes([code[off + 2], code[off + 3]]) } else { 0 };
+        let addr = start + off as u32;
+        let mut d = if wide { decode32(hw1, hw2, addr) } else { decode16(hw1) };
+        if it_left > 0 {
+            it_left -= 1;
+            if d.flow == Flow::Branch {
+                d.flow = Flow::CondBranch;
+            }
+        }
+        if hw1 & 0xFF00 == 0xBF00 && hw1 & 0x000F != 0 {
+            it_left = 4 - (hw1 & 0xF).trailing_zeros();
+        }
+        // Neighbouring single loads/stores pipeline (TRM §18.3): the second costs 1.
+        let cost = if d.single_mem && prev_mem { d.cost - 1 } else { d.cost };
+        prev_mem = d.single_mem;
+        insns.push(Insn { addr, cost, flow: d.flow, wfi: hw1 == 0xBF30 });
+        prefix.push(prefix.last().unwrap() + cost);
+        off += if wide { 4 } else { 2 };
+    }
+    Block { start, end: start + off as u32, insns, prefix }
+}
+
+struct Decoded {
+    cost: u64,
+    flow: Flow,
+    single_mem: bool,
+}
+
+fn alu() -> Decoded {
+    Decoded { cost: 1, flow: Flow::Next, single_mem: false }
+}
+
+fn mem(cost: u64) -> Decoded {
+    Decoded { cost, flow: Flow::Next, single_mem: true }
+}
+
+fn branch(cost: u64, flow: Flow) -> Decoded {
+    Decoded { cost, flow, single_mem: false }
+}
+
+// 16-bit Thumb instruction
+fn decode16(hw: u16) -> Decoded {
+    match hw >> 10 {
+        0b010001 => {
+            // ADD/CMP/MOV high registers, BX/BLX.
+            let op = (hw >> 8) & 3;
+            let rd = ((hw >> 4) & 8) | (hw & 7);
+            if op == 3 || (op != 1 && rd == 15) {
+                branch(1, Flow::Branch)
+            } else {
+                alu()
+            }
+        }
+        0b010010 | 0b010011 => mem(2 + FLASH_WAIT_STATES), // LDR literal
+        _ => match hw >> 12 {
+            0b0101 | 0b0110 | 0b0111 | 0b1000 | 0b1001 => mem(2),
+            0b1011 => misc16(hw),
+            0b1100 => branch(1 + (hw & 0xFF).count_ones() as u64, Flow::Next), // LDM/STM
+            0b1101 => match (hw >> 8) & 0xF {
+                0xE | 0xF => alu(), // UDF, SVC
+                _ => branch(1, Flow::CondBranch),
+            },
+            0b1110 => branch(1, Flow::Branch), // B
+            _ => alu(),
+        },
+    }
+}
+
+// 16-bit miscellaneous (1011 xxxx)
+fn misc16(hw: u16) -> Decoded {
+    let regs = (hw & 0xFF).count_ones() as u64;
+    match (hw >> 8) & 0xF {
+        0x1 | 0x3 | 0x9 | 0xB => branch(1, Flow::CondBranch), // CBZ/CBNZ
+        0x4 | 0x5 => branch(1 + regs + ((hw >> 8) & 1) as u64, Flow::Next), // PUSH
+        0xC | 0xD if hw & 0x100 != 0 => branch(1 + regs + 1, Flow::Branch), // POP {.., pc}
+        0xC | 0xD => branch(1 + regs, Flow::Next), // POP
+        _ => alu(),
+    }
+}
+
+// 32-bit Thumb-2 instruction
+fn decode32(hw1: u16, hw2: u16, _addr: u32) -> Decoded {
+    match hw1 >> 11 {
+        0b11101 if hw1 & 0x0600 == 0 => {
+            if hw1 & 0x0040 == 0 {
+                // LDM/STM: 1 + N; a load of PC branches.
+                let regs = hw2.count_ones() as u64;
+                let load = hw1 & 0x0010 != 0;
+                let flow = if load && hw2 & 0x8000 != 0 { Flow::Branch } else { Flow::Next };
+                branch(1 + regs, flow)
+            } else if hw1 & 0xFFF0 == 0xE8D0 && hw2 & 0xFFE0 == 0xF000 {
+                branch(2 + FLASH_WAIT_STATES, Flow::Branch) // TBB/TBH
+            } else if hw1 & 0x0120 != 0 || hw1 & 0x0080 != 0 {
+                branch(3, Flow::Next) // LDRD/STRD
+            } else {
+                mem(2) // LDREX/STREX
+            }
+        }
+        0b11110 if hw2 & 0x8000 != 0 => {
+            if hw2 & 0x5000 != 0 {
+                branch(1, Flow::Branch) // B.W, BL
+            } else if (hw1 >> 6) & 0xE != 0xE {
+                branch(1, Flow::CondBranch) // B<c>.W
+            } else {
+                alu() // MSR, MRS, hints, barriers
+            }
+        }
+        0b11111 => match (hw1 >> 8) & 0x7 {
+            0 | 1 => {
+                let rn = hw1 & 0xF;
+                let rt = hw2 >> 12;
+                let load = hw1 & 0x0010 != 0;
+                if load && rt == 15 {
+                    branch(2, Flow::Branch)
+                } else if rn == 15 {
+                    mem(2 + FLASH_WAIT_STATES)
+                } else {
+                    mem(2)
+                }
+            }
+            3 => match (hw1 >> 4) & 0xF {
+                0x0 if hw2 & 0xF0F0 == 0xF000 => alu(), // MUL
+                0x0 | 0x1 => Decoded { cost: 2, flow: Flow::Next, single_mem: false }, // MLA/MLS
+                0x8 | 0xA => Decoded { cost: 4, flow: Flow::Next, single_mem: false }, // SMULL/UMULL
+                0x9 | 0xB => Decoded { cost: 7, flow: Flow::Next, single_mem: false }, // SDIV/UDIV
+                0xC | 0xE => Decoded { cost: 5, flow: Flow::Next, single_mem: false }, // SMLAL/UMLAL
+                _ => alu(),
+            },
+            _ => alu(),
+        },
+        _ => alu(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn costs_of_a_small_block() {
+        // movs r0,#1; ldr r3,[pc,#8]; str r0,[r3]; str r0,[r3,#4]; bx lr
+        let code = [0x01, 0x20, 0x02, 0x4b, 0x18, 0x60, 0x58, 0x60, 0x70, 0x47];
+        let b = decode_block(0x0800_0000, &code);
+        let costs: Vec<u64> = b.insns.iter().map(|i| i.cost).collect();
+        assert_eq!(costs, vec![1, 4, 1, 1, 1]);
+        assert_eq!(b.insns[4].flow, Flow::Branch);
+        assert_eq!(b.cost_to(0x0800_0100), 8 + 3);
+    }
+}

@@ -1,0 +1,36 @@
+//! Virtual bench: runs the real firmware ELF on an emulated STM32F103C8 "Blue Pill"
+//! (unicorn Cortex-M3 + models of TIM2, USART1, GPIO, SysTick, NVIC, RCC). Time is modeled
+//! cycles at 72 MHz, from per-instruction costs of the Cortex-M3 TRM (see `cost.rs` and
+//! bench/README.md for the model and its expected error). For firmware-in-the-loop tests,
+//! the `sim` CLI and the benchmark sweep.
+//!
+//! ```no_run
+//! use ddastep_bench::emu::{firmware_elf, Board};
+//! let mut board = Board::load(firmware_elf()?)?;
+//! board.run_seconds(0.01)?;
+//! println!("{}", board.send_line_wait_ok("G91")?);
+//! println!("{}", board.report());
+//! # Ok::<(), anyhow::Error>(())
+//! ```
+
+pub mod asm;
+mod board;
+mod bus;
+pub mod cost;
+mod cpu;
+mod exception;
+mod firmware;
+mod gpio;
+pub mod nvic;
+mod report;
+mod stats;
+mod systick;
+mod timer;
+mod usart;
+
+pub use board::{Board, InputFlip, Port, HZ};
+pub use bus::{TIM2_IRQ, USART1_IRQ};
+pub use firmware::{firmware_elf, gcode_lines, repo_root, stream_gcode};
+pub use gpio::PinEdge;
+pub use report::{AxisReport, Report, StepIsr, AXES, DIR_PINS, EN_PIN, STEP_PINS};
+pub use unicorn_engine::RegisterARM;

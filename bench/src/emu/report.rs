@@ -1,0 +1,202 @@
+//! Run outputs: the JSON/human report (per-axis numbers come from the `la` checker fed with
+//! the bench's pin edges) and a VCD of the step, dir and enable pins. For the CLI and tests.
+//!
+//! Pin map (firmware contract): step X..U = PB9..PB15, dir X..U = PB0, PB1, PB3, PB4, PB5,
+//! PB6, PB7, enable = PB8. VCD time is modeled cycles × 1000/72 ns, rounded to 1 ns.
+
+use std::io::Write;
+use std::path::Path;
+
+use anyhow::Result;
+use serde::ser::SerializeMap;
+use serde::{Serialize, Serializer};
+
+use super::board::{Board, HZ};
+use crate::la::{Analyzer, AxisChannels, Config};
+
+/// Axis names in channel order.
+pub const AXES: [&str; 7] = ["X", "Y", "Z", "A", "B", "C", "U"];
+/// GPIOB step pins per axis.
+pub const STEP_PINS: [u8; 7] = [9, 10, 11, 12, 13, 14, 15];
+/// GPIOB dir pins per axis.
+pub const DIR_PINS: [u8; 7] = [0, 1, 3, 4, 5, 6, 7];
+/// GPIOB shared enable pin.
+pub const EN_PIN: u8 = 8;
+
+/// Per-axis numbers.
+#[derive(Clone, Debug, Serialize)]
+pub struct AxisReport {
+    pub rising_edges: u64,
+    pub net_steps: i64,
+    pub max_rate_hz: f64,
+    pub min_high_ns: Option<f64>,
+    pub min_low_ns: Option<f64>,
+    pub min_dir_setup_ns: Option<f64>,
+}
+
+/// TIM2 handler numbers (modeled cycles, entry and return overhead included).
+#[derive(Clone, Debug, Serialize)]
+pub struct StepIsr {
+    pub entries: u64,
+    pub mean_cycles: f64,
+    pub max_cycles: u64,
+    pub mean_instructions: f64,
+    pub max_instructions: u64,
+    pub bsrr_offset_min_cycles: Option<u64>,
+    pub bsrr_offset_max_cycles: Option<u64>,
+}
+
+/// Axes in X..U order, serialized as a JSON object.
+#[derive(Clone, Debug)]
+pub struct Axes(pub Vec<(String, AxisReport)>);
+
+impl Serialize for Axes {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut map = s.serialize_map(Some(self.0.len()))?;
+        for (k, v) in &self.0 {
+            map.serialize_entry(k, v)?;
+        }
+        map.end()
+    }
+}
+
+/// The `--json` report.
+#[derive(Clone, Debug, Serialize)]
+pub struct Report {
+    pub axes: Axes,
+    pub max_slave_deviation_steps: f64,
+    pub step_isr: StepIsr,
+    pub cpu_load_peak: f64,
+    pub overruns: u64,
+    pub sim_cycles: u64,
+    pub sim_seconds: f64,
+    pub instructions: u64,
+    pub serial: String,
+    pub usart_rx_overruns: u64,
+    pub unmodeled_registers: Vec<String>,
+}
+
+// picoseconds of a modeled cycle count
+fn ps(cycles: u64) -> u64 {
+    (cycles as u128 * 1_000_000_000_000 / HZ as u128) as u64
+}
+
+impl Board {
+    // the report of everything so far
+    pub fn report(&self) -> Report {
+        let mut channels = Vec::new();
+        for (i, name) in AXES.iter().enumerate() {
+            channels.push(AxisChannels::new(name, 2 * i, Some(2 * i + 1)));
+        }
+        let mut la = Analyzer::new(Config::new(channels)).expect("fixed channel map");
+        for ch in 0..14 {
+            la.edge(0, ch, false);
+        }
+        for e in self.edges().iter().filter(|e| e.port == 1) {
+            let ch = STEP_PINS.iter().position(|&p| p == e.pin).map(|a| 2 * a).or_else(|| DIR_PINS.iter().position(|&p| p == e.pin).map(|a| 2 * a + 1));
+            if let Some(ch) = ch {
+                la.edge(ps(e.cycle), ch, e.level);
+            }
+        }
+        la.advance(ps(self.cycles()));
+        let r = la.finish();
+        let axes = r
+            .axes
+            .iter()
+            .map(|a| {
+                (a.name.clone(), AxisReport {
+                    rising_edges: a.steps,
+                    net_steps: a.net_steps,
+                    max_rate_hz: a.max_rate_hz,
+                    min_high_ns: a.min_high_ns,
+                    min_low_ns: a.min_low_ns,
+                    min_dir_setup_ns: a.min_dir_setup_ns,
+                })
+            })
+            .collect();
+        let dev = r.axes.iter().filter_map(|a| a.max_deviation_steps).fold(0.0, f64::max);
+        let s = &self.stats().step_isr;
+        let mean = |sum: u64| if s.entries == 0 { 0.0 } else { sum as f64 / s.entries as f64 };
+        let u = self.serial_bytes().0;
+        Report {
+            axes: Axes(axes),
+            max_slave_deviation_steps: dev,
+            step_isr: StepIsr {
+                entries: s.entries,
+                mean_cycles: mean(s.cycles_sum),
+                max_cycles: s.cycles_max,
+                mean_instructions: mean(s.insns_sum),
+                max_instructions: s.insns_max,
+                bsrr_offset_min_cycles: s.bsrr_min,
+                bsrr_offset_max_cycles: s.bsrr_max,
+            },
+            cpu_load_peak: self.stats().cpu_load_peak(self.cycles()),
+            overruns: self.overruns(),
+            sim_cycles: self.cycles(),
+            sim_seconds: self.seconds(),
+            instructions: self.instructions(),
+            serial: String::from_utf8_lossy(u).into_owned(),
+            usart_rx_overruns: self.usart_rx_overruns(),
+            unmodeled_registers: self.unmodeled().iter().map(|(a, pc)| format!("{a:#010x} (pc {pc:#010x})")).collect(),
+        }
+    }
+
+    // write a VCD of the step/dir/enable pins
+    pub fn write_vcd(&self, path: impl AsRef<Path>) -> Result<()> {
+        let file = std::io::BufWriter::new(std::fs::File::create(path)?);
+        let mut w = vcd::Writer::new(file);
+        w.timescale(1, vcd::TimescaleUnit::NS)?;
+        w.add_module("bluepill")?;
+        let mut ids = std::collections::HashMap::new();
+        for (i, name) in AXES.iter().enumerate() {
+            ids.insert(STEP_PINS[i], w.add_wire(1, &format!("{name}_STEP"))?);
+            ids.insert(DIR_PINS[i], w.add_wire(1, &format!("{name}_DIR"))?);
+        }
+        ids.insert(EN_PIN, w.add_wire(1, "EN")?);
+        w.upscope()?;
+        w.enddefinitions()?;
+        w.timestamp(0)?;
+        for id in ids.values() {
+            w.change_scalar(*id, vcd::Value::V0)?;
+        }
+        let mut last = 0;
+        for e in self.edges().iter().filter(|e| e.port == 1) {
+            let Some(id) = ids.get(&e.pin) else { continue };
+            let t = (e.cycle * 1000 + HZ / 2_000_000) / (HZ / 1_000_000);
+            if t != last {
+                w.timestamp(t)?;
+                last = t;
+            }
+            w.change_scalar(*id, if e.level { vcd::Value::V1 } else { vcd::Value::V0 })?;
+        }
+        w.timestamp((self.cycles() * 1000) / (HZ / 1_000_000))?;
+        w.writer().flush()?;
+        Ok(())
+    }
+}
+
+impl std::fmt::Display for Report {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        writeln!(f, "simulated {:.6} s = {} modeled cycles, {} instructions", self.sim_seconds, self.sim_cycles, self.instructions)?;
+        writeln!(f, "axis  rising  net  max rate Hz  min high ns  min low ns  min dir setup ns")?;
+        let o = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.0}"));
+        for (name, a) in &self.axes.0 {
+            if a.rising_edges == 0 {
+                continue;
+            }
+            writeln!(f, "{name:>4} {:>7} {:>4} {:>12.0} {:>12} {:>11} {:>17}", a.rising_edges, a.net_steps, a.max_rate_hz, o(a.min_high_ns), o(a.min_low_ns), o(a.min_dir_setup_ns))?;
+        }
+        writeln!(f, "max slave deviation: {:.3} steps", self.max_slave_deviation_steps)?;
+        let s = &self.step_isr;
+        writeln!(f, "step ISR (TIM2): {} entries, {:.1} mean / {} max modeled cycles, {:.1} mean / {} max instructions", s.entries, s.mean_cycles, s.max_cycles, s.mean_instructions, s.max_instructions)?;
+        if let (Some(a), Some(b)) = (s.bsrr_offset_min_cycles, s.bsrr_offset_max_cycles) {
+            writeln!(f, "update event -> first BSRR store: {a}..{b} modeled cycles")?;
+        }
+        writeln!(f, "peak CPU load (1 ms windows, modeled): {:.1} %", self.cpu_load_peak * 100.0)?;
+        writeln!(f, "timer overruns: {}", self.overruns)?;
+        if !self.unmodeled_registers.is_empty() {
+            writeln!(f, "unmodeled registers: {}", self.unmodeled_registers.join(", "))?;
+        }
+        Ok(())
+    }
+}

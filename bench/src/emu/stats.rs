@@ -1,0 +1,88 @@
+//! Run statistics kept while the board runs: sleep time per 1 ms window (CPU load) and the
+//! TIM2 step interrupt's modeled duration, instruction count and update-to-BSRR offset.
+//! For `board.rs` (collection) and `report.rs` (output).
+
+/// Modeled cycles per CPU-load window (1 ms at 72 MHz).
+pub const WINDOW: u64 = 72_000;
+
+/// A TIM2 handler in progress.
+#[derive(Clone, Copy, Debug)]
+pub struct IsrEntry {
+    /// Cycle the exception entry began.
+    pub start: u64,
+    pub insns: u64,
+    /// Cycle of the update event when UIF was set at entry.
+    pub update: Option<u64>,
+}
+
+/// Aggregates over all TIM2 handler runs.
+#[derive(Clone, Debug, Default)]
+pub struct IsrStats {
+    pub entries: u64,
+    pub cycles_sum: u64,
+    pub cycles_max: u64,
+    pub insns_sum: u64,
+    pub insns_max: u64,
+    pub bsrr_min: Option<u64>,
+    pub bsrr_max: Option<u64>,
+}
+
+/// Everything collected during a run.
+#[derive(Default)]
+pub struct Stats {
+    /// Sleeping cycles per window.
+    pub sleep: Vec<u64>,
+    pub isr: Option<IsrEntry>,
+    pub step_isr: IsrStats,
+}
+
+impl Stats {
+    // record sleep from cycle `from` to `to`
+    pub fn sleep(&mut self, from: u64, to: u64) {
+        let mut t = from;
+        while t < to {
+            let w = (t / WINDOW) as usize;
+            let w_end = (w as u64 + 1) * WINDOW;
+            let upto = to.min(w_end);
+            if self.sleep.len() <= w {
+                self.sleep.resize(w + 1, 0);
+            }
+            self.sleep[w] += upto - t;
+            t = upto;
+        }
+    }
+
+    // close the running TIM2 handler at cycle `end` with `insns` executed so far
+    pub fn isr_done(&mut self, end: u64, insns: u64, first_bsrr: Option<u64>) {
+        let Some(e) = self.isr.take() else { return };
+        let s = &mut self.step_isr;
+        let cycles = end - e.start;
+        let n = insns - e.insns;
+        s.entries += 1;
+        s.cycles_sum += cycles;
+        s.cycles_max = s.cycles_max.max(cycles);
+        s.insns_sum += n;
+        s.insns_max = s.insns_max.max(n);
+        if let (Some(u), Some(b)) = (e.update, first_bsrr) {
+            let off = b - u;
+            s.bsrr_min = Some(s.bsrr_min.map_or(off, |m| m.min(off)));
+            s.bsrr_max = Some(s.bsrr_max.map_or(off, |m| m.max(off)));
+        }
+    }
+
+    // CPU load (busy fraction) of the busiest complete window before cycle `now`
+    pub fn cpu_load_peak(&self, now: u64) -> f64 {
+        let full = (now / WINDOW) as usize;
+        (0..full).map(|w| 1.0 - *self.sleep.get(w).unwrap_or(&0) as f64 / WINDOW as f64).fold(0.0, f64::max)
+    }
+
+    // CPU load over windows [from, to) (cycles), averaged
+    pub fn cpu_load_between(&self, from: u64, to: u64) -> f64 {
+        let (a, b) = ((from / WINDOW) as usize, (to / WINDOW) as usize);
+        if b <= a {
+            return 0.0;
+        }
+        let slept: u64 = (a..b).map(|w| *self.sleep.get(w).unwrap_or(&0)).sum();
+        1.0 - slept as f64 / ((b - a) as u64 * WINDOW) as f64
+    }
+}
