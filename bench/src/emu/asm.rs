@@ -9,7 +9,9 @@ use anyhow::{bail, Context, Result};
 
 // assemble `body` (Thumb, unified syntax) with a vector table of `vectors` into an ELF
 pub fn build(name: &str, vectors: &[(u32, &str)], body: &str) -> Result<Vec<u8>> {
-    let dir = std::env::temp_dir().join(format!("ddastep-emu-asm-{}-{name}", std::process::id()));
+    static SEQ: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
+    let seq = SEQ.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let dir = std::env::temp_dir().join(format!("ddastep-emu-asm-{}-{seq}-{name}", std::process::id()));
     std::fs::create_dir_all(&dir)?;
     let n = vectors.iter().map(|v| v.0).max().unwrap_or(15).max(15) + 1;
     let mut src = String::from(".syntax unified\n.cpu cortex-m3\n.thumb\n.text\n.word 0x20005000\n");

@@ -324,7 +324,17 @@ impl Board {
         }
         let result = self.cpu.emu_start((pc | 1) as u64, 0, 0, count);
         let start_pc = pc;
-        let pc = self.reg(RegisterARM::PC);
+        let mut pc = self.reg(RegisterARM::PC);
+        if let Some(store) = self.cpu.get_data_mut().mmio_stop.take() {
+            let next = self.cpu.get_data().block().and_then(|b| {
+                let i = b.index_of(store)?;
+                Some(b.insns.get(i + 1).map_or(b.end, |n| n.addr))
+            });
+            if let (true, Some(next)) = (pc == store, next) {
+                pc = next;
+                let _ = self.cpu.reg_write(RegisterARM::PC, pc as u64);
+            }
+        }
         if std::env::var_os("EMU_TRACE").is_some() {
             let m = self.cpu.get_data();
             eprintln!("run {start_pc:#x} count {count} -> {pc:#x} {result:?} stop {:?} cur {:x?} now {} deadline {deadline}", m.stop, m.cur, m.now);

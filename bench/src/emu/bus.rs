@@ -71,6 +71,8 @@ pub struct Machine {
     /// First GPIOB BSRR/BRR store cycle since the last TIM2 entry.
     pub first_bsrr: Option<u64>,
     pub flash_erase: Option<u32>,
+    /// PC of a store after which the write callback stopped the CPU.
+    pub mmio_stop: Option<u32>,
 }
 
 impl Machine {
@@ -103,6 +105,7 @@ impl Machine {
             pc: 0,
             first_bsrr: None,
             flash_erase: None,
+            mmio_stop: None,
         }
     }
 

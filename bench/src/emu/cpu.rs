@@ -76,6 +76,12 @@ fn map_mmio(uc: &mut Cpu, base: u64, size: u64, _: u32) -> Result<(), unicorn_en
             // the next block. (Stopping here would make unicorn replay the store.)
             let m = uc.get_data_mut();
             m.deadline = m.deadline.min(m.next_event());
+            // A store to the SCS that pends an exception (NVIC ISPR/STIR, ICSR) preempts right
+            // after the store. Unicorn then reports the store's own PC; `board.rs` steps past it.
+            if base == 0xE000_0000 && m.pending {
+                m.mmio_stop = Some(pc);
+                let _ = uc.emu_stop();
+            }
         }),
     )
 }
