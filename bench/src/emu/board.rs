@@ -335,7 +335,8 @@ impl Board {
                 let _ = self.cpu.reg_write(RegisterARM::PC, pc as u64);
             }
         }
-        if std::env::var_os("EMU_TRACE").is_some() {
+        static TRACE: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+        if *TRACE.get_or_init(|| std::env::var_os("EMU_TRACE").is_some()) {
             let m = self.cpu.get_data();
             eprintln!("run {start_pc:#x} count {count} -> {pc:#x} {result:?} stop {:?} cur {:x?} now {} deadline {deadline}", m.stop, m.cur, m.now);
         }
