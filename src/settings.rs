@@ -201,10 +201,11 @@ impl Settings {
         };
         match id {
             0 => {
-                if value < 1.0 {
+                // 0.2 µs: TMC drivers need 100 ns; shorter than that no driver takes.
+                if value < 0.2 {
                     return Err(Error::StepPulseMin);
                 }
-                self.pulse_us = range(1.0, 100.0)?;
+                self.pulse_us = range(0.2, 100.0)?;
                 Ok(Change::Profile)
             }
             1 => {
@@ -236,7 +237,8 @@ impl Settings {
                 Ok(Change::Profile)
             }
             RAMP_START => {
-                self.ramp_start_hz = range(1.0, MAX_RATE_HZ as f64)? as u32;
+                range(1.0, MAX_RATE_HZ as f64)?;
+                self.ramp_start_hz = value as u32;
                 Ok(Change::Profile)
             }
             RAMP_SHAPE => {
@@ -288,14 +290,17 @@ impl Settings {
 
     /// Step timing in timer ticks.
     pub fn timing(&self) -> Timing {
-        let pulse = ns_to_ticks(libm::roundf(self.pulse_us * 1000.0) as u32);
-        let dir = ns_to_ticks(libm::roundf(self.dir_setup_us * 1000.0) as u32);
+        // f64 like the rest of the settings math: f32 arithmetic would link a second soft-float set.
+        let pulse = ns_to_ticks(libm::round(self.pulse_us as f64 * 1000.0) as u32);
+        let dir = ns_to_ticks(libm::round(self.dir_setup_us as f64 * 1000.0) as u32);
         Timing::new(pulse, dir, ISR_FLOOR_TICKS)
     }
 
     /// The ramp asked for by the first `axes` axes (before the table's length is considered).
     pub fn ramp_config(&self, axes: usize, timing: &Timing) -> RampConfig {
-        let axes = axes.clamp(1, MAX_AXES);
+        // max/min, not clamp, here and below: clamp's panic message would link integer
+        // formatting into the firmware.
+        let axes = axes.max(1).min(MAX_AXES);
         let mut accel = f64::MAX;
         let mut top = 0.0f64;
         for i in 0..axes {
@@ -303,9 +308,9 @@ impl Settings {
             accel = accel.min(self.accel[i] as f64 * spm);
             top = top.max(self.max_rate[i] as f64 * spm / 60.0);
         }
-        let vmax = (top as u32).clamp(1, timing.max_rate_hz());
+        let vmax = (top as u32).max(1).min(timing.max_rate_hz());
         RampConfig {
-            v0: self.ramp_start_hz.clamp(1, vmax),
+            v0: self.ramp_start_hz.max(1).min(vmax),
             vmax,
             accel: (accel as u32).max(1),
             shape: self.shape,

@@ -48,16 +48,17 @@ pub struct Timing {
 
 impl Timing {
     /// 3 µs pulses, 5 µs direction setup: safe for every driver in this module until
-    /// settings say otherwise. The 3 µs pulse (216 ticks) sets the shortest period to 432
-    /// ticks, so this allows about 166 kHz; the interrupt's own floor is 144 ticks (500 kHz).
+    /// settings say otherwise. The 3 µs pulse (216 ticks) sets the shortest period to 480
+    /// ticks, so this allows 150 kHz; the interrupt's own floor is 144 ticks (500 kHz).
     pub const DEFAULT: Timing = Timing::new(216, 360, 144);
 
     /// All zero: "not set yet"; the engine uses [`Timing::DEFAULT`] in its place.
     pub const UNSET: Timing = Timing { pulse_ticks: 0, dir_setup_ticks: 0, min_period_ticks: 0 };
 
-    /// Timing from its parts (ticks); the shortest period is never below twice the pulse.
+    /// Timing from its parts (ticks); the shortest period is never below twice the pulse plus
+    /// [`STORE_LATENCY_TICKS`] (the pulse is stretched by that much, see the firmware).
     pub const fn new(pulse_ticks: u32, dir_setup_ticks: u32, min_period_ticks: u32) -> Self {
-        let floor = 2 * pulse_ticks;
+        let floor = 2 * pulse_ticks + STORE_LATENCY_TICKS;
         Timing {
             pulse_ticks,
             dir_setup_ticks,
@@ -70,6 +71,11 @@ impl Timing {
         (crate::TIMER_HZ / self.min_period_ticks.max(1)).min(MAX_RATE_HZ)
     }
 }
+
+/// Timer ticks from an update event to the step handler's BSRR store: 40..45 modeled cycles
+/// on the virtual bench (bench/RESULTS.md), rounded up. The firmware sets the compare event
+/// this much after the pulse width, so the high time is never shorter than asked.
+pub const STORE_LATENCY_TICKS: u32 = 48;
 
 /// Converts nanoseconds to timer ticks, rounding up so a minimum is never undercut.
 pub const fn ns_to_ticks(ns: u32) -> u32 {

@@ -58,7 +58,7 @@ fn profile_uses_the_slowest_accel_and_the_fastest_axis() {
     s.set(120, 1.0, 3).unwrap();
     s.set(120, 10_000.0, 3).unwrap();
     let t = s.timing();
-    assert_eq!((t.pulse_ticks, t.dir_setup_ticks, t.min_period_ticks), (216, 360, 432));
+    assert_eq!((t.pulse_ticks, t.dir_setup_ticks, t.min_period_ticks), (216, 360, 480));
     let cfg = s.ramp_config(3, &t);
     assert_eq!((cfg.v0, cfg.vmax, cfg.accel), (1000, 100_000, 50_000));
     // 99 kHz at 50 000 steps/s² needs 1.98 s: the table caps the top.
@@ -68,7 +68,7 @@ fn profile_uses_the_slowest_accel_and_the_fastest_axis() {
     assert!(r.table_limited);
     assert_eq!(r.cfg.vmax, 1000 + 50_000 * 1024 / 1000 - 1);
     assert_eq!(g.ramp.config(), r.cfg);
-    assert_eq!(r.max_rate_hz, 166_666);
+    assert_eq!(r.max_rate_hz, 150_000);
     // Defaults fit: 59 ms to 60 kHz.
     let r = Settings::DEFAULT.build_profile(3, &mut g);
     assert!(!r.table_limited);
@@ -78,8 +78,12 @@ fn profile_uses_the_slowest_accel_and_the_fastest_axis() {
 #[test]
 fn short_pulses_raise_the_rate_limit() {
     let mut s = Settings::DEFAULT;
+    // Period floor: 2 × pulse + 48 ticks of store latency, and never below 144 ticks.
     s.set(0, 2.0, 3).unwrap();
-    assert_eq!(s.timing().max_rate_hz(), 250_000);
+    assert_eq!(s.timing().max_rate_hz(), 214_285);
     s.set(0, 1.0, 3).unwrap();
+    assert_eq!(s.timing().max_rate_hz(), 375_000);
+    s.set(0, 0.5, 3).unwrap();
     assert_eq!(s.timing().max_rate_hz(), 500_000);
+    assert!(s.set(0, 0.1, 3).is_err());
 }

@@ -66,7 +66,7 @@ pub fn set_enable(high: bool) {
 
 /// New step pulse width: CCR1 is preloaded, so it takes effect at the next update event.
 pub fn set_pulse_ticks(ticks: u32) {
-    tim2().ccr1().write(|w| unsafe { w.bits(ticks.min(0xFFFF)) });
+    tim2().ccr1().write(|w| unsafe { w.bits((ticks + ddastep::timing::STORE_LATENCY_TICKS).min(0xFFFF)) });
 }
 
 /// PC13 LED (active low): on for 100 ms of every second.
@@ -154,10 +154,16 @@ fn setup_tim2(rcc: &mut stm32f1xx_hal::rcc::Rcc) {
     t.arr().write(|w| unsafe { w.bits(IDLE_TICKS - 1) });
     // Compare 1 "frozen" (no pin), CCR1 preloaded so a new pulse width starts at an update.
     t.ccmr1_output().write(|w| unsafe { w.bits(1 << 3) });
-    t.ccr1().write(|w| unsafe { w.bits(ddastep::timing::Timing::DEFAULT.pulse_ticks) });
+    t.ccr1().write(|w| unsafe { w.bits(ddastep::timing::Timing::DEFAULT.pulse_ticks + ddastep::timing::STORE_LATENCY_TICKS) });
     t.egr().write(|w| w.ug().set_bit());
     t.sr().write(|w| unsafe { w.bits(0) });
     t.dier().write(|w| unsafe { w.bits(SR_UIF | SR_CC1IF) });
-    // ARPE | URS | CEN
-    t.cr1().write(|w| unsafe { w.bits((1 << 7) | (1 << 2) | 1) });
+    // ARPE | URS; counting starts in `start_step_timer`.
+    t.cr1().write(|w| unsafe { w.bits((1 << 7) | (1 << 2)) });
+}
+
+/// Starts TIM2 counting: the last thing `init` does, so the first update event does not wait
+/// behind the rest of init (which runs with interrupts off).
+pub fn start_step_timer() {
+    tim2().cr1().modify(|r, w| unsafe { w.bits(r.bits() | 1) });
 }

@@ -67,6 +67,7 @@ mod app {
         let engine = Engine::new(&SHARED, mv_out, &PROFILE, pins);
         let controller = Controller::new(Feeder::new(mv_in, &SHARED), &SHARED, &PROFILE, settings);
         defmt::info!("ddastep up: 72 MHz, {} axes", AXES);
+        hw::start_step_timer();
         (
             SharedRes { tx: board.tx },
             Local {
