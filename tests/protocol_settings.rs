@@ -25,7 +25,7 @@ fn defaults_survive_flash_and_bad_images_fall_back() {
 #[test]
 fn set_follows_grbl_rules() {
     let mut s = Settings::DEFAULT;
-    assert_eq!(s.set(0, 0.5, 3), Err(Error::StepPulseMin));
+    assert_eq!(s.set(0, 0.15, 3), Err(Error::StepPulseMin));
     assert_eq!(s.set(100, -1.0, 3), Err(Error::NegativeValue));
     assert_eq!(s.set(103, 10.0, 3), Err(Error::InvalidStatement));
     assert_eq!(s.set(103, 10.0, 4), Ok(Change::Profile));
