@@ -1,0 +1,86 @@
+//! Firmware-in-the-loop helpers: boot the release ELF on the virtual bench and read its pins.
+#![allow(dead_code)]
+
+use ddastep::board::{DIR_PINS, STEP_PINS};
+use ddastep_bench::emu::{firmware_elf, Board, HZ};
+
+/// A booted board: banner seen.
+pub fn boot() -> Board {
+    let elf = firmware_elf().expect("firmware builds");
+    let mut b = Board::load(elf).expect("ELF loads");
+    let up = b.run_until(HZ / 2, |b| b.serial_output().contains("Grbl")).expect("runs");
+    assert!(up, "no banner: {:?}", b.serial_output());
+    b
+}
+
+/// Sends a line and expects `ok`.
+pub fn ok(b: &mut Board, line: &str) {
+    let r = b.send_line_wait_ok(line).unwrap_or_else(|e| panic!("{line}: {e}"));
+    assert!(r.contains("ok"), "{line}: {r}");
+}
+
+/// Sends a line and returns the reply (ok or error).
+pub fn reply(b: &mut Board, line: &str) -> String {
+    match b.send_line_wait_ok(line) {
+        Ok(r) => r,
+        Err(e) => e.to_string(),
+    }
+}
+
+/// Asks `?` and returns the status line.
+pub fn status(b: &mut Board) -> String {
+    let mark = b.serial_output().len();
+    b.serial_send(b"?");
+    b.run_until(HZ / 10, |b| b.serial_output()[mark..].contains(">\r\n")).expect("runs");
+    let out = b.serial_output()[mark..].to_string();
+    out.lines().find(|l| l.starts_with('<')).unwrap_or("").to_string()
+}
+
+/// Runs until the status says Idle (checked every 10 ms), at most `max_s` simulated seconds.
+pub fn wait_idle(b: &mut Board, max_s: f64) {
+    let end = b.seconds() + max_s;
+    while b.seconds() < end {
+        b.run_seconds(0.01).expect("runs");
+        if status(b).starts_with("<Idle") {
+            return;
+        }
+    }
+    panic!("not idle after {max_s} s: {}", status(b));
+}
+
+/// One step edge seen on the pins.
+#[derive(Clone, Copy, Debug)]
+pub struct Step {
+    pub cycle: u64,
+    pub axis: usize,
+    pub positive: bool,
+}
+
+/// Rising step edges of every axis, in order, with the direction pin's meaning (low = +).
+pub fn steps(b: &Board) -> Vec<Step> {
+    let mut dir_high = [false; 7];
+    let mut out = Vec::new();
+    for e in b.edges() {
+        if e.port != 1 {
+            continue;
+        }
+        if let Some(a) = DIR_PINS.iter().position(|&p| p == e.pin) {
+            dir_high[a] = e.level;
+        }
+        if let Some(a) = STEP_PINS.iter().position(|&p| p == e.pin) {
+            if e.level {
+                out.push(Step { cycle: e.cycle, axis: a, positive: !dir_high[a] });
+            }
+        }
+    }
+    out
+}
+
+/// Net steps per axis.
+pub fn net(steps: &[Step]) -> [i64; 7] {
+    let mut n = [0i64; 7];
+    for s in steps {
+        n[s.axis] += if s.positive { 1 } else { -1 };
+    }
+    n
+}
