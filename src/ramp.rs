@@ -107,10 +107,12 @@ impl<const L: usize> RampTable<L> {
         }
     }
 
-    /// Milliseconds the ramp from `v0` to `vmax` takes with this shape.
+    /// Milliseconds the ramp from `v0` to `vmax` takes with this shape (for a config that
+    /// [`Self::build`] accepts: `accel > 0`, `v0 ≤ vmax ≤ MAX_RATE_HZ`).
     pub fn ramp_ms(cfg: &RampConfig) -> u64 {
-        let dv = (cfg.vmax - cfg.v0) as f64;
-        let ms = libm::ceil(dv * 1000.0 / cfg.accel as f64) as u64;
+        // 32-bit integers (`dv` · 1000 ≤ 10^9), the same as ⌈f64 quotient⌉ without libm::ceil.
+        let dv = cfg.vmax.saturating_sub(cfg.v0).min(MAX_RATE_HZ);
+        let ms = (dv * 1000).div_ceil(cfg.accel.max(1)) as u64;
         match cfg.shape {
             Shape::Trapezoid => ms,
             // The logistic's steepest slope is span/2 / norm of the mean slope.
@@ -133,7 +135,9 @@ impl<const L: usize> RampTable<L> {
         let n = Self::ramp_ms(&cfg).max(1);
         if n > L as u64 {
             let reachable = match cfg.shape {
-                Shape::Trapezoid => cfg.v0 as u64 + cfg.accel as u64 * L as u64 / 1000,
+                // f64 (exact: the product is below 2^53 and a quotient that is not whole is
+                // at least 1/1000 from the next integer): no 64-bit division in the firmware.
+                Shape::Trapezoid => cfg.v0 as u64 + (cfg.accel as f64 * L as f64 / 1000.0) as u64,
                 Shape::SCurve => {
                     cfg.v0 as u64 + (cfg.accel as f64 * L as f64 / 1000.0 / s_curve_stretch()) as u64
                 }
@@ -263,7 +267,8 @@ fn mean_millihz(cfg: &RampConfig, i: usize, n: usize) -> u64 {
             // the curve is smooth enough that the midpoint is within 0.1 % of the mean here).
             let u = ((i as f64 + 0.5) / n as f64).min(1.0);
             let v = v0 as f64 + (vmax - v0) as f64 * s_curve(u);
-            (v as u64).clamp(v0.max(1), vmax.max(1))
+            // max/min, not clamp: its panic message would link integer formatting.
+            (v as u64).max(v0.max(1)).min(vmax.max(1))
         }
     }
 }
@@ -369,6 +374,25 @@ impl<const L: usize> Drop for RampWriteGuard<'_, L> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn ramp_ms_is_the_ceiling_of_the_exact_quotient() {
+        let mut r = 0x2545_F491_4F6C_DD1Du64;
+        let mut next = |n: u32| {
+            r ^= r << 13;
+            r ^= r >> 7;
+            r ^= r << 17;
+            (r % n as u64) as u32
+        };
+        for i in 0..100_000 {
+            let v0 = 1 + next(MAX_RATE_HZ);
+            let vmax = v0 + next(MAX_RATE_HZ - v0 + 1);
+            let accel = 1 + if i % 2 == 0 { next(u32::MAX) } else { next(10_000) };
+            let cfg = RampConfig { v0, vmax, accel, shape: Shape::Trapezoid };
+            let f64_ceil = libm::ceil((vmax - v0) as f64 * 1000.0 / accel as f64) as u64;
+            assert_eq!(RampTable::<RAMP_LEN>::ramp_ms(&cfg), f64_ceil, "{cfg:?}");
+        }
+    }
 
     #[test]
     fn exp_small_matches_libm() {
