@@ -148,43 +148,51 @@ pub fn put_error(out: &mut impl Out, e: Error) {
 
 /// Writes an unsigned decimal.
 pub fn put_u32(out: &mut impl Out, v: u32) {
-    put_u64(out, v as u64);
+    put_padded(out, v, 1);
 }
 
-/// Writes an unsigned decimal.
-pub fn put_u64(out: &mut impl Out, mut v: u64) {
-    let mut buf = [0u8; 20];
-    let mut i = buf.len();
-    loop {
-        i -= 1;
-        buf[i] = b'0' + (v % 10) as u8;
+/// Writes `v` in decimal with at least `width` digits (leading zeros; at most 10).
+fn put_padded(out: &mut impl Out, mut v: u32, width: usize) {
+    let mut buf = [b'0'; 10];
+    let mut start = buf.len();
+    for (i, d) in buf.iter_mut().enumerate().rev() {
+        *d = b'0' + (v % 10) as u8;
         v /= 10;
-        if v == 0 {
+        start = i;
+        if v == 0 && i + width <= 10 {
             break;
         }
     }
-    out.put(&buf[i..]);
+    out.put(buf.get(start..).unwrap_or_default());
 }
 
 /// Writes `x` rounded to `decimals` places (0..=3), e.g. `-1.250`. Non-finite values and
 /// magnitudes beyond 1e15 are written as 0 (reports only; never reached by settings).
+///
+/// 32-bit integers only (no 64-bit division in the firmware): the rounded magnitude, a whole
+/// `f64` below 1e15, splits exactly into `hi · 10⁹ + lo` (every integer below 2^53 is exact,
+/// and a quotient that is not whole lies at least 10⁻¹⁵ of itself below the next integer, so
+/// truncating it is the floor).
 pub fn put_fixed(out: &mut impl Out, x: f64, decimals: u32) {
-    let scale = 10u64.pow(decimals.min(3));
+    let decimals = decimals.min(3);
+    let scale = 10u32.pow(decimals);
     let scaled = libm::round(x * scale as f64);
-    let scaled = if scaled.is_finite() && libm::fabs(scaled) < 1e15 { scaled as i64 } else { 0 };
-    if scaled < 0 {
+    let scaled = if scaled.is_finite() && libm::fabs(scaled) < 1e15 { scaled } else { 0.0 };
+    if scaled < 0.0 {
         out.put(b"-");
     }
-    let a = scaled.unsigned_abs();
-    put_u64(out, a / scale);
+    let a = libm::fabs(scaled);
+    let hi = (a / 1e9) as u32;
+    let lo = (a - hi as f64 * 1e9) as u32;
+    if hi > 0 {
+        put_u32(out, hi);
+        put_padded(out, lo / scale, 9 - decimals as usize);
+    } else {
+        put_u32(out, lo / scale);
+    }
     if decimals > 0 {
         out.put(b".");
-        let frac = a % scale;
-        let mut div = scale / 10;
-        while div > 0 {
-            out.put(&[b'0' + (frac / div % 10) as u8]);
-            div /= 10;
-        }
+        put_padded(out, lo % scale, decimals as usize);
     }
 }
 
@@ -292,5 +300,63 @@ impl LineBuf {
         self.paren = false;
         self.semicolon = false;
         self.ended = false;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use std::{format, string::String};
+
+    /// The former 64-bit integer formatting, as the reference.
+    fn reference(x: f64, decimals: u32) -> String {
+        let scale = 10i64.pow(decimals);
+        let s = libm::round(x * scale as f64);
+        let s = if s.is_finite() && libm::fabs(s) < 1e15 { s as i64 } else { 0 };
+        let (sign, a, scale) = (if s < 0 { "-" } else { "" }, s.unsigned_abs(), scale as u64);
+        match decimals {
+            0 => format!("{sign}{a}"),
+            d => format!("{sign}{}.{:0w$}", a / scale, a % scale, w = d as usize),
+        }
+    }
+
+    fn fixed(x: f64, decimals: u32) -> String {
+        let mut b = heapless::Vec::<u8, 64>::new();
+        put_fixed(&mut b, x, decimals);
+        String::from_utf8(b.to_vec()).unwrap()
+    }
+
+    #[test]
+    fn put_fixed_matches_64_bit_formatting() {
+        let edges = [
+            0.0, -0.0, 0.0004, -0.0004, -0.0005, 1.25, -1.2345, 999_999.9995, 999_999_999.0, 1e9,
+            1_000_000_000.000_5, 999_999_999_999.999, 999_999_999_999_999.0, 1e15, -1e15, 1e300,
+            f64::NAN, f64::INFINITY, f64::NEG_INFINITY,
+        ];
+        let mut r = 0x9E37_79B9_7F4A_7C15u64;
+        let random = (0..20_000).map(|_| {
+            r ^= r << 13;
+            r ^= r >> 7;
+            r ^= r << 17;
+            // Magnitudes from 10^-4 to 10^16, both signs.
+            let m = (r >> 11) as f64 / (1u64 << 53) as f64;
+            let v = libm::pow(10.0, -4.0 + 20.0 * m);
+            if r & 1 == 0 { v } else { -v }
+        });
+        for x in edges.into_iter().chain(random) {
+            for d in 0..=3 {
+                assert_eq!(fixed(x, d), reference(x, d), "{x} with {d} decimals");
+            }
+        }
+        assert_eq!(fixed(1.5, 7), "1.500");
+        assert_eq!(put_u32_text(u32::MAX), "4294967295");
+        assert_eq!(put_u32_text(0), "0");
+    }
+
+    fn put_u32_text(v: u32) -> String {
+        let mut b = heapless::Vec::<u8, 16>::new();
+        put_u32(&mut b, v);
+        String::from_utf8(b.to_vec()).unwrap()
     }
 }
