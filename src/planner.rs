@@ -124,7 +124,7 @@ impl<const N: usize> Planner<N> {
                 minutes = minutes.max(libm::fabs(d) / rate);
             }
         }
-        let len = libm::sqrt(len2);
+        let len = sqrt(len2);
         if let Some(f) = feed {
             minutes = minutes.max(len / f);
         }
@@ -136,6 +136,49 @@ impl<const N: usize> Planner<N> {
         self.steps = to;
         Ok(Some(Planned { mv, mm_per_step: (len / master_steps as f64) as f32, wanted_hz }))
     }
+}
+
+/// Square root, correctly rounded like `libm::sqrt`, in ~100 bytes of flash instead of ~700
+/// (libm's needs a 256-byte table and 64-bit multiplies). Digit by digit: the 54-bit truncated
+/// root of the significand, then rounded half up; a tie cannot happen, since a 54-bit odd
+/// significand squared never fits in 53 bits. Negative inputs give NaN, like libm.
+fn sqrt(x: f64) -> f64 {
+    let bits = x.to_bits();
+    if bits > 1 << 63 {
+        return f64::NAN;
+    }
+    if bits == 0 || bits >= 0x7FF << 52 {
+        return x; // ±0, +∞, NaN
+    }
+    let mut e = (bits >> 52) as i32 - 1023;
+    let mut m = bits & ((1 << 52) - 1);
+    if e == -1023 {
+        // Subnormal: normalize.
+        e += 1;
+        while m < 1 << 52 {
+            m <<= 1;
+            e -= 1;
+        }
+    } else {
+        m |= 1 << 52;
+    }
+    // Make the exponent even: √(m · 2^e) = √(m · 2^(e & 1)) · 2^(e >> 1), m now in [2^52, 2^54).
+    m <<= e & 1;
+    e >>= 1;
+    // q = ⌊√(m · 2^54)⌋ (54 bits), one bit at a time; the remainder stays below 2^57.
+    let (mut rem, mut s, mut q, mut r) = (m << 1, 0u64, 0u64, 1u64 << 53);
+    while r != 0 {
+        let t = s + r;
+        if t <= rem {
+            s = t + r;
+            rem -= t;
+            q += r;
+        }
+        rem <<= 1;
+        r >>= 1;
+    }
+    // A carry out of the significand correctly bumps the exponent.
+    f64::from_bits((((e + 1022) as u64) << 52) + ((q + 1) >> 1))
 }
 
 /// Absolute steps of a position in mm: `round(mm × steps/mm)`, within ±(2^31 - 1).
@@ -199,6 +242,26 @@ mod tests {
         // Very slow feeds stop at 1 step/s.
         let pl = p.line(&[0.01, 40.0, 20.0], Some(1e-6), &l).unwrap().unwrap();
         assert_eq!(pl.mv.cruise(), period_of_hz(1));
+    }
+
+    #[test]
+    fn sqrt_matches_libm() {
+        let mut x = 0x2545_F491_4F6C_DD1Du64;
+        let specials = [0.0, -0.0, 1.0, 2.0, 3800.0, 5e-324, 2.2e-308, f64::MAX, f64::INFINITY];
+        for v in specials {
+            assert_eq!(sqrt(v).to_bits(), libm::sqrt(v).to_bits(), "√{v}");
+        }
+        assert!(sqrt(-1.0).is_nan() && sqrt(f64::NAN).is_nan());
+        for i in 0..200_000 {
+            // xorshift64: random bit patterns (every exponent) and random lengths² in mm².
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let v = if i % 2 == 0 { f64::from_bits(x >> 1) } else { (x >> 11) as f64 / (1u64 << 20) as f64 };
+            if v.is_finite() {
+                assert_eq!(sqrt(v).to_bits(), libm::sqrt(v).to_bits(), "√{v}");
+            }
+        }
     }
 
     #[test]
