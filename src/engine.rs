@@ -209,7 +209,8 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
     fn step(&mut self) -> (u32, u32) {
         let mut word = self.master_on;
         let total = self.total;
-        for s in self.slaves[..self.n_slaves as usize].iter_mut() {
+        // `take`, not a slice: no bounds-check call in the hot path.
+        for s in self.slaves.iter_mut().take(self.n_slaves as usize) {
             if s.dda.step(total) {
                 word |= s.on;
                 bump(s.pos, s.sign);
