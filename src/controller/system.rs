@@ -91,7 +91,7 @@ impl<const N: usize> Controller<'_, N> {
         loop {
             match l {
                 Listing::Settings(i) => {
-                    let id = Settings::ids(N).nth(i as usize)?;
+                    let id = Settings::id(i as usize, N)?;
                     if out.room() < SETTING_LEN + 4 {
                         return Some(l);
                     }
