@@ -310,6 +310,7 @@ impl Settings {
     pub fn ramp_config(&self, axes: usize, timing: &Timing) -> RampConfig {
         // max/min, not clamp, here and below: clamp's panic message would link integer
         // formatting into the firmware.
+        #[allow(clippy::manual_clamp, reason = "clamp's panic path costs flash")]
         let axes = axes.max(1).min(MAX_AXES);
         let mut accel = f64::MAX;
         let mut top = 0.0f64;
