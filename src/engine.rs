@@ -30,7 +30,7 @@ use crate::board::PinMap;
 use crate::interp::Dda;
 use crate::queue::{Move, Shared, State};
 use crate::ramp::{Period, RampSlot, RAMP_LEN};
-use crate::timing::Timing;
+use crate::timing::{Timing, STORE_JITTER_TICKS};
 use crate::TICKS_PER_MS;
 
 /// Longest timer period one tick can set (ARR is 16 bits).
@@ -408,7 +408,7 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
             t => t,
         };
         self.min_period = Period::from_bits(t.min_period_ticks.saturating_mul(16));
-        self.dir_setup = t.dir_setup_ticks.max(t.min_period_ticks);
+        self.dir_setup = (t.dir_setup_ticks + STORE_JITTER_TICKS).max(t.min_period_ticks);
         self.idx = 0;
         self.ramp_steps = 0;
         self.hold_stop = false;

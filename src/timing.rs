@@ -77,6 +77,11 @@ impl Timing {
 /// this much after the pulse width, so the high time is never shorter than asked.
 pub const STORE_LATENCY_TICKS: u32 = 48;
 
+/// Spread of that latency (the instruction an interrupt lands on, flash wait states): the
+/// engine adds it to the direction-setup gap, since the direction store and the step store are
+/// two interrupts whose latencies differ by up to this much.
+pub const STORE_JITTER_TICKS: u32 = 24;
+
 /// Converts nanoseconds to timer ticks, rounding up so a minimum is never undercut.
 pub const fn ns_to_ticks(ns: u32) -> u32 {
     // 72 ticks per µs is 9 per 125 ns (32-bit math: no 64-bit division in the firmware).
