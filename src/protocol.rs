@@ -175,8 +175,9 @@ fn put_padded(out: &mut impl Out, mut v: u32, width: usize) {
 /// truncating it is the floor).
 pub fn put_fixed(out: &mut impl Out, x: f64, decimals: u32) {
     let decimals = decimals.min(3);
-    let scale = 10u32.pow(decimals);
-    let scaled = libm::round(x * scale as f64);
+    // NonZero: dividing by it has no panic path.
+    let scale = core::num::NonZeroU32::new(10u32.pow(decimals)).unwrap_or(core::num::NonZeroU32::MIN);
+    let scaled = libm::round(x * scale.get() as f64);
     let scaled = if scaled.is_finite() && libm::fabs(scaled) < 1e15 { scaled } else { 0.0 };
     if scaled < 0.0 {
         out.put(b"-");

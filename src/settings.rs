@@ -364,12 +364,10 @@ impl Settings {
         b[18] = self.dir_invert;
         b[19] = self.enable_invert as u8 | (self.limit_invert as u8) << 1 | (self.probe_invert as u8) << 2;
         b[20] = (self.shape == Shape::SCurve) as u8;
-        let arrays = [&self.steps_per_mm, &self.max_rate, &self.accel, &self.max_travel];
-        for (g, arr) in arrays.iter().enumerate() {
-            for (i, v) in arr.iter().enumerate() {
-                let at = 24 + 4 * (g * MAX_AXES + i);
-                b[at..at + 4].copy_from_slice(&v.to_le_bytes());
-            }
+        // Axis arrays from byte 24, in field order (chunks, not computed indices: no panic path).
+        let values = [&self.steps_per_mm, &self.max_rate, &self.accel, &self.max_travel].into_iter().flatten();
+        for (w, v) in b[24..].chunks_exact_mut(4).zip(values) {
+            w.copy_from_slice(&v.to_le_bytes());
         }
         let crc = crc32(&b[..SETTINGS_LEN - 4]);
         b[SETTINGS_LEN - 4..].copy_from_slice(&crc.to_le_bytes());
@@ -404,11 +402,9 @@ impl Settings {
             },
             ..Settings::DEFAULT
         };
-        let arrays = [&mut s.steps_per_mm, &mut s.max_rate, &mut s.accel, &mut s.max_travel];
-        for (g, arr) in arrays.into_iter().enumerate() {
-            for (i, v) in arr.iter_mut().enumerate() {
-                *v = f32::from_le_bytes(word(24 + 4 * (g * MAX_AXES + i)));
-            }
+        let values = [&mut s.steps_per_mm, &mut s.max_rate, &mut s.accel, &mut s.max_travel].into_iter().flatten();
+        for (w, v) in b[24..].chunks_exact(4).zip(values) {
+            *v = f32::from_le_bytes([w[0], w[1], w[2], w[3]]);
         }
         s.is_valid().then_some(s)
     }
