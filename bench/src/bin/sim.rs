@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
 use clap::Parser;
-use ddastep_bench::emu::{firmware_elf, gcode_lines, Board, InputFlip, Port, HZ};
+use ddastep_bench::emu::{firmware_elf, gcode_lines, isr_profile, sweep, Board, InputFlip, Port, HZ};
 
 #[derive(Parser)]
 #[command(about = "Run the ddastep firmware ELF on an emulated Blue Pill (modeled cycles at 72 MHz)")]
@@ -28,6 +28,25 @@ struct Args {
     /// Input flips, e.g. PA0@0.25=0 (pin PA0 low at 0.25 s simulated).
     #[arg(long)]
     pin: Vec<String>,
+    /// Print where the step interrupt's modeled cycles go (per function and per block).
+    #[arg(long)]
+    profile: bool,
+    /// Step-rate sweep: max sustainable master rate and CPU load per axis count (see
+    /// bench/README.md); prints a table.
+    #[arg(long)]
+    sweep: bool,
+    /// With --sweep: write bench/RESULTS.md-style results to this file.
+    #[arg(long)]
+    results: Option<PathBuf>,
+    /// With --sweep: axis counts, e.g. 1,3,7 (default 1..=7).
+    #[arg(long, value_delimiter = ',')]
+    axes: Vec<usize>,
+    /// With --sweep: worker threads.
+    #[arg(long, default_value_t = 2)]
+    jobs: usize,
+    /// One sweep point, AXES@HZ (e.g. 7@200000), with the step-ISR profile of its cruise.
+    #[arg(long)]
+    point: Option<String>,
 }
 
 // parse "PA0@0.25=0"
@@ -47,13 +66,36 @@ fn parse_pin(s: &str) -> Result<InputFlip> {
 
 fn main() -> Result<()> {
     let args = Args::parse();
-    let elf = match args.elf {
+    let elf = match args.elf.clone() {
         Some(p) => p,
         None => firmware_elf()?,
     };
+    if args.sweep {
+        return run_sweep(&args, &elf);
+    }
+    if let Some(spec) = &args.point {
+        let (axes, hz) = spec.split_once('@').context("expected AXES@HZ")?;
+        let p = sweep::run_point(&elf, axes.parse()?, hz.parse()?, 20, 0.95, true);
+        println!("{}", sweep::point_line(&p));
+        let entries = p.isr_entries.max(1) as f64;
+        println!("step ISR profile over the measured cruise ({} entries, {:.1} cycles per master step):", p.isr_entries, p.isr_cycles_per_step);
+        for f in &p.profile {
+            println!("  {:>5.1}% {:>8.1} cycles/entry  {}", f.share * 100.0, f.cycles as f64 / entries, f.function);
+        }
+        println!("by block (cycles per entry, cycles per run):");
+        for (name, runs, cycles) in p.profile_blocks.iter().take(20) {
+            println!("  {:>8.1} {:>6.1}  {name}", *cycles as f64 / entries, *cycles as f64 / (*runs).max(1) as f64);
+        }
+        println!("thread mode over the same stretch (cycles per step-ISR entry):");
+        for f in p.profile_thread.iter().take(8) {
+            println!("  {:>5.1}% {:>8.1}  {}", f.share * 100.0, f.cycles as f64 / entries, f.function);
+        }
+        return Ok(());
+    }
     let gcode_path = args.gcode.unwrap_or_else(|| ddastep_bench::emu::repo_root().join("bench/demo/paper_532.gcode"));
     let gcode = std::fs::read_to_string(&gcode_path).with_context(|| format!("reading {}", gcode_path.display()))?;
     let mut board = Board::load(&elf)?;
+    board.set_profile(args.profile);
     for p in &args.pin {
         board.schedule_input(parse_pin(p)?);
     }
@@ -82,12 +124,33 @@ fn main() -> Result<()> {
     eprintln!();
     let report = board.report();
     println!("{report}");
+    if args.profile {
+        print!("{}", isr_profile(&board, 12));
+    }
     println!("wall {:.2} s for {:.3} s simulated", wall.elapsed().as_secs_f64(), board.seconds());
     if let Some(p) = args.vcd {
         board.write_vcd(&p)?;
     }
     if let Some(p) = args.json {
         std::fs::write(&p, serde_json::to_string_pretty(&report)?)?;
+    }
+    Ok(())
+}
+
+// the step-rate sweep: table on stdout, progress on stderr, optionally the results file
+fn run_sweep(args: &Args, elf: &std::path::Path) -> Result<()> {
+    let mut opts = sweep::Options { jobs: args.jobs, ..Default::default() };
+    if !args.axes.is_empty() {
+        opts.axes = args.axes.clone();
+    }
+    let s = sweep::sweep(elf, &opts)?;
+    println!("max step rate ($I with the sweep settings): {} Hz", s.cap_hz);
+    print!("{}", s.table());
+    println!("{} points in {:.1} s wall", s.points, s.wall_s);
+    if let Some(p) = &args.results {
+        let command = std::env::args().skip(1).collect::<Vec<_>>().join(" ");
+        std::fs::write(p, sweep::results_markdown(&s, &format!("cargo sim -- {command}"), elf)?)?;
+        eprintln!("wrote {}", p.display());
     }
     Ok(())
 }

@@ -18,6 +18,7 @@ use super::cpu::{self, Cpu, Image};
 use super::exception::{self, ENTRY_CYCLES, RETURN_CYCLES, TAIL_CHAIN_CYCLES};
 use super::gpio::PinEdge;
 use super::nvic::IRQ0;
+use super::profile::{self, FnCost};
 use super::stats::{IsrEntry, Stats};
 
 /// Core clock: modeled cycles per second.
@@ -264,6 +265,50 @@ impl Board {
         self.stats.cpu_load_between(from, to)
     }
 
+    // forget the step-ISR figures so far (entries, cycles, BSRR offsets): measure one stretch
+    pub fn reset_step_isr_stats(&mut self) {
+        self.stats.step_isr = Default::default();
+    }
+
+    // write memory (e.g. a flash page before boot, as a reset keeps flash)
+    pub fn write_mem(&mut self, addr: u32, bytes: &[u8]) -> Result<()> {
+        self.cpu.mem_write(addr as u64, bytes).map_err(|e| anyhow::anyhow!("writing {addr:#x}: {e:?}"))?;
+        if (cpu::FLASH_BASE..cpu::FLASH_BASE + cpu::FLASH_SIZE).contains(&addr) {
+            self.cpu.mem_write((addr - cpu::FLASH_BASE) as u64, bytes).map_err(|e| anyhow::anyhow!("{e:?}"))?;
+        }
+        Ok(())
+    }
+
+    // busy fraction of each 1 ms window [k·72 000, (k+1)·72 000) cycles for k in `windows`
+    pub fn window_loads(&self, windows: std::ops::Range<u64>) -> Vec<f64> {
+        windows.map(|w| self.stats.window_load(w as usize)).collect()
+    }
+
+    // fraction of each 1 ms window spent in the step interrupt (TIM2), entry and return included
+    pub fn window_isr_loads(&self, windows: std::ops::Range<u64>) -> Vec<f64> {
+        windows.map(|w| self.stats.window_isr_load(w as usize)).collect()
+    }
+
+    // start (clearing) or stop the per-block cycle histogram
+    pub fn set_profile(&mut self, on: bool) {
+        self.cpu.get_data_mut().profile = on.then(Default::default);
+    }
+
+    // cycles per function spent in exception `exc` (e.g. `16 + TIM2_IRQ`; 0 = thread mode)
+    pub fn profile(&self, exc: u32) -> Vec<FnCost> {
+        self.cpu.get_data().profile.as_ref().map_or_else(Vec::new, |h| profile::by_function(h, &self.image.symbols, exc))
+    }
+
+    // cycles per translated block spent in exception `exc`, named `address function+offset`
+    pub fn profile_blocks(&self, exc: u32) -> Vec<(String, profile::Count)> {
+        self.cpu.get_data().profile.as_ref().map_or_else(Vec::new, |h| profile::by_block(h, &self.image.symbols, exc))
+    }
+
+    // the function symbol containing `addr` and the offset into it
+    pub fn symbol(&self, addr: u32) -> Option<(&str, u32)> {
+        self.image.symbols.lookup(addr)
+    }
+
     pub(crate) fn stats(&self) -> &Stats {
         &self.stats
     }
@@ -349,8 +394,8 @@ impl Board {
                 None => (if pc >= 0xFFFF_FFF0 { b.prefix[b.insns.len()] } else { b.cost_to(pc) }, b.insns.len()),
             };
             wfi = pc == b.end && b.insns.last().is_some_and(|i| i.wfi);
-            m.now += cycles;
-            m.insns += n as u64;
+            let start = b.start;
+            m.account(start, cycles, n as u64);
         }
         m.cur = None;
         if let Stop::Split(k) = m.stop {
@@ -372,7 +417,7 @@ impl Board {
         let start = self.cycles();
         exception::enter(&mut self.cpu, n, exc_return);
         let m = self.cpu.get_data_mut();
-        m.now += cost;
+        m.account(profile::ENTRY, cost, 0);
         if n == IRQ0 + TIM2_IRQ {
             m.first_bsrr = None;
             let update = (m.tim2.sr & 1 != 0).then_some(m.tim2.last_update);
@@ -384,17 +429,21 @@ impl Board {
     fn exception_return(&mut self, exc_return: u32) {
         let n = self.cpu.get_data_mut().nvic.deactivate();
         let now = self.cycles();
-        if n == IRQ0 + TIM2_IRQ {
-            let m = self.cpu.get_data();
-            self.stats.isr_done(now + RETURN_CYCLES, m.insns, m.first_bsrr);
-        }
         self.cpu.get_data_mut().sync(now);
         let basepri = self.reg(RegisterARM::BASEPRI);
         let primask = self.reg(RegisterARM::PRIMASK) != 0;
-        if let Some(next) = self.cpu.get_data().nvic.preempting(basepri, primask) {
+        let next = self.cpu.get_data().nvic.preempting(basepri, primask);
+        // A tail-chain replaces the return: its cost is charged to the next handler's entry.
+        let ret = if next.is_some() { 0 } else { RETURN_CYCLES };
+        if n == IRQ0 + TIM2_IRQ {
+            let m = self.cpu.get_data();
+            self.stats.isr_done(now + ret, m.insns, m.first_bsrr);
+        }
+        if let Some(next) = next {
             self.take(next, exc_return, TAIL_CHAIN_CYCLES);
             return;
         }
+        self.profile_return(n);
         let to_thread = exc_return & 8 != 0;
         if to_thread && self.cpu.get_data().nvic.scr & 2 != 0 {
             self.sleeping = true;
@@ -404,5 +453,12 @@ impl Board {
         }
         exception::unstack(&mut self.cpu, exc_return);
         self.cpu.get_data_mut().now += RETURN_CYCLES;
+    }
+
+    // charge an exception return of exception `n` to the profile (the clock is charged apart)
+    fn profile_return(&mut self, n: u32) {
+        if let Some(h) = &mut self.cpu.get_data_mut().profile {
+            h.add(n, profile::RETURN, RETURN_CYCLES, 0);
+        }
     }
 }

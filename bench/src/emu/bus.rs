@@ -12,6 +12,7 @@ use std::collections::{BTreeMap, HashMap, HashSet};
 use super::cost::{Block, BlockCache};
 use super::gpio::{PinEdge, Port};
 use super::nvic::{Nvic, IRQ0};
+use super::profile::Histogram;
 use super::systick::SysTick;
 use super::timer::Timer;
 use super::usart::Usart;
@@ -73,6 +74,8 @@ pub struct Machine {
     pub flash_erase: Option<u32>,
     /// PC of a store after which the write callback stopped the CPU.
     pub mmio_stop: Option<u32>,
+    /// Per-block cycle histogram while profiling is on.
+    pub profile: Option<Histogram>,
 }
 
 impl Machine {
@@ -106,12 +109,22 @@ impl Machine {
             first_bsrr: None,
             flash_erase: None,
             mmio_stop: None,
+            profile: None,
         }
     }
 
     // the block being executed
     pub fn block(&self) -> Option<&Block> {
         self.cur.and_then(|a| self.blocks.at(a))
+    }
+
+    // charge `cycles` and `insns` of block `start` to the clock (and the profile, if on)
+    pub fn account(&mut self, start: u32, cycles: u64, insns: u64) {
+        self.now += cycles;
+        self.insns += insns;
+        if let Some(h) = &mut self.profile {
+            h.add(self.nvic.ipsr(), start, cycles, insns);
+        }
     }
 
     // modeled cycle at which the instruction at `self.pc` completes its access

@@ -181,7 +181,7 @@ fn decode16(hw: u16) -> Decoded {
         }
         0b010010 | 0b010011 => mem(2 + FLASH_WAIT_STATES), // LDR literal
         _ => match hw >> 12 {
-            0b0101 | 0b0110 | 0b0111 | 0b1000 | 0b1001 => mem(2),
+            0b0101..=0b1001 => mem(2),
             0b1011 => misc16(hw),
             0b1100 => branch(1 + (hw & 0xFF).count_ones() as u64, Flow::Next), // LDM/STM
             0b1101 => match (hw >> 8) & 0xF {

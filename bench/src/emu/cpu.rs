@@ -13,6 +13,7 @@ use unicorn_engine::unicorn_const::{Arch, Mode, Prot};
 use unicorn_engine::{ArmCpuModel, RegisterARM, Unicorn};
 
 use super::bus::{Machine, Stop};
+use super::profile::Symbols;
 
 pub const FLASH_BASE: u32 = 0x0800_0000;
 pub const FLASH_SIZE: u32 = 64 * 1024;
@@ -24,6 +25,7 @@ pub struct Image {
     pub initial_sp: u32,
     pub reset: u32,
     pub rtt: Option<u32>,
+    pub symbols: Symbols,
 }
 
 pub type Cpu = Unicorn<'static, Machine>;
@@ -88,7 +90,7 @@ fn map_mmio(uc: &mut Cpu, base: u64, size: u64, _: u32) -> Result<(), unicorn_en
 
 // bit-band alias: word n of the alias is bit n%32 of word n/32 of the target region
 fn map_bitband(uc: &mut Cpu, alias: u64, target: u32, size: u32) -> Result<(), unicorn_engine::unicorn_const::uc_error> {
-    let locate = move |off: u64| (target + (off / 32) as u32 & !3, ((off / 32) % 4 * 8 + (off % 32) / 4) as u32);
+    let locate = move |off: u64| ((target + (off / 32) as u32) & !3, ((off / 32) % 4 * 8 + (off % 32) / 4) as u32);
     let is_ram = target == RAM_BASE;
     uc.mmio_map(
         alias,
@@ -148,6 +150,7 @@ fn load_elf(uc: &mut Cpu, elf: &[u8]) -> Result<Image> {
         initial_sp: u32::from_le_bytes(vt[0..4].try_into().unwrap()),
         reset: u32::from_le_bytes(vt[4..8].try_into().unwrap()),
         rtt,
+        symbols: Symbols::from_elf(elf),
     })
 }
 
@@ -180,8 +183,8 @@ fn on_block(uc: &mut Unicorn<Machine>, addr: u64, size: u32) {
     let m = uc.get_data_mut();
     if let Some(prev) = m.cur {
         let b = m.blocks.at(prev).expect("current block is cached");
-        m.now += b.cost_to(addr);
-        m.insns += b.insns.len() as u64;
+        let (cycles, n) = (b.cost_to(addr), b.insns.len() as u64);
+        m.account(prev, cycles, n);
     }
     m.cur = Some(addr);
     if m.armed == Some((addr, m.now)) {

@@ -1,6 +1,7 @@
 //! Exception entry, return and tail-chaining done by the bench (unicorn has no NVIC):
 //! stacks the 8-word frame (with the 8-byte alignment bit), loads the vector from VTOR and
-//! sets LR to EXC_RETURN; on a branch to 0xFFFFFFF1/F9/FD it unstacks. Unicorn itself stays in
+//! sets LR to EXC_RETURN and clears the IT state; on a branch to 0xFFFFFFF1/F9/FD it unstacks
+//! (flags and IT state from the stacked xPSR). Unicorn itself stays in
 //! "thread mode" (IPSR 0) all the time; the bench keeps IPSR in `Nvic::stack`. For `board.rs`.
 //!
 //! Modeled costs (Cortex-M3 TRM §5.5, zero wait states, plus 2 flash wait states for the
@@ -15,6 +16,10 @@ use super::cpu::Cpu;
 pub const ENTRY_CYCLES: u64 = 12 + FLASH_WAIT_STATES;
 pub const RETURN_CYCLES: u64 = 10 + FLASH_WAIT_STATES;
 pub const TAIL_CHAIN_CYCLES: u64 = 6 + FLASH_WAIT_STATES;
+
+/// xPSR Thumb bit and IT/ICI bits (ARMv7-M ARM B1.4.2).
+const EPSR_T: u32 = 1 << 24;
+const EPSR_IT: u32 = 0x0600_FC00;
 
 const FRAME: [RegisterARM; 7] =
     [RegisterARM::R0, RegisterARM::R1, RegisterARM::R2, RegisterARM::R3, RegisterARM::R12, RegisterARM::LR, RegisterARM::PC];
@@ -65,6 +70,8 @@ pub fn enter(uc: &mut Cpu, n: u32, exc_return: u32) -> u32 {
     let vtor = m.nvic.vtor;
     let vector = read32(uc, vtor + 4 * n);
     let _ = uc.reg_write(RegisterARM::LR, exc_return as u64);
+    // The handler starts outside any IT block (the interrupted one's state is in the frame).
+    let _ = uc.reg_write(RegisterARM::EPSR, EPSR_T as u64);
     let _ = uc.reg_write(RegisterARM::PC, (vector & !1) as u64);
     vector & !1
 }
@@ -79,6 +86,8 @@ pub fn unstack(uc: &mut Cpu, exc_return: u32) {
     }
     let xpsr = words[7];
     let _ = uc.reg_write(RegisterARM::APSR_NZCVQ, (xpsr & 0xF800_0000) as u64);
+    // Resume an interrupted IT block where it stopped.
+    let _ = uc.reg_write(RegisterARM::EPSR, (xpsr & EPSR_IT | EPSR_T) as u64);
     let new_sp = sp + 32 + if xpsr & 1 << 9 != 0 { 4 } else { 0 };
     if psp {
         let control = uc.reg_read(RegisterARM::CONTROL).unwrap_or(0);

@@ -12,6 +12,8 @@ use serde::ser::SerializeMap;
 use serde::{Serialize, Serializer};
 
 use super::board::{Board, HZ};
+use super::bus::TIM2_IRQ;
+use super::nvic::IRQ0;
 use crate::la::{Analyzer, AxisChannels, Config};
 
 /// Axis names in channel order.
@@ -22,6 +24,9 @@ pub const STEP_PINS: [u8; 7] = [9, 10, 11, 12, 13, 14, 15];
 pub const DIR_PINS: [u8; 7] = [0, 1, 3, 4, 5, 6, 7];
 /// GPIOB shared enable pin.
 pub const EN_PIN: u8 = 8;
+/// Dir pin low = positive motion (Grbl's convention with `$3=0`; a `$3` mask would flip axes,
+/// which the report does not follow).
+pub const DIR_LOW_IS_POSITIVE: bool = true;
 
 /// Per-axis numbers.
 #[derive(Clone, Debug, Serialize)]
@@ -38,6 +43,7 @@ pub struct AxisReport {
 #[derive(Clone, Debug, Serialize)]
 pub struct StepIsr {
     pub entries: u64,
+    pub total_cycles: u64,
     pub mean_cycles: f64,
     pub max_cycles: u64,
     pub mean_instructions: f64,
@@ -66,7 +72,12 @@ pub struct Report {
     pub axes: Axes,
     pub max_slave_deviation_steps: f64,
     pub step_isr: StepIsr,
+    /// Busiest 1 ms window after boot (from the first WFI sleep on).
     pub cpu_load_peak: f64,
+    /// Busiest 1 ms window including boot (init runs with interrupts off: 100 %).
+    pub cpu_load_peak_with_boot: f64,
+    /// Modeled cycle of the first WFI sleep after reset (end of boot).
+    pub boot_cycles: Option<u64>,
     pub overruns: u64,
     pub sim_cycles: u64,
     pub sim_seconds: f64,
@@ -88,7 +99,9 @@ impl Board {
         for (i, name) in AXES.iter().enumerate() {
             channels.push(AxisChannels::new(name, 2 * i, Some(2 * i + 1)));
         }
-        let mut la = Analyzer::new(Config::new(channels)).expect("fixed channel map");
+        let mut config = Config::new(channels);
+        config.dir_invert = DIR_LOW_IS_POSITIVE;
+        let mut la = Analyzer::new(config).expect("fixed channel map");
         for ch in 0..14 {
             la.edge(0, ch, false);
         }
@@ -115,22 +128,14 @@ impl Board {
             })
             .collect();
         let dev = r.axes.iter().filter_map(|a| a.max_deviation_steps).fold(0.0, f64::max);
-        let s = &self.stats().step_isr;
-        let mean = |sum: u64| if s.entries == 0 { 0.0 } else { sum as f64 / s.entries as f64 };
         let u = self.serial_bytes().0;
         Report {
             axes: Axes(axes),
             max_slave_deviation_steps: dev,
-            step_isr: StepIsr {
-                entries: s.entries,
-                mean_cycles: mean(s.cycles_sum),
-                max_cycles: s.cycles_max,
-                mean_instructions: mean(s.insns_sum),
-                max_instructions: s.insns_max,
-                bsrr_offset_min_cycles: s.bsrr_min,
-                bsrr_offset_max_cycles: s.bsrr_max,
-            },
+            step_isr: self.step_isr(),
             cpu_load_peak: self.stats().cpu_load_peak(self.cycles()),
+            cpu_load_peak_with_boot: self.stats().cpu_load_peak_with_boot(self.cycles()),
+            boot_cycles: self.stats().first_sleep,
             overruns: self.overruns(),
             sim_cycles: self.cycles(),
             sim_seconds: self.seconds(),
@@ -138,6 +143,22 @@ impl Board {
             serial: String::from_utf8_lossy(u).into_owned(),
             usart_rx_overruns: self.usart_rx_overruns(),
             unmodeled_registers: self.unmodeled().iter().map(|(a, pc)| format!("{a:#010x} (pc {pc:#010x})")).collect(),
+        }
+    }
+
+    // the TIM2 handler figures since reset (or `reset_step_isr_stats`)
+    pub fn step_isr(&self) -> StepIsr {
+        let s = &self.stats().step_isr;
+        let mean = |sum: u64| if s.entries == 0 { 0.0 } else { sum as f64 / s.entries as f64 };
+        StepIsr {
+            entries: s.entries,
+            total_cycles: s.cycles_sum,
+            mean_cycles: mean(s.cycles_sum),
+            max_cycles: s.cycles_max,
+            mean_instructions: mean(s.insns_sum),
+            max_instructions: s.insns_max,
+            bsrr_offset_min_cycles: s.bsrr_min,
+            bsrr_offset_max_cycles: s.bsrr_max,
         }
     }
 
@@ -192,11 +213,31 @@ impl std::fmt::Display for Report {
         if let (Some(a), Some(b)) = (s.bsrr_offset_min_cycles, s.bsrr_offset_max_cycles) {
             writeln!(f, "update event -> first BSRR store: {a}..{b} modeled cycles")?;
         }
-        writeln!(f, "peak CPU load (1 ms windows, modeled): {:.1} %", self.cpu_load_peak * 100.0)?;
+        writeln!(f, "peak CPU load (1 ms windows after boot, modeled): {:.1} % ({:.1} % with boot)", self.cpu_load_peak * 100.0, self.cpu_load_peak_with_boot * 100.0)?;
         writeln!(f, "timer overruns: {}", self.overruns)?;
         if !self.unmodeled_registers.is_empty() {
             writeln!(f, "unmodeled registers: {}", self.unmodeled_registers.join(", "))?;
         }
         Ok(())
     }
+}
+
+// the step interrupt's modeled cycles by function and by block (needs `Board::set_profile`)
+pub fn isr_profile(board: &Board, top: usize) -> String {
+    use std::fmt::Write as _;
+    let exc = IRQ0 + TIM2_IRQ;
+    let entries = board.stats().step_isr.entries.max(1) as f64;
+    let mut s = String::new();
+    let funcs = board.profile(exc);
+    let total: u64 = funcs.iter().map(|f| f.cycles).sum();
+    let _ = writeln!(s, "step ISR profile: {total} modeled cycles in {} entries ({:.1} per entry)", entries as u64, total as f64 / entries);
+    let _ = writeln!(s, "  {:>6} {:>9} {:>8}  function", "share", "cycles", "/entry");
+    for f in funcs.iter().take(top) {
+        let _ = writeln!(s, "  {:>5.1}% {:>9} {:>8.1}  {}", f.share * 100.0, f.cycles, f.cycles as f64 / entries, f.function);
+    }
+    let _ = writeln!(s, "  {:>6} {:>9} {:>8}  block (address function+offset), cycles/run", "share", "cycles", "runs");
+    for (name, c) in board.profile_blocks(exc).iter().take(top) {
+        let _ = writeln!(s, "  {:>5.1}% {:>9} {:>8}  {name}, {:.1}", c.cycles as f64 * 100.0 / total.max(1) as f64, c.cycles, c.runs, c.cycles as f64 / c.runs.max(1) as f64);
+    }
+    s
 }

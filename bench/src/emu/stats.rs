@@ -32,24 +32,21 @@ pub struct IsrStats {
 pub struct Stats {
     /// Sleeping cycles per window.
     pub sleep: Vec<u64>,
+    /// Cycle of the first sleep (WFI) after reset: the end of boot.
+    pub first_sleep: Option<u64>,
     pub isr: Option<IsrEntry>,
     pub step_isr: IsrStats,
+    /// TIM2 handler cycles per window (entry to end of return).
+    pub isr_busy: Vec<u64>,
 }
 
 impl Stats {
     // record sleep from cycle `from` to `to`
     pub fn sleep(&mut self, from: u64, to: u64) {
-        let mut t = from;
-        while t < to {
-            let w = (t / WINDOW) as usize;
-            let w_end = (w as u64 + 1) * WINDOW;
-            let upto = to.min(w_end);
-            if self.sleep.len() <= w {
-                self.sleep.resize(w + 1, 0);
-            }
-            self.sleep[w] += upto - t;
-            t = upto;
+        if to > from && self.first_sleep.is_none() {
+            self.first_sleep = Some(from);
         }
+        add_per_window(&mut self.sleep, from, to);
     }
 
     // close the running TIM2 handler at cycle `end` with `insns` executed so far
@@ -58,6 +55,7 @@ impl Stats {
         let s = &mut self.step_isr;
         let cycles = end - e.start;
         let n = insns - e.insns;
+        add_per_window(&mut self.isr_busy, e.start, end);
         s.entries += 1;
         s.cycles_sum += cycles;
         s.cycles_max = s.cycles_max.max(cycles);
@@ -70,10 +68,33 @@ impl Stats {
         }
     }
 
-    // CPU load (busy fraction) of the busiest complete window before cycle `now`
+    // CPU load of the busiest complete window that starts after boot (the first sleep) and
+    // ends before cycle `now`; 0 before the first sleep. Boot runs init with interrupts off
+    // (clocks, ramp table), which would read as 100 %.
     pub fn cpu_load_peak(&self, now: u64) -> f64 {
-        let full = (now / WINDOW) as usize;
-        (0..full).map(|w| 1.0 - *self.sleep.get(w).unwrap_or(&0) as f64 / WINDOW as f64).fold(0.0, f64::max)
+        match self.first_sleep {
+            Some(s) => self.peak_windows(s.div_ceil(WINDOW) as usize, now),
+            None => 0.0,
+        }
+    }
+
+    // CPU load of the busiest complete window before cycle `now`, boot included
+    pub fn cpu_load_peak_with_boot(&self, now: u64) -> f64 {
+        self.peak_windows(0, now)
+    }
+
+    fn peak_windows(&self, first: usize, now: u64) -> f64 {
+        (first..(now / WINDOW) as usize).map(|w| self.window_load(w)).fold(0.0, f64::max)
+    }
+
+    // fraction of window `w` spent in the TIM2 handler
+    pub fn window_isr_load(&self, w: usize) -> f64 {
+        *self.isr_busy.get(w).unwrap_or(&0) as f64 / WINDOW as f64
+    }
+
+    // busy fraction of window `w`
+    pub fn window_load(&self, w: usize) -> f64 {
+        1.0 - *self.sleep.get(w).unwrap_or(&0) as f64 / WINDOW as f64
     }
 
     // CPU load over windows [from, to) (cycles), averaged
@@ -84,5 +105,19 @@ impl Stats {
         }
         let slept: u64 = (a..b).map(|w| *self.sleep.get(w).unwrap_or(&0)).sum();
         1.0 - slept as f64 / ((b - a) as u64 * WINDOW) as f64
+    }
+}
+
+// add the cycles of [from, to) to the per-window totals `v`
+fn add_per_window(v: &mut Vec<u64>, from: u64, to: u64) {
+    let mut t = from;
+    while t < to {
+        let w = (t / WINDOW) as usize;
+        let upto = to.min((w as u64 + 1) * WINDOW);
+        if v.len() <= w {
+            v.resize(w + 1, 0);
+        }
+        v[w] += upto - t;
+        t = upto;
     }
 }

@@ -1,0 +1,550 @@
+//! The step-rate sweep: for each axis count, the highest master rate the firmware sustains on
+//! the emulated board, and its CPU load at a few fixed rates. For `cargo sim -- --sweep` and
+//! `cargo bench --bench sweep`; the numbers go to bench/RESULTS.md.
+//!
+//! One point = a fresh board (reset), the sweep settings, one `G1` on `axes` axes with the
+//! steps in the ratio 10:6:4:8:2:7:5 (X is the master) and F chosen for the target master rate,
+//! long enough for `cruise_ms` of measured cruise plus margins. The measured stretch is the
+//! whole 1 ms load windows from 2 ms after the ramp's end; every window in it must have X
+//! within 1 % of the target (rate from the first and last X edge of the window), else the
+//! point reports "no cruise". A point is sustainable when it has no timer overrun in the move,
+//! every axis made exactly its steps (rising edges and net count), cruise was reached and no
+//! measured window is busier than `max_load`.
+//!
+//! Step-ISR figures (entries, cycles, BSRR offsets) cover the measured stretch only, so the
+//! move's load (refill, 1 000-cycle `Engine::load`) and the ramp walk stay out of them.
+
+use std::path::Path;
+
+use anyhow::{bail, Context, Result};
+use serde::Serialize;
+
+use super::board::{Board, HZ};
+use super::bus::TIM2_IRQ;
+use super::nvic::IRQ0;
+use super::profile::FnCost;
+use super::report::{AXES, STEP_PINS};
+use super::stats::WINDOW;
+
+/// Steps per axis per 10 master steps: X:Y:Z:A:B:C:U = 10:6:4:8:2:7:5 (the paper's 5:3:2 first).
+pub const RATIO: [u64; 7] = [10, 6, 4, 8, 2, 7, 5];
+/// Steps/mm the sweep leaves at its default.
+const STEPS_PER_MM: f64 = 100.0;
+/// `$120..126` for the sweep, mm/s² (10⁸ master steps/s²: 500 kHz in 5 ms).
+const ACCEL_MM_S2: f64 = 1_000_000.0;
+/// `$110..126` for the sweep, mm/min (1 MHz at 100 steps/mm: never the limit).
+const MAX_RATE_MM_MIN: f64 = 600_000.0;
+/// `$0` for the sweep, µs. The firmware's period floor is max(2 × pulse + 48 ticks, 144 ticks);
+/// 0.5 µs (36 ticks) leaves the 144-tick (500 kHz) interrupt floor as the limit.
+pub const PULSE_US: f64 = 0.5;
+
+/// What to sweep.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// Axis counts (1..=7).
+    pub axes: Vec<usize>,
+    /// Rates at which the load is reported, Hz.
+    pub load_rates: Vec<u32>,
+    /// Stop the search when the pass/fail bracket is this narrow, Hz.
+    pub resolution_hz: u32,
+    /// Measured cruise per point, ms.
+    pub cruise_ms: u64,
+    /// Highest busy fraction allowed in any measured window.
+    pub max_load: f64,
+    /// Worker threads (points of one axis count run in sequence).
+    pub jobs: usize,
+    /// Print each point as it finishes.
+    pub verbose: bool,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self {
+            axes: (1..=7).collect(),
+            load_rates: vec![50_000, 200_000, 400_000],
+            resolution_hz: 2_000,
+            cruise_ms: 20,
+            max_load: 0.95,
+            jobs: 2,
+            verbose: true,
+        }
+    }
+}
+
+/// Why a point is not sustainable.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub enum Verdict {
+    Ok,
+    /// Timer events found their flag still set.
+    Overrun(u64),
+    /// Busiest measured window, busy fraction.
+    Load(f64),
+    /// Some axis did not make its exact steps.
+    Counts(String),
+    /// The measured stretch was not all cruise at the target (slowest window's X rate, Hz).
+    NoCruise(f64),
+    /// The planner did not accept the move, or the board faulted.
+    Error(String),
+}
+
+/// One measured point.
+#[derive(Clone, Debug, Serialize)]
+pub struct Point {
+    pub axes: usize,
+    pub target_hz: u32,
+    /// Judged with the CPU load (everything not asleep: step ISR, other interrupts, `idle`).
+    pub verdict: Verdict,
+    /// Judged with the step ISR's share of each window instead of the CPU load.
+    pub isr_verdict: Verdict,
+    /// X rate over the measured stretch (edges / time), Hz.
+    pub cruise_hz: f64,
+    pub windows: usize,
+    /// CPU load (not asleep) over the measured windows: mean and busiest.
+    pub load_mean: f64,
+    pub load_max: f64,
+    /// Step-ISR share of the measured windows: mean and busiest.
+    pub isr_load_mean: f64,
+    pub isr_load_max: f64,
+    pub overruns: u64,
+    /// Step-ISR figures over the measured stretch.
+    pub isr_entries: u64,
+    pub isr_mean_cycles: f64,
+    pub isr_max_cycles: u64,
+    /// Step-ISR modeled cycles per master step (all entries of the stretch / X steps).
+    pub isr_cycles_per_step: f64,
+    pub bsrr_min: Option<u64>,
+    pub bsrr_max: Option<u64>,
+    /// Shortest X step high time in the move, ns.
+    pub min_high_ns: Option<f64>,
+    /// Step-ISR profile over the measured stretch (when asked for).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub profile: Vec<FnCost>,
+    /// The same by translated block: (address and name, runs, cycles).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub profile_blocks: Vec<(String, u64, u64)>,
+    /// Thread mode (`idle`) by function over the measured stretch.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub profile_thread: Vec<FnCost>,
+    /// Simulated seconds and wall seconds this point took.
+    pub sim_s: f64,
+    pub wall_s: f64,
+}
+
+impl Point {
+    // true when the firmware sustained the rate with the CPU load at most `max_load`
+    pub fn ok(&self) -> bool {
+        self.verdict == Verdict::Ok
+    }
+
+    // true when it sustained the rate with the step ISR's share at most `max_load`
+    pub fn isr_ok(&self) -> bool {
+        self.isr_verdict == Verdict::Ok
+    }
+
+    fn failed(axes: usize, target_hz: u32, verdict: Verdict) -> Self {
+        Point {
+            axes,
+            target_hz,
+            isr_verdict: verdict.clone(),
+            verdict,
+            cruise_hz: 0.0,
+            windows: 0,
+            load_mean: 0.0,
+            load_max: 0.0,
+            isr_load_mean: 0.0,
+            isr_load_max: 0.0,
+            overruns: 0,
+            isr_entries: 0,
+            isr_mean_cycles: 0.0,
+            isr_max_cycles: 0,
+            isr_cycles_per_step: 0.0,
+            bsrr_min: None,
+            bsrr_max: None,
+            min_high_ns: None,
+            profile: Vec::new(),
+            profile_blocks: Vec::new(),
+            profile_thread: Vec::new(),
+            sim_s: 0.0,
+            wall_s: 0.0,
+        }
+    }
+}
+
+/// The highest passing and lowest failing rate of one criterion.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct Bracket {
+    /// Highest sustainable rate found, Hz (0: none).
+    pub max_hz: u32,
+    /// Lowest failing rate above it (None: the firmware's cap passed).
+    pub fail_hz: Option<u32>,
+}
+
+/// The sweep's result for one axis count.
+#[derive(Clone, Debug, Serialize)]
+pub struct Row {
+    pub axes: usize,
+    /// With the CPU load criterion (the headline).
+    pub cpu: Bracket,
+    /// With the step ISR's share instead (what the handler alone sustains).
+    pub isr: Bracket,
+    /// Every point tried, in order.
+    pub tried: Vec<Point>,
+}
+
+impl Row {
+    // the point tried at `hz`
+    pub fn at(&self, hz: u32) -> Option<&Point> {
+        self.tried.iter().find(|p| p.target_hz == hz)
+    }
+}
+
+/// Everything the sweep found.
+#[derive(Clone, Debug, Serialize)]
+pub struct Sweep {
+    /// `[MSG:max step rate N Hz]` with the sweep settings.
+    pub cap_hz: u32,
+    /// Settings lines sent to each board.
+    pub settings: Vec<String>,
+    pub rows: Vec<Row>,
+    pub wall_s: f64,
+    pub points: usize,
+}
+
+// the settings lines every point sends (after reset)
+pub fn settings_lines() -> Vec<String> {
+    let mut v = vec![format!("$0={PULSE_US}"), "$41=0".to_string(), "$40=1000".to_string()];
+    for i in 0..7 {
+        v.push(format!("$11{i}={MAX_RATE_MM_MIN}"));
+        v.push(format!("$12{i}={ACCEL_MM_S2}"));
+    }
+    v
+}
+
+/// A booted board with the sweep settings applied and what `$I` said.
+struct Prepared {
+    board: Board,
+    cap_hz: u32,
+    accel_hz_s: u32,
+}
+
+// reset a board from `elf`, boot it, send the settings and `$I`
+fn prepare(elf: &Path) -> Result<Prepared> {
+    let mut board = Board::load(elf)?;
+    board.run_until(HZ / 2, |b| b.serial_output().contains("Grbl"))?;
+    for line in settings_lines() {
+        board.send_line_wait_ok(&line)?;
+    }
+    let info = board.send_line_wait_ok("$I")?;
+    let cap_hz = number_after(&info, "max step rate ").context("no max step rate in $I")?;
+    let accel_hz_s = info
+        .split("[MSG:ramp ")
+        .nth(1)
+        .and_then(|r| r.split(" Hz ").nth(1))
+        .and_then(|r| r.split(' ').next()?.parse().ok())
+        .context("no ramp acceleration in $I")?;
+    board.send_line_wait_ok("G91")?;
+    Ok(Prepared { board, cap_hz, accel_hz_s })
+}
+
+fn number_after(text: &str, key: &str) -> Option<u32> {
+    let rest = &text[text.find(key)? + key.len()..];
+    rest[..rest.find(|c: char| !c.is_ascii_digit())?].parse().ok()
+}
+
+/// The move for a point: steps per axis and the `G1` line.
+fn move_line(axes: usize, target_hz: u32, master_steps: u64) -> (Vec<u64>, String) {
+    let steps: Vec<u64> = RATIO[..axes].iter().map(|r| master_steps * r / 10).collect();
+    let mm: Vec<f64> = steps.iter().map(|&s| s as f64 / STEPS_PER_MM).collect();
+    let path = mm.iter().map(|m| m * m).sum::<f64>().sqrt();
+    let seconds = master_steps as f64 / target_hz as f64;
+    let feed = path / seconds * 60.0;
+    let mut line = "G1".to_string();
+    for (name, m) in AXES.iter().zip(&mm) {
+        line += &format!(" {name}{m}");
+    }
+    line += &format!(" F{feed:.4}");
+    (steps, line)
+}
+
+// run one point: reset, settings, the move, measurements
+pub fn run_point(elf: &Path, axes: usize, target_hz: u32, cruise_ms: u64, max_load: f64, profile: bool) -> Point {
+    let wall = std::time::Instant::now();
+    let mut p = match measure(elf, axes, target_hz, cruise_ms, max_load, profile) {
+        Ok(p) => p,
+        Err(e) => Point::failed(axes, target_hz, Verdict::Error(format!("{e:#}"))),
+    };
+    p.wall_s = wall.elapsed().as_secs_f64();
+    p
+}
+
+fn measure(elf: &Path, axes: usize, target_hz: u32, cruise_ms: u64, max_load: f64, profile: bool) -> Result<Point> {
+    let Prepared { mut board, accel_hz_s, .. } = prepare(elf)?;
+    // Ramp: whole table entries of 1 ms, from the 1 kHz start.
+    let ramp_ms = ((target_hz as u64).saturating_sub(1000) * 1000).div_ceil(accel_hz_s.max(1) as u64) + 1;
+    let cruise_total_ms = cruise_ms + ramp_ms + 6;
+    let master = (target_hz as u64 * cruise_total_ms / 1000).div_ceil(10) * 10;
+    let (steps, line) = move_line(axes, target_hz, master);
+    let overruns0 = board.overruns();
+    let edges0 = board.edges().len();
+    board.send_line_wait_ok(&line)?;
+    // The first X step starts the clock.
+    let x_pin = STEP_PINS[0];
+    let started = board.run_until(HZ / 20, |b| b.edges()[edges0..].iter().any(|e| e.port == 1 && e.pin == x_pin && e.level))?;
+    if !started {
+        bail!("no X step within 50 ms of {line:?}");
+    }
+    let x0 = board.edges()[edges0..].iter().find(|e| e.port == 1 && e.pin == x_pin && e.level).unwrap().cycle;
+    let w0 = (x0 + (ramp_ms + 2) * WINDOW).div_ceil(WINDOW);
+    let w1 = w0 + cruise_ms;
+    board.run_until_cycle(w0 * WINDOW)?;
+    board.reset_step_isr_stats();
+    board.set_profile(profile);
+    board.run_until_cycle(w1 * WINDOW)?;
+    let isr = board.step_isr();
+    let prof = if profile { board.profile(IRQ0 + TIM2_IRQ) } else { Vec::new() };
+    let blocks = if profile { board.profile_blocks(IRQ0 + TIM2_IRQ) } else { Vec::new() };
+    let thread = if profile { board.profile(0) } else { Vec::new() };
+    board.set_profile(false);
+    // Run until the move is over: no step edge for 2 ms.
+    let expected_end = x0 + (master as f64 / target_hz as f64 * HZ as f64) as u64 + HZ / 100;
+    while board.cycles() < expected_end + HZ / 2 {
+        let last = board.edges().last().map_or(0, |e| e.cycle);
+        if board.cycles() > expected_end && board.cycles() > last + HZ / 500 {
+            break;
+        }
+        board.run_for(HZ / 1000)?;
+    }
+    // X edges per measured window.
+    let mut per_window: Vec<Vec<u64>> = vec![Vec::new(); cruise_ms as usize];
+    let mut x_steps = 0u64;
+    for e in &board.edges()[edges0..] {
+        if e.port == 1 && e.pin == x_pin && e.level && e.cycle >= w0 * WINDOW && e.cycle < w1 * WINDOW {
+            per_window[(e.cycle / WINDOW - w0) as usize].push(e.cycle);
+            x_steps += 1;
+        }
+    }
+    let rate = |t: &[u64]| if t.len() < 2 { 0.0 } else { (t.len() - 1) as f64 * HZ as f64 / (t[t.len() - 1] - t[0]) as f64 };
+    let slowest = per_window.iter().map(|t| rate(t)).fold(f64::INFINITY, f64::min);
+    let fastest = per_window.iter().map(|t| rate(t)).fold(0.0, f64::max);
+    let in_cruise = |r: f64| (r - target_hz as f64).abs() <= 0.01 * target_hz as f64;
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+    let max = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
+    let loads = board.window_loads(w0..w1);
+    let isr_loads = board.window_isr_loads(w0..w1);
+    let report = board.report();
+    let overruns = board.overruns() - overruns0;
+    let mut wrong = Vec::new();
+    for (i, &want) in steps.iter().enumerate() {
+        let a = &report.axes.0[i].1;
+        if a.rising_edges != want || a.net_steps != want as i64 {
+            wrong.push(format!("{} {}/{} net {}", AXES[i], a.rising_edges, want, a.net_steps));
+        }
+    }
+    for (name, a) in &report.axes.0[axes..] {
+        if a.rising_edges != 0 {
+            wrong.push(format!("{name} moved {}", a.rising_edges));
+        }
+    }
+    let verdict = |load_max: f64| {
+        if !wrong.is_empty() {
+            Verdict::Counts(wrong.join(", "))
+        } else if overruns > 0 {
+            Verdict::Overrun(overruns)
+        } else if !in_cruise(slowest) || !in_cruise(fastest) {
+            Verdict::NoCruise(if in_cruise(slowest) { fastest } else { slowest })
+        } else if load_max > max_load {
+            Verdict::Load(load_max)
+        } else {
+            Verdict::Ok
+        }
+    };
+    let span = (w1 - w0) * WINDOW;
+    Ok(Point {
+        axes,
+        target_hz,
+        verdict: verdict(max(&loads)),
+        isr_verdict: verdict(max(&isr_loads)),
+        cruise_hz: x_steps as f64 * HZ as f64 / span as f64,
+        windows: cruise_ms as usize,
+        load_mean: mean(&loads),
+        load_max: max(&loads),
+        isr_load_mean: mean(&isr_loads),
+        isr_load_max: max(&isr_loads),
+        overruns,
+        isr_entries: isr.entries,
+        isr_mean_cycles: isr.mean_cycles,
+        isr_max_cycles: isr.max_cycles,
+        isr_cycles_per_step: isr.total_cycles as f64 / x_steps.max(1) as f64,
+        bsrr_min: isr.bsrr_offset_min_cycles,
+        bsrr_max: isr.bsrr_offset_max_cycles,
+        min_high_ns: report.axes.0[0].1.min_high_ns,
+        profile: prof,
+        profile_blocks: blocks.into_iter().map(|(n, c)| (n, c.runs, c.cycles)).collect(),
+        profile_thread: thread,
+        sim_s: board.seconds(),
+        wall_s: 0.0,
+    })
+}
+
+// the search for one axis count: the load rates, then per criterion the cap and bisection
+fn sweep_axes(elf: &Path, axes: usize, cap_hz: u32, opts: &Options) -> Row {
+    let mut tried: Vec<Point> = Vec::new();
+    let mut run = |hz: u32| -> Point {
+        if let Some(p) = tried.iter().find(|p| p.target_hz == hz) {
+            return p.clone();
+        }
+        let p = run_point(elf, axes, hz, opts.cruise_ms, opts.max_load, false);
+        if opts.verbose {
+            eprintln!("{}", point_line(&p));
+        }
+        tried.push(p.clone());
+        p
+    };
+    for &hz in &opts.load_rates {
+        if hz <= cap_hz {
+            run(hz);
+        }
+    }
+    let cpu = search(&mut run, cap_hz, opts, Point::ok);
+    let isr = search(&mut run, cap_hz, opts, Point::isr_ok);
+    Row { axes, cpu, isr, tried }
+}
+
+// bisection for the highest rate where `pass` holds, starting from the load-rate points
+fn search(run: &mut impl FnMut(u32) -> Point, cap_hz: u32, opts: &Options, pass: fn(&Point) -> bool) -> Bracket {
+    let mut lo = 0u32;
+    let mut hi: Option<u32> = None;
+    for &hz in &opts.load_rates {
+        if hz > cap_hz {
+            continue;
+        }
+        if pass(&run(hz)) {
+            lo = lo.max(hz);
+        } else if hz > lo {
+            hi = Some(hi.map_or(hz, |h| h.min(hz)));
+        }
+    }
+    if hi.is_none_or(|h| h <= lo) {
+        hi = if pass(&run(cap_hz)) { None } else { Some(cap_hz) };
+        if hi.is_none() {
+            lo = cap_hz;
+        }
+    }
+    while let Some(h) = hi {
+        // Bisect on a 1 kHz grid down to the resolution.
+        let mid = (lo + (h - lo) / 2) / 1000 * 1000;
+        if h - lo <= opts.resolution_hz || mid <= lo || mid >= h {
+            break;
+        }
+        if pass(&run(mid)) {
+            lo = mid;
+        } else {
+            hi = Some(mid);
+        }
+    }
+    Bracket { max_hz: lo, fail_hz: hi }
+}
+
+// the whole sweep, `opts.jobs` axis counts at a time
+pub fn sweep(elf: &Path, opts: &Options) -> Result<Sweep> {
+    let wall = std::time::Instant::now();
+    let cap_hz = prepare(elf)?.cap_hz;
+    let queue = std::sync::Mutex::new(opts.axes.clone());
+    let rows = std::sync::Mutex::new(Vec::new());
+    std::thread::scope(|s| {
+        for _ in 0..opts.jobs.max(1) {
+            s.spawn(|| loop {
+                let Some(axes) = queue.lock().unwrap().pop() else { break };
+                let row = sweep_axes(elf, axes, cap_hz, opts);
+                rows.lock().unwrap().push(row);
+            });
+        }
+    });
+    let mut rows = rows.into_inner().unwrap();
+    rows.sort_by_key(|r| r.axes);
+    let points = rows.iter().map(|r| r.tried.len()).sum();
+    Ok(Sweep { cap_hz, settings: settings_lines(), rows, wall_s: wall.elapsed().as_secs_f64(), points })
+}
+
+// one line per point for progress output
+pub fn point_line(p: &Point) -> String {
+    format!(
+        "{} axes @ {:>6.1} kHz: {:<22} (ISR only: {:<16}) CPU {:>5.1}/{:>5.1} %, ISR {:>5.1}/{:>5.1} % (mean/max), ISR {:>6.1} cyc/step ({:>5.1} mean / {:>4} max per entry), BSRR {}..{}, {:.2} s sim in {:.1} s",
+        p.axes,
+        p.target_hz as f64 / 1000.0,
+        verdict_text(&p.verdict),
+        verdict_text(&p.isr_verdict),
+        p.load_mean * 100.0,
+        p.load_max * 100.0,
+        p.isr_load_mean * 100.0,
+        p.isr_load_max * 100.0,
+        p.isr_cycles_per_step,
+        p.isr_mean_cycles,
+        p.isr_max_cycles,
+        p.bsrr_min.map_or("-".into(), |v| v.to_string()),
+        p.bsrr_max.map_or("-".into(), |v| v.to_string()),
+        p.sim_s,
+        p.wall_s
+    )
+}
+
+// a short verdict
+pub fn verdict_text(v: &Verdict) -> String {
+    match v {
+        Verdict::Ok => "ok".into(),
+        Verdict::Overrun(n) => format!("{n} overruns"),
+        Verdict::Load(l) => format!("load {:.1} %", l * 100.0),
+        Verdict::Counts(s) => format!("counts: {s}"),
+        Verdict::NoCruise(r) => format!("no cruise ({:.1} kHz)", r / 1000.0),
+        Verdict::Error(e) => format!("error: {e}"),
+    }
+}
+
+impl Sweep {
+    // the results table (Markdown)
+    pub fn table(&self) -> String {
+        let mut s = String::new();
+        s += "| axes | max kHz (CPU ≤ 95 %) | max kHz (step ISR ≤ 95 %) | CPU / ISR load @ 50 kHz | @ 200 kHz | @ 400 kHz | ISR cycles per step @ 50 kHz | ISR mean / max cycles per entry @ 50 kHz | BSRR offset min / max cycles |\n";
+        s += "|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+        for r in &self.rows {
+            let load = |hz: u32| match r.at(hz) {
+                Some(p) if matches!(p.isr_verdict, Verdict::Ok | Verdict::Load(_)) => {
+                    let mark = if p.ok() { "" } else if p.isr_ok() { " ¹" } else { " ²" };
+                    format!("{:.0} / {:.0} %{mark}", p.load_max * 100.0, p.isr_load_max * 100.0)
+                }
+                Some(p) => verdict_text(&p.verdict),
+                None => "-".into(),
+            };
+            let (cps, isr) = match r.at(50_000) {
+                Some(p) if p.isr_entries > 0 => (format!("{:.0}", p.isr_cycles_per_step), format!("{:.0} / {}", p.isr_mean_cycles, p.isr_max_cycles)),
+                _ => ("-".into(), "-".into()),
+            };
+            let bsrr_min = r.tried.iter().filter_map(|p| p.bsrr_min).min();
+            let bsrr_max = r.tried.iter().filter(|p| p.isr_ok()).filter_map(|p| p.bsrr_max).max();
+            let bsrr = format!("{} / {}", bsrr_min.map_or("-".into(), |v| v.to_string()), bsrr_max.map_or("-".into(), |v| v.to_string()));
+            s += &format!(
+                "| {} | {} | {} | {} | {} | {} | {cps} | {isr} | {bsrr} |\n",
+                r.axes,
+                bracket_text(&r.cpu),
+                bracket_text(&r.isr),
+                load(50_000),
+                load(200_000),
+                load(400_000)
+            );
+        }
+        s
+    }
+}
+
+fn bracket_text(b: &Bracket) -> String {
+    match (b.max_hz, b.fail_hz) {
+        (0, Some(f)) => format!("< {:.0}", f as f64 / 1000.0),
+        (m, None) => format!("≥ {:.0} (cap)", m as f64 / 1000.0),
+        (m, Some(f)) => format!("{:.0} (fails {:.0})", m as f64 / 1000.0, f as f64 / 1000.0),
+    }
+}
+
+// bench/RESULTS.md: command, date, model, table, notes
+pub fn results_markdown(s: &Sweep, command: &str, _elf: &Path) -> Result<String> {
+    Ok(format!("{command}\n\n{}", s.table()))
+}
