@@ -156,6 +156,23 @@ impl Board {
         Ok(true)
     }
 
+    // run until no pin has changed for `quiet` cycles (motion over) or `max_cycles` pass;
+    // returns whether it went quiet
+    pub fn run_until_quiet(&mut self, quiet: u64, max_cycles: u64) -> Result<bool> {
+        let end = self.cycles() + max_cycles;
+        loop {
+            let last = self.edges().last().map_or(0, |e| e.cycle);
+            if self.cycles() >= last + quiet {
+                return Ok(true);
+            }
+            if self.cycles() >= end {
+                return Ok(false);
+            }
+            let next = (last + quiet).min(end);
+            self.run_until_cycle(next.max(self.cycles() + 1))?;
+        }
+    }
+
     // queue bytes on the host side of USART1 RX (they arrive at line pace)
     pub fn serial_send(&mut self, bytes: &[u8]) {
         let m = self.cpu.get_data_mut();
