@@ -22,7 +22,7 @@
 //!
 //! Cycle budget: see bench/RESULTS.md (modeled on the virtual bench).
 
-use core::sync::atomic::{AtomicI32, Ordering::Relaxed};
+use core::sync::atomic::Ordering::Relaxed;
 
 use heapless::spsc::Consumer;
 
@@ -55,11 +55,10 @@ enum Phase {
 
 /// One slave axis of the running move.
 #[derive(Clone, Copy, Debug)]
-struct Slave<'a> {
+struct Slave {
     dda: Dda,
     on: u32,
-    pos: &'a AtomicI32,
-    sign: i8,
+    axis: u8,
 }
 
 /// The step engine for `N` axes.
@@ -87,9 +86,9 @@ pub struct Engine<'a, const N: usize, const L: usize = RAMP_LEN> {
     total: u32,
     ramp_steps: u32,
     master_on: u32,
-    master_pos: &'a AtomicI32,
-    master_sign: i8,
-    slaves: [Slave<'a>; N],
+    master_axis: u8,
+    mv_steps: [i32; N],
+    slaves: [Slave; N],
     n_slaves: u8,
     dir_neg: u32,
     dir_known: u32,
@@ -125,9 +124,9 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
             total: 0,
             ramp_steps: 0,
             master_on: 0,
-            master_pos: &shared.position[0],
-            master_sign: 0,
-            slaves: [Slave { dda: Dda::new(0, 0), on: 0, pos: &shared.position[0], sign: 0 }; N],
+            master_axis: 0,
+            mv_steps: [0; N],
+            slaves: [Slave { dda: Dda::new(0, 0), on: 0, axis: 0 }; N],
             n_slaves: 0,
             dir_neg: 0,
             dir_known: 0,
@@ -209,15 +208,23 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
     fn step(&mut self) -> (u32, u32) {
         let mut word = self.master_on;
         let total = self.total;
-        // `take`, not a slice: no bounds-check call in the hot path.
-        for s in self.slaves.iter_mut().take(self.n_slaves as usize) {
-            if s.dda.step(total) {
-                word |= s.on;
-                bump(s.pos, s.sign);
-            }
+        // Unrolled over the slots (N is a constant), stopping after the move's last slave: no
+        // loop counter, no bounds checks, no branch inside a slot.
+        let n = self.n_slaves as usize;
+        macro_rules! slaves {
+            ($out:lifetime; $($i:literal)*) => {$(
+                if $i + 1 >= N || $i >= n {
+                    break $out;
+                }
+                let s = &mut self.slaves[$i];
+                word |= s.on & s.dda.step_mask(total);
+            )*};
         }
-        bump(self.master_pos, self.master_sign);
+        'slaves: {
+            slaves!('slaves; 0 1 2 3 4 5 6);
+        }
         self.left -= 1;
+        self.shared.mv_done.store(total - self.left, Relaxed);
         match self.phase {
             Phase::Accel => self.ramp_steps += 1,
             Phase::Decel => self.ramp_steps = self.ramp_steps.saturating_sub(1),
@@ -335,6 +342,17 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
     /// Ends the running move (counted as done only when completed).
     #[inline(never)]
     fn end_move(&mut self, completed: bool) {
+        if self.phase != Phase::Idle {
+            // What each axis made: all of it, or (stopped) the master's and the slaves' counts.
+            let done = self.total - self.left;
+            let mut made = [0u32; N];
+            made[self.master_axis as usize] = done;
+            for s in self.slaves.iter().take(self.n_slaves as usize) {
+                made[s.axis as usize] = s.dda.done();
+            }
+            let steps = self.mv_steps;
+            self.shared.end_move(|i| if steps[i] < 0 { -(made[i] as i32) } else { made[i] as i32 });
+        }
         if completed {
             self.shared.moves_done.fetch_add(1, Relaxed);
         }
@@ -368,11 +386,12 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
     /// Sets up a move: master, slaves, ramp; returns a direction event when a pin must change.
     fn load(&mut self, mv: &Move<N>) -> (u32, u32) {
         let m = mv.master as usize;
-        self.master_pos = &self.shared.position[m];
+        self.master_axis = mv.master;
+        self.mv_steps = mv.steps;
         self.total = mv.steps[m].unsigned_abs();
         self.left = self.total;
         self.master_on = self.pins.step_on[m];
-        self.master_sign = sign(mv.steps[m]);
+        self.shared.start_move(&mv.steps, self.total);
         let mut n = 0;
         let mut dir_word = 0;
         let mut dir_neg = self.dir_neg;
@@ -391,8 +410,7 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
                 self.slaves[n] = Slave {
                     dda: Dda::new(s.unsigned_abs(), self.total),
                     on: self.pins.step_on[i],
-                    pos: &self.shared.position[i],
-                    sign: sign(s),
+                    axis: i as u8,
                 };
                 n += 1;
             }
@@ -429,19 +447,5 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
     #[inline(always)]
     fn publish(&self, s: State) {
         self.shared.state.store(s as u8, Relaxed);
-    }
-}
-
-/// Adds ±1 to a position with a plain load and store (the engine is the only writer).
-#[inline(always)]
-fn bump(p: &AtomicI32, sign: i8) {
-    p.store(p.load(Relaxed).wrapping_add(sign as i32), Relaxed);
-}
-
-fn sign(s: i32) -> i8 {
-    if s < 0 {
-        -1
-    } else {
-        1
     }
 }

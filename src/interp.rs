@@ -14,12 +14,31 @@
 pub struct Dda {
     acc: u32,
     count: u32,
+    done: u32,
 }
 
 impl Dda {
     /// Starts a slave of `count` steps against a master of `master` steps (`count ≤ master`).
     pub const fn new(count: u32, master: u32) -> Self {
-        Dda { acc: master / 2, count }
+        Dda { acc: master / 2, count, done: 0 }
+    }
+
+    /// Steps made so far.
+    #[inline(always)]
+    pub fn done(&self) -> u32 {
+        self.done
+    }
+
+    /// Advances by one master step without a branch: all ones when the slave steps, else 0
+    /// (the step engine ANDs it with the pin bits).
+    #[inline(always)]
+    pub fn step_mask(&mut self, master: u32) -> u32 {
+        let a = self.acc + self.count;
+        let stepped = (a >= master) as u32;
+        let mask = stepped.wrapping_neg();
+        self.acc = a - (master & mask);
+        self.done += stepped;
+        mask
     }
 
     /// Advances by one master step; true when the slave steps too.
@@ -29,6 +48,7 @@ impl Dda {
         self.acc += self.count;
         if self.acc >= master {
             self.acc -= master;
+            self.done += 1;
             true
         } else {
             false

@@ -8,7 +8,7 @@
 //! move at its next tick and every queued move stamped with an older epoch when it reaches it
 //! (one per tick, so the interrupt never loops over the queue).
 
-use core::sync::atomic::{AtomicBool, AtomicI32, AtomicU32, AtomicU8, Ordering::Relaxed};
+use core::sync::atomic::{fence, AtomicBool, AtomicI32, AtomicU32, AtomicU8, Ordering::{Acquire, Relaxed, Release}};
 
 use heapless::spsc::Producer;
 
@@ -89,9 +89,19 @@ impl<const N: usize> Move<N> {
 }
 
 /// State shared lock-free between the engine (interrupt) and the rest of the firmware.
+///
+/// Positions are published as a record the engine rewrites only when a move starts or ends:
+/// the axes' positions at the start of the running move (`base`), that move's signed steps, its
+/// master count and the master steps handed out so far (`done`, one store per step). A reader
+/// derives every axis's position exactly as the DDA made it, `base + sign·⌊(done·|c| + ⌊M/2⌋)/M⌋`
+/// (the division happens in the reader, never in the interrupt). `seq` is a sequence lock: odd
+/// while the engine rewrites the record, so a reader that overlapped a rewrite reads again.
 pub struct Shared<const N: usize> {
-    /// Position of each axis in steps: the step words handed out so far.
-    pub position: [AtomicI32; N],
+    base: [AtomicI32; N],
+    mv_steps: [AtomicI32; N],
+    mv_total: AtomicU32,
+    pub(crate) mv_done: AtomicU32,
+    seq: AtomicU32,
     pub(crate) hold: AtomicBool,
     pub(crate) abort_epoch: AtomicU32,
     pub(crate) state: AtomicU8,
@@ -108,7 +118,11 @@ impl<const N: usize> Default for Shared<N> {
 impl<const N: usize> Shared<N> {
     pub const fn new() -> Self {
         Shared {
-            position: [const { AtomicI32::new(0) }; N],
+            base: [const { AtomicI32::new(0) }; N],
+            mv_steps: [const { AtomicI32::new(0) }; N],
+            mv_total: AtomicU32::new(0),
+            mv_done: AtomicU32::new(0),
+            seq: AtomicU32::new(0),
             hold: AtomicBool::new(false),
             abort_epoch: AtomicU32::new(0),
             state: AtomicU8::new(State::Idle as u8),
@@ -150,16 +164,66 @@ impl<const N: usize> Shared<N> {
         }
     }
 
-    /// Position of every axis.
+    /// Position of every axis in steps: the step words handed out so far.
     pub fn positions(&self) -> [i32; N] {
-        core::array::from_fn(|i| self.position[i].load(Relaxed))
+        loop {
+            let s1 = self.seq.load(Acquire);
+            let total = self.mv_total.load(Relaxed).max(1) as u64;
+            let done = self.mv_done.load(Relaxed) as u64;
+            let p = core::array::from_fn(|i| {
+                let c = self.mv_steps[i].load(Relaxed);
+                let made = ((done * c.unsigned_abs() as u64 + total / 2) / total) as i32;
+                let made = if c < 0 { -made } else { made };
+                self.base[i].load(Relaxed).wrapping_add(made)
+            });
+            fence(Acquire);
+            if s1 & 1 == 0 && self.seq.load(Relaxed) == s1 {
+                return p;
+            }
+        }
     }
 
     /// Sets positions (only while idle: G92 and homing).
     pub fn set_positions(&self, p: [i32; N]) {
-        for (a, v) in self.position.iter().zip(p) {
+        self.begin_write();
+        for (a, v) in self.base.iter().zip(p) {
             a.store(v, Relaxed);
         }
+        self.end_write();
+    }
+
+    /// Engine: a move of `steps` (master count `total`) starts from the current base.
+    pub(crate) fn start_move(&self, steps: &[i32; N], total: u32) {
+        self.begin_write();
+        for (a, &v) in self.mv_steps.iter().zip(steps) {
+            a.store(v, Relaxed);
+        }
+        self.mv_total.store(total, Relaxed);
+        self.mv_done.store(0, Relaxed);
+        self.end_write();
+    }
+
+    /// Engine: the running move ends; `made(i)` is what axis `i` made of it (signed).
+    pub(crate) fn end_move(&self, made: impl Fn(usize) -> i32) {
+        self.begin_write();
+        for (i, a) in self.base.iter().enumerate() {
+            a.store(a.load(Relaxed).wrapping_add(made(i)), Relaxed);
+        }
+        for a in &self.mv_steps {
+            a.store(0, Relaxed);
+        }
+        self.mv_done.store(0, Relaxed);
+        self.end_write();
+    }
+
+    fn begin_write(&self) {
+        self.seq.store(self.seq.load(Relaxed).wrapping_add(1), Relaxed);
+        fence(Release);
+    }
+
+    fn end_write(&self) {
+        fence(Release);
+        self.seq.store(self.seq.load(Relaxed).wrapping_add(1), Release);
     }
 }
 
