@@ -203,3 +203,30 @@ fn dithering_makes_the_average_cruise_rate_exact() {
     // 0.002 %), plus one tick at the ends; rounding to whole ticks alone would be off by 0.006 %.
     assert!((span - exact).abs() <= 16_000.0 / 32.0 + 1.0, "{span} vs {exact}");
 }
+
+#[test]
+fn positions_mid_move_equal_pulses_written_plus_the_pending_word() {
+    let mut rig = Rig::<4>::trapezoid(1000, 80_000, 400_000);
+    rig.push([-9_001, 4_000, 7_777, -3], 60_000);
+    rig.push([500, -4_000, 0, 3], 30_000);
+    let mut checked = 0;
+    for i in 0..40_000u32 {
+        rig.update();
+        if i % 997 == 0 {
+            let mut want = rig.net_steps();
+            // The word already computed for the next edge is counted too.
+            let pending = rig.engine.word();
+            let pos = rig.shared.positions();
+            for a in 0..4 {
+                if pending & rig.pins.step_on[a] != 0 {
+                    want[a] += if pos[a] as i64 > want[a] { 1 } else { -1 };
+                }
+            }
+            assert_eq!(pos.map(|p| p as i64), want, "update {i}");
+            checked += 1;
+        }
+    }
+    assert!(checked > 30);
+    rig.run_to_idle(1_000_000);
+    assert_eq!(rig.shared.positions(), [-8_501, 0, 7_777, 0]);
+}
