@@ -44,6 +44,10 @@ struct Args {
     /// With --sweep: worker threads.
     #[arg(long, default_value_t = 2)]
     jobs: usize,
+    /// With --results: how to describe the firmware (default: the repository's HEAD, marked when
+    /// src/ has uncommitted changes).
+    #[arg(long)]
+    firmware_label: Option<String>,
     /// One sweep point, AXES@HZ (e.g. 7@200000), with the step-ISR profile of its cruise.
     #[arg(long)]
     point: Option<String>,
@@ -149,7 +153,8 @@ fn run_sweep(args: &Args, elf: &std::path::Path) -> Result<()> {
     println!("{} points in {:.1} s wall", s.points, s.wall_s);
     if let Some(p) = &args.results {
         let command = std::env::args().skip(1).collect::<Vec<_>>().join(" ");
-        std::fs::write(p, sweep::results_markdown(&s, &format!("cargo sim -- {command}"), elf)?)?;
+        let label = args.firmware_label.clone().unwrap_or_else(sweep::firmware_commit);
+        std::fs::write(p, sweep::results_markdown(&s, &format!("cargo sim -- {command}"), &label, elf)?)?;
         eprintln!("wrote {}", p.display());
     }
     Ok(())

@@ -544,7 +544,138 @@ fn bracket_text(b: &Bracket) -> String {
     }
 }
 
-// bench/RESULTS.md: command, date, model, table, notes
-pub fn results_markdown(s: &Sweep, command: &str, _elf: &Path) -> Result<String> {
-    Ok(format!("{command}\n\n{}", s.table()))
+// bench/RESULTS.md: command, date, model, table, ISR cost and profile, notes, every point
+pub fn results_markdown(s: &Sweep, command: &str, firmware: &str, elf: &Path) -> Result<String> {
+    use std::fmt::Write as _;
+    let mut m = String::new();
+    let (date, commit, flash) = (utc_date(), firmware, flash_bytes(elf));
+    let cruise_ms = Options::default().cruise_ms;
+    writeln!(m, "# Step-rate sweep on the virtual bench\n")?;
+    writeln!(m, "Made by `{command}` on {date} (UTC), firmware {commit}, flash image {flash} bytes;")?;
+    writeln!(m, "{} points in {:.0} s wall. Regenerate with the same command after a firmware change.\n", s.points, s.wall_s)?;
+    writeln!(m, "## What the numbers are\n")?;
+    writeln!(m, "Every cycle and load figure is **modeled**: the release ELF runs on unicorn and the bench charges")?;
+    writeln!(m, "Cortex-M3 TRM cycle costs per instruction, 2 flash wait states on taken branches and literal loads")?;
+    writeln!(m, "at 72 MHz, exception entry 14 / return 12 / tail-chain 8 cycles (bench/README.md, \"Model\"). Expect")?;
+    writeln!(m, "a handler's cycles within roughly ±20 % of silicon (prefetch, division, bus contention are")?;
+    writeln!(m, "approximated); before/after comparisons on the bench are much tighter than that.\n")?;
+    writeln!(m, "Per point: reset, then `{}`, `G91` and one `G1` on N axes", s.settings.join("`, `"))?;
+    writeln!(m, "(steps X:Y:Z:A:B:C:U = 10:6:4:8:2:7:5, all positive, F for the target master rate, trapezoid")?;
+    writeln!(m, "ramp at 10⁸ steps/s²). `$0={PULSE_US}` because the firmware's period floor is max(2·pulse + 48")?;
+    writeln!(m, "ticks, 144 ticks): with `$0=1` it would be 192 ticks (375 kHz). `$I` reports {} Hz with these", s.cap_hz)?;
+    writeln!(m, "settings: the cap of the search.\n")?;
+    writeln!(m, "Measured: {cruise_ms} whole 1 ms windows starting 2 ms after the ramp; each must have X within 1 % of")?;
+    writeln!(m, "the target (first-to-last X edge of the window). A rate is **sustainable** when, for the move,")?;
+    writeln!(m, "there is no timer overrun, every axis made exactly its steps (rising edges and net count),")?;
+    writeln!(m, "cruise held, and no measured window is over 95 % busy. \"CPU\" is everything not asleep in")?;
+    writeln!(m, "WFI (step ISR, other interrupts, `idle`); \"ISR\" is the step interrupt's share alone (entry to")?;
+    writeln!(m, "end of return). The search bisects on a 1 kHz grid to {} kHz.\n", Options::default().resolution_hz / 1000)?;
+    writeln!(m, "## Results\n")?;
+    m += &s.table();
+    writeln!(m, "\nLoad cells: busiest measured window, CPU / step ISR. ¹ sustained except the CPU load (over 95 %);")?;
+    writeln!(m, "² the step ISR alone is over 95 % too. A failure is named when the rate was not sustained at all.")?;
+    writeln!(m, "BSRR offset: update event to the handler's first GPIOB store, over the points the ISR sustained.\n")?;
+    // Cost per master step against slave count.
+    let pts: Vec<(f64, f64)> = s.rows.iter().filter_map(|r| r.at(50_000).filter(|p| p.isr_entries > 0).map(|p| ((r.axes - 1) as f64, p.isr_cycles_per_step))).collect();
+    if pts.len() >= 2 {
+        let n = pts.len() as f64;
+        let (sx, sy) = (pts.iter().map(|p| p.0).sum::<f64>(), pts.iter().map(|p| p.1).sum::<f64>());
+        let sxx = pts.iter().map(|p| p.0 * p.0).sum::<f64>();
+        let sxy = pts.iter().map(|p| p.0 * p.1).sum::<f64>();
+        let b = (n * sxy - sx * sy) / (n * sxx - sx * sx);
+        let a = (sy - b * sx) / n;
+        writeln!(m, "## Step ISR cost\n")?;
+        writeln!(m, "Modeled step-ISR cycles per master step at 50 kHz cruise: ≈ {a:.0} + {b:.1} × slaves")?;
+        let entries: Vec<f64> = s.rows.iter().filter_map(|r| r.at(50_000).map(|p| p.isr_entries as f64 / (p.target_hz as f64 * cruise_ms as f64 / 1000.0))).collect();
+        writeln!(m, "(least squares over the axis counts; entry, body and return included; {:.2}–{:.2} handler entries", entries.iter().copied().fold(f64::INFINITY, f64::min), entries.iter().copied().fold(0.0, f64::max))?;
+        writeln!(m, "per step: with a short pulse the compare event is already pending when the update handler")?;
+        writeln!(m, "checks it, so the falling edge costs no entry of its own). The step ISR alone saturates the core")?;
+        writeln!(m, "at 72 MHz / cycles: ≈ {:.0} kHz for 1 axis, ≈ {:.0} kHz for 7. 500 kHz needs", 72e3 / a, 72e3 / (a + 6.0 * b))?;
+        writeln!(m, "≤ 144 cycles per step including entry and return (26).\n")?;
+    }
+    for (axes, hz) in [(7usize, 50_000u32), (1, 50_000)] {
+        let p = run_point(elf, axes, hz, cruise_ms, 0.95, true);
+        let e = p.isr_entries.max(1) as f64;
+        writeln!(m, "### Where the cycles go: {axes} {} at {} kHz ({:.0} cycles per step)\n", if axes == 1 { "axis" } else { "axes" }, hz / 1000, p.isr_cycles_per_step)?;
+        writeln!(m, "| step ISR, by function | cycles per entry | share |\n|---|---:|---:|")?;
+        for f in &p.profile {
+            writeln!(m, "| `{}` | {:.1} | {:.1} % |", f.function, f.cycles as f64 / e, f.share * 100.0)?;
+        }
+        writeln!(m, "\n| hottest blocks (start, function+offset) | cycles per entry | cycles per run |\n|---|---:|---:|")?;
+        for (name, runs, cycles) in p.profile_blocks.iter().take(10) {
+            writeln!(m, "| `{name}` | {:.1} | {:.1} |", *cycles as f64 / e, *cycles as f64 / (*runs).max(1) as f64)?;
+        }
+        let thread: u64 = p.profile_thread.iter().map(|f| f.cycles).sum();
+        writeln!(m, "\nThread mode in the same windows: {:.0} cycles per step-ISR entry ({}).\n", thread as f64 / e, p.profile_thread.iter().take(4).map(|f| format!("`{}` {:.0}", f.function, f.cycles as f64 / e)).collect::<Vec<_>>().join(", "))?;
+    }
+    writeln!(m, "## Notes\n")?;
+    m += NOTES;
+    writeln!(m, "\n<details><summary>Every point tried</summary>\n\n```")?;
+    for r in &s.rows {
+        for p in &r.tried {
+            writeln!(m, "{}", point_line(p))?;
+        }
+    }
+    writeln!(m, "```\n</details>")?;
+    Ok(m)
+}
+
+/// Notes that hold for the method (findings specific to a firmware version go in the report
+/// that accompanies a regeneration).
+const NOTES: &str = "\
+- `idle` wakes from WFI after every interrupt, so at cruise it runs its loop once per step: the
+  \"Thread mode\" figure above. Its cycles are preemptible (they never delay a step), but they are
+  CPU load: that is why the CPU column stops well below the ISR column.
+- Above the ISR limit the firmware does not slow down: the timer keeps its period, handlers run
+  back to back, updates are missed (overruns) and a rising edge can merge with the previous pulse
+  (a step lost on the pins while the position counter counts it).
+- The BSRR offset grows when an update arrives while the previous handler is still running; the
+  firmware stretches the pulse by 48 ticks (`STORE_LATENCY_TICKS`) for it, so at offsets above 48
+  the high time is shorter than `$0` by the difference.
+- The sweep measures one straight move per point; it says nothing about move-to-move refills
+  (`Engine::load`, ~1 000 modeled cycles) at high rates.
+";
+
+// today's date (UTC) as YYYY-MM-DD
+fn utc_date() -> String {
+    let days = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_secs() / 86_400) as i64;
+    // Civil from days (H. Hinnant's algorithm).
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let mo = if mp < 10 { mp + 3 } else { mp - 9 };
+    let y = yoe + era * 400 + (mo <= 2) as i64;
+    format!("{y:04}-{mo:02}-{d:02}")
+}
+
+// the repository's HEAD, marked when firmware sources have uncommitted changes
+pub fn firmware_commit() -> String {
+    let git = |args: &[&str]| {
+        std::process::Command::new("git").current_dir(super::repo_root()).args(args).output().ok().map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+    };
+    let head = git(&["rev-parse", "--short", "HEAD"]).unwrap_or_else(|| "?".into());
+    let dirty = git(&["status", "--porcelain", "--", "src", "Cargo.toml", "Cargo.lock", "memory.x", "build.rs"]).is_some_and(|s| !s.is_empty());
+    if dirty {
+        format!("`{head}` + uncommitted changes in src/")
+    } else {
+        format!("`{head}`")
+    }
+}
+
+// bytes the ELF puts in flash
+fn flash_bytes(elf: &Path) -> u64 {
+    use object::read::elf::{FileHeader, ProgramHeader};
+    let Ok(bytes) = std::fs::read(elf) else { return 0 };
+    let Ok(h) = object::elf::FileHeader32::<object::Endianness>::parse(&*bytes) else { return 0 };
+    let Ok(endian) = h.endian() else { return 0 };
+    h.program_headers(endian, &*bytes).map_or(0, |phs| {
+        phs.iter()
+            .filter(|ph| ph.p_type(endian) == object::elf::PT_LOAD && (0x0800_0000..0x0801_0000).contains(&ph.p_paddr(endian)))
+            .map(|ph| ph.p_filesz(endian) as u64)
+            .sum()
+    })
 }

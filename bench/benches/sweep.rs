@@ -1,0 +1,20 @@
+//! The step-rate sweep on the virtual bench (the same as `cargo sim -- --sweep`): highest
+//! sustainable master rate and CPU load per axis count, in modeled cycles. Prints the table;
+//! `cargo sim -- --sweep --results bench/RESULTS.md` also writes the results file.
+//!
+//! `cargo bench -p ddastep-bench --target host-tuple --bench sweep` (about a minute).
+
+use ddastep_bench::emu::{firmware_elf, sweep};
+
+fn main() -> anyhow::Result<()> {
+    // `cargo test --benches` runs benches once in test mode: nothing to check here.
+    if std::env::args().any(|a| a == "--test" || a == "--list") {
+        return Ok(());
+    }
+    let elf = firmware_elf()?;
+    let s = sweep::sweep(&elf, &sweep::Options::default())?;
+    println!("max step rate ($I with the sweep settings): {} Hz", s.cap_hz);
+    print!("{}", s.table());
+    println!("{} points in {:.1} s wall", s.points, s.wall_s);
+    Ok(())
+}
