@@ -77,14 +77,20 @@ pub struct Engine<'a, const N: usize, const L: usize = RAMP_LEN> {
     // The running move.
     phase: Phase,
     hold_stop: bool,
-    epoch: u32,
+    ctl_seen: u32,
     idx: u16,
     cruise_idx: u16,
     cruise: Period,
     period: Period,
     left: u32,
     total: u32,
-    ramp_steps: u32,
+    /// Start decelerating once `left` is at most this (set when accelerating or cruising).
+    decel_at: u32,
+    /// `left` plus the ramp steps already made when the current acceleration began.
+    ramp_base: u32,
+    /// Ramp steps made and `left` when the deceleration began (for a released feed hold).
+    decel_ramp: u32,
+    decel_left: u32,
     master_on: u32,
     master_axis: u8,
     mv_steps: [i32; N],
@@ -115,14 +121,17 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
             ms_left: TICKS_PER_MS as i32,
             phase: Phase::Idle,
             hold_stop: false,
-            epoch: shared.abort_epoch.load(Relaxed),
+            ctl_seen: shared.ctl.load(Relaxed),
             idx: 0,
             cruise_idx: 0,
             cruise: Period::ZERO,
             period: Period::ZERO,
             left: 0,
             total: 0,
-            ramp_steps: 0,
+            decel_at: 0,
+            ramp_base: 0,
+            decel_ramp: 0,
+            decel_left: 0,
             master_on: 0,
             master_axis: 0,
             mv_steps: [0; N],
@@ -183,22 +192,13 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
     /// The next edge: a step, a direction change or an idle gap, with the gap after it.
     #[inline(always)]
     fn next_event(&mut self) -> (u32, u32) {
-        let epoch = self.shared.abort_epoch.load(Relaxed);
-        if epoch != self.epoch {
-            self.epoch = epoch;
-            self.end_move(false);
+        let ctl = self.shared.ctl.load(Relaxed);
+        if ctl != self.ctl_seen {
+            self.control(ctl);
         }
         match self.phase {
-            Phase::Accel | Phase::Cruise | Phase::Decel => {
-                self.check_hold();
-                self.step()
-            }
-            Phase::Held => {
-                if !self.shared.hold.load(Relaxed) {
-                    self.resume();
-                }
-                (0, IDLE_TICKS)
-            }
+            Phase::Accel | Phase::Cruise | Phase::Decel => self.step(),
+            Phase::Held => (0, IDLE_TICKS),
             Phase::Idle => self.refill(),
         }
     }
@@ -225,12 +225,7 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
         }
         self.left -= 1;
         self.shared.mv_done.store(total - self.left, Relaxed);
-        match self.phase {
-            Phase::Accel => self.ramp_steps += 1,
-            Phase::Decel => self.ramp_steps = self.ramp_steps.saturating_sub(1),
-            _ => {}
-        }
-        if self.left <= self.ramp_steps && self.phase != Phase::Decel {
+        if self.left <= self.decel_at {
             self.start_decel();
         }
         let acc = self.frac + self.period.to_bits();
@@ -249,7 +244,7 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
                 self.idx += 1;
                 if self.idx >= self.cruise_idx {
                     self.idx = self.cruise_idx;
-                    self.phase = Phase::Cruise;
+                    self.cruise_now();
                 }
             }
             Phase::Decel => {
@@ -271,6 +266,12 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
     /// had, so the steps down equal the steps up (`ramp_steps`).
     #[inline(never)]
     fn start_decel(&mut self) {
+        if self.phase == Phase::Decel {
+            return;
+        }
+        self.decel_ramp = self.ramp_steps();
+        self.decel_left = self.left;
+        self.decel_at = 0;
         if self.phase == Phase::Cruise {
             if self.idx > 0 {
                 self.idx -= 1;
@@ -295,12 +296,42 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
         self.shared.period_bits.store(self.period.to_bits(), Relaxed);
     }
 
-    /// Starts or ends a feed-hold deceleration as requested.
-    #[inline(always)]
-    fn check_hold(&mut self) {
-        let hold = self.shared.hold.load(Relaxed);
-        if hold != self.hold_stop {
-            self.toggle_hold(hold);
+    /// Ramp steps made so far: steps up the table, less steps back down.
+    fn ramp_steps(&self) -> u32 {
+        match self.phase {
+            Phase::Accel => self.ramp_base - self.left,
+            Phase::Cruise => self.decel_at,
+            Phase::Decel => self.decel_ramp.saturating_sub(self.decel_left - self.left),
+            _ => 0,
+        }
+    }
+
+    /// (Re)starts accelerating with `made` ramp steps already behind.
+    fn accel_now(&mut self, made: u32) {
+        self.phase = Phase::Accel;
+        self.ramp_base = self.left + made;
+        // left ≤ made + (steps from here) ⟺ 2·left ≤ ramp_base.
+        self.decel_at = self.ramp_base >> 1;
+    }
+
+    /// Reaches the cruise rate: the steps it took up are the steps it needs down.
+    fn cruise_now(&mut self) {
+        self.decel_at = self.ramp_steps();
+        self.phase = Phase::Cruise;
+    }
+
+    /// The control word changed: an immediate stop, or a feed hold on or off.
+    #[inline(never)]
+    fn control(&mut self, ctl: u32) {
+        let old = core::mem::replace(&mut self.ctl_seen, ctl);
+        if (old ^ ctl) >> 1 != 0 {
+            self.end_move(false);
+        }
+        let hold = ctl & 1 != 0;
+        match self.phase {
+            Phase::Accel | Phase::Cruise | Phase::Decel if hold != self.hold_stop => self.toggle_hold(hold),
+            Phase::Held if !hold => self.resume(),
+            _ => {}
         }
     }
 
@@ -315,8 +346,9 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
                 }
                 self.publish(State::Holding);
             } else {
-                if self.left > self.ramp_steps {
-                    self.phase = Phase::Accel;
+                let made = self.ramp_steps();
+                if self.left > made {
+                    self.accel_now(made);
                 }
                 self.publish(State::Run);
             }
@@ -327,16 +359,23 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
     #[inline(never)]
     fn resume(&mut self) {
         self.hold_stop = false;
-        self.ramp_steps = 0;
         self.idx = 0;
         if self.left == 0 {
             self.phase = Phase::Idle;
             self.publish(State::Idle);
             return;
         }
-        self.phase = if self.cruise_idx == 0 { Phase::Cruise } else { Phase::Accel };
+        self.start_ramp();
         self.set_period();
         self.publish(State::Run);
+    }
+
+    /// From rest: accelerate, or cruise at once when the cruise rate is below the table.
+    fn start_ramp(&mut self) {
+        self.accel_now(0);
+        if self.cruise_idx == 0 {
+            self.cruise_now();
+        }
     }
 
     /// Ends the running move (counted as done only when completed).
@@ -366,7 +405,7 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
     /// Loads the next move, if any (queue refill; never in the step path).
     #[inline(never)]
     fn refill(&mut self) -> (u32, u32) {
-        if self.shared.hold.load(Relaxed) {
+        if self.ctl_seen & 1 != 0 {
             self.publish(State::Held);
             return (0, IDLE_TICKS);
         }
@@ -377,7 +416,7 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
             self.publish(State::Idle);
             return (0, IDLE_TICKS);
         };
-        if mv.epoch != self.epoch {
+        if mv.epoch != self.ctl_seen >> 1 {
             return (0, IDLE_TICKS); // dropped by an immediate stop
         }
         self.load(&mv)
@@ -428,9 +467,8 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
         self.min_period = Period::from_bits(t.min_period_ticks.saturating_mul(16));
         self.dir_setup = (t.dir_setup_ticks + STORE_JITTER_TICKS).max(t.min_period_ticks);
         self.idx = 0;
-        self.ramp_steps = 0;
         self.hold_stop = false;
-        self.phase = if self.cruise_idx == 0 { Phase::Cruise } else { Phase::Accel };
+        self.start_ramp();
         self.set_period();
         self.publish(State::Run);
         // The ramp's milliseconds start at the move's first step.

@@ -8,7 +8,7 @@
 //! move at its next tick and every queued move stamped with an older epoch when it reaches it
 //! (one per tick, so the interrupt never loops over the queue).
 
-use core::sync::atomic::{fence, AtomicBool, AtomicI32, AtomicU32, AtomicU8, Ordering::{Acquire, Relaxed, Release}};
+use core::sync::atomic::{fence, AtomicI32, AtomicU32, AtomicU8, Ordering::{Acquire, Relaxed, Release}};
 
 use heapless::spsc::Producer;
 
@@ -102,8 +102,9 @@ pub struct Shared<const N: usize> {
     mv_total: AtomicU32,
     pub(crate) mv_done: AtomicU32,
     seq: AtomicU32,
-    pub(crate) hold: AtomicBool,
-    pub(crate) abort_epoch: AtomicU32,
+    /// Control word the engine polls with one load per tick: bit 0 feed hold, bits 1.. the
+    /// immediate-stop epoch.
+    pub(crate) ctl: AtomicU32,
     pub(crate) state: AtomicU8,
     pub(crate) moves_done: AtomicU32,
     pub(crate) period_bits: AtomicU32,
@@ -123,8 +124,7 @@ impl<const N: usize> Shared<N> {
             mv_total: AtomicU32::new(0),
             mv_done: AtomicU32::new(0),
             seq: AtomicU32::new(0),
-            hold: AtomicBool::new(false),
-            abort_epoch: AtomicU32::new(0),
+            ctl: AtomicU32::new(0),
             state: AtomicU8::new(State::Idle as u8),
             moves_done: AtomicU32::new(0),
             period_bits: AtomicU32::new(0),
@@ -133,12 +133,21 @@ impl<const N: usize> Shared<N> {
 
     /// Feed hold on (decelerate and pause) or off (resume).
     pub fn set_hold(&self, on: bool) {
-        self.hold.store(on, Relaxed);
+        if on {
+            self.ctl.fetch_or(1, Relaxed);
+        } else {
+            self.ctl.fetch_and(!1, Relaxed);
+        }
     }
 
     /// True while a feed hold is requested.
     pub fn hold_requested(&self) -> bool {
-        self.hold.load(Relaxed)
+        self.ctl.load(Relaxed) & 1 != 0
+    }
+
+    /// The immediate-stop epoch moves are stamped with.
+    pub(crate) fn epoch(&self) -> u32 {
+        self.ctl.load(Relaxed) >> 1
     }
 
     /// What the engine is doing.
@@ -241,7 +250,7 @@ impl<'a, const N: usize> Feeder<'a, N> {
 
     /// Queues a move; gives it back when the queue is full.
     pub fn push(&mut self, mut mv: Move<N>) -> Result<(), Move<N>> {
-        mv.epoch = self.shared.abort_epoch.load(Relaxed);
+        mv.epoch = self.shared.epoch();
         self.producer.enqueue(mv)?;
         self.queued = self.queued.wrapping_add(1);
         Ok(())
@@ -265,7 +274,7 @@ impl<'a, const N: usize> Feeder<'a, N> {
     /// Immediate stop: the running move ends at the next tick and queued moves are dropped.
     /// Positions stay equal to the pulses emitted.
     pub fn abort(&mut self) {
-        self.shared.abort_epoch.fetch_add(1, Relaxed);
+        self.shared.ctl.fetch_add(2, Relaxed);
         // Dropped moves never count as done; forget them here.
         self.queued = self.shared.moves_done();
     }
