@@ -387,7 +387,7 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
             let mut made = [0u32; N];
             made[self.master_axis as usize] = done;
             for s in self.slaves.iter().take(self.n_slaves as usize) {
-                made[s.axis as usize] = s.dda.done();
+                made[s.axis as usize] = s.dda.made(done, self.total);
             }
             let steps = self.mv_steps;
             self.shared.end_move(|i| if steps[i] < 0 { -(made[i] as i32) } else { made[i] as i32 });

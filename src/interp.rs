@@ -14,19 +14,22 @@
 pub struct Dda {
     acc: u32,
     count: u32,
-    done: u32,
 }
 
 impl Dda {
     /// Starts a slave of `count` steps against a master of `master` steps (`count ≤ master`).
     pub const fn new(count: u32, master: u32) -> Self {
-        Dda { acc: master / 2, count, done: 0 }
+        Dda { acc: master / 2, count }
     }
 
-    /// Steps made so far.
-    #[inline(always)]
-    pub fn done(&self) -> u32 {
-        self.done
+    /// Steps made after `k` master steps of `master`, recovered from the accumulator:
+    /// `k·count + ⌊master/2⌋ − acc` is an exact multiple of `master`, divided here by a
+    /// multiplication with the inverse of its odd part (mod 2^32), so the step interrupt's
+    /// stop path needs no division instruction.
+    pub fn made(&self, k: u32, master: u32) -> u32 {
+        let num = k as u64 * self.count as u64 + (master / 2) as u64 - self.acc as u64;
+        let t = master.trailing_zeros();
+        exact_div_odd((num >> t) as u32, master >> t)
     }
 
     /// Advances by one master step without a branch: all ones when the slave steps, else 0
@@ -34,10 +37,8 @@ impl Dda {
     #[inline(always)]
     pub fn step_mask(&mut self, master: u32) -> u32 {
         let a = self.acc + self.count;
-        let stepped = (a >= master) as u32;
-        let mask = stepped.wrapping_neg();
+        let mask = ((a >= master) as u32).wrapping_neg();
         self.acc = a - (master & mask);
-        self.done += stepped;
         mask
     }
 
@@ -48,12 +49,21 @@ impl Dda {
         self.acc += self.count;
         if self.acc >= master {
             self.acc -= master;
-            self.done += 1;
             true
         } else {
             false
         }
     }
+}
+
+/// `n / d` for odd `d` when `d` divides `n`: `n · d⁻¹ mod 2^32`, the inverse by Newton's
+/// iteration (each round doubles the correct low bits: 3 → 6 → 12 → 24 → 48).
+fn exact_div_odd(n: u32, d: u32) -> u32 {
+    let mut inv = d;
+    for _ in 0..4 {
+        inv = inv.wrapping_mul(2u32.wrapping_sub(d.wrapping_mul(inv)));
+    }
+    n.wrapping_mul(inv)
 }
 
 /// Picks the master axis: the one with the most steps, ties to the lowest index.
@@ -133,6 +143,18 @@ mod tests {
             }
         }
         assert_eq!(totals, [5000, 3000, 2000]);
+    }
+
+    #[test]
+    fn made_matches_the_steps_counted() {
+        for (c, m) in [(3000u32, 5000u32), (1, 1), (7, 7), (1, 2), (999_999, 1_000_000), (12, 4096), (5, 1 << 30)] {
+            let mut d = Dda::new(c, m);
+            let mut n = 0;
+            for k in 1..=m.min(20_000) {
+                n += d.step(m) as u32;
+                assert_eq!(d.made(k, m), n, "c={c} m={m} k={k}");
+            }
+        }
     }
 
     #[test]
