@@ -34,6 +34,9 @@ mod app {
     static STATUS_REQ: AtomicBool = AtomicBool::new(false);
     /// Ctrl-X arrived.
     static RESET_REQ: AtomicBool = AtomicBool::new(false);
+    /// Work for `idle`: set by SysTick (every ms) and USART1, not by the step interrupt, so
+    /// `idle` sleeps through step ticks instead of polling after each one.
+    static POLL: AtomicBool = AtomicBool::new(true);
 
     #[shared]
     struct SharedRes {
@@ -104,6 +107,7 @@ mod app {
     /// USART1: realtime bytes act at once, line bytes go to the RX ring, the TX ring drains.
     #[task(binds = USART1, priority = 2, local = [rx, rx_in, tx_out], shared = [tx])]
     fn usart(mut cx: usart::Context) {
+        POLL.store(true, Relaxed);
         while let Ok(b) = cx.local.rx.read() {
             match realtime(b) {
                 Some(Realtime::Hold) => SHARED.set_hold(true),
@@ -137,6 +141,7 @@ mod app {
     #[task(binds = SysTick, priority = 1)]
     fn systick(_: systick::Context) {
         MILLIS.store(MILLIS.load(Relaxed).wrapping_add(1), Relaxed);
+        POLL.store(true, Relaxed);
     }
 
     /// The protocol loop: bytes into the controller, its actions onto the pins and flash.
@@ -147,6 +152,10 @@ mod app {
         let rx_out = cx.local.rx_out;
         ctl.welcome(tx_in);
         loop {
+            if !POLL.swap(false, Relaxed) {
+                cortex_m::asm::wfi();
+                continue;
+            }
             let now = MILLIS.load(Relaxed);
             if RESET_REQ.swap(false, Relaxed) {
                 // Bytes before the Ctrl-X belong to the old stream.
@@ -178,9 +187,6 @@ mod app {
             hw::heartbeat(now);
             if tx_in.len() > 0 {
                 cx.shared.tx.lock(|tx| tx.listen());
-            }
-            if rx_out.len() == 0 && !RESET_REQ.load(Relaxed) && !STATUS_REQ.load(Relaxed) {
-                cortex_m::asm::wfi();
             }
         }
     }
