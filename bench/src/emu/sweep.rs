@@ -45,7 +45,9 @@ pub struct Options {
     pub axes: Vec<usize>,
     /// Rates at which the load is reported, Hz.
     pub load_rates: Vec<u32>,
-    /// Stop the search when the pass/fail bracket is this narrow, Hz.
+    /// Grid step of the upward scan (and its first rate), Hz.
+    pub grid_hz: u32,
+    /// Stop the refinement when the pass/fail bracket is this narrow, Hz.
     pub resolution_hz: u32,
     /// Measured cruise per point, ms.
     pub cruise_ms: u64,
@@ -62,7 +64,8 @@ impl Default for Options {
         Self {
             axes: (1..=7).collect(),
             load_rates: vec![50_000, 200_000, 400_000],
-            resolution_hz: 2_000,
+            grid_hz: 10_000,
+            resolution_hz: 1_000,
             cruise_ms: 20,
             max_load: 0.95,
             jobs: 2,
@@ -187,6 +190,8 @@ pub struct Row {
     pub cpu: Bracket,
     /// With the step ISR's share instead (what the handler alone sustains).
     pub isr: Bracket,
+    /// A grid rate above `cpu.fail_hz` where the CPU criterion passed again, if any.
+    pub cpu_passes_again_hz: Option<u32>,
     /// Every point tried, in order.
     pub tried: Vec<Point>,
 }
@@ -347,7 +352,8 @@ fn measure(elf: &Path, axes: usize, target_hz: u32, cruise_ms: u64, max_load: f6
     }
     let verdict = |load_max: f64| {
         if !wrong.is_empty() {
-            Verdict::Counts(wrong.join(", "))
+            let also = if overruns > 0 { format!(" ({})", overruns_text(overruns)) } else { String::new() };
+            Verdict::Counts(wrong.join(", ") + &also)
         } else if overruns > 0 {
             Verdict::Overrun(overruns)
         } else if !in_cruise(slowest) || !in_cruise(fastest) {
@@ -386,7 +392,9 @@ fn measure(elf: &Path, axes: usize, target_hz: u32, cruise_ms: u64, max_load: f6
     })
 }
 
-// the search for one axis count: the load rates, then per criterion the cap and bisection
+// the search for one axis count: a grid upward from `grid_hz` until the step ISR fails, the
+// load rates, then per criterion a bisection between its last passing and first failing grid
+// point ("sustainable at every rate up to max_hz")
 fn sweep_axes(elf: &Path, axes: usize, cap_hz: u32, opts: &Options) -> Row {
     let mut tried: Vec<Point> = Vec::new();
     let mut run = |hz: u32| -> Point {
@@ -400,49 +408,50 @@ fn sweep_axes(elf: &Path, axes: usize, cap_hz: u32, opts: &Options) -> Row {
         tried.push(p.clone());
         p
     };
+    let mut grid: Vec<(u32, bool, bool)> = Vec::new();
+    let mut hz = opts.grid_hz;
+    loop {
+        let hz_now = hz.min(cap_hz);
+        let p = run(hz_now);
+        grid.push((hz_now, p.ok(), p.isr_ok()));
+        if !p.isr_ok() || hz_now == cap_hz {
+            break;
+        }
+        hz += opts.grid_hz;
+    }
     for &hz in &opts.load_rates {
         if hz <= cap_hz {
             run(hz);
         }
     }
-    let cpu = search(&mut run, cap_hz, opts, Point::ok);
-    let isr = search(&mut run, cap_hz, opts, Point::isr_ok);
-    Row { axes, cpu, isr, tried }
+    let cpu = refine(&mut run, &grid, opts, |g| g.1, Point::ok);
+    let isr = refine(&mut run, &grid, opts, |g| g.2, Point::isr_ok);
+    // The CPU load is not monotone in the rate (how `idle`'s loop meets the steps): say so.
+    let cpu_again = cpu.fail_hz.and_then(|f| grid.iter().find(|g| g.0 > f && g.1).map(|g| g.0));
+    tried.sort_by_key(|p| p.target_hz);
+    Row { axes, cpu, isr, cpu_passes_again_hz: cpu_again, tried }
 }
 
-// bisection for the highest rate where `pass` holds, starting from the load-rate points
-fn search(run: &mut impl FnMut(u32) -> Point, cap_hz: u32, opts: &Options, pass: fn(&Point) -> bool) -> Bracket {
-    let mut lo = 0u32;
-    let mut hi: Option<u32> = None;
-    for &hz in &opts.load_rates {
-        if hz > cap_hz {
-            continue;
-        }
-        if pass(&run(hz)) {
-            lo = lo.max(hz);
-        } else if hz > lo {
-            hi = Some(hi.map_or(hz, |h| h.min(hz)));
-        }
-    }
-    if hi.is_none_or(|h| h <= lo) {
-        hi = if pass(&run(cap_hz)) { None } else { Some(cap_hz) };
-        if hi.is_none() {
-            lo = cap_hz;
-        }
-    }
-    while let Some(h) = hi {
-        // Bisect on a 1 kHz grid down to the resolution.
-        let mid = (lo + (h - lo) / 2) / 1000 * 1000;
-        if h - lo <= opts.resolution_hz || mid <= lo || mid >= h {
+// bisection between the last grid point where `grid_pass` holds before its first failure and
+// that failure, on a 1 kHz grid down to the resolution
+fn refine(run: &mut impl FnMut(u32) -> Point, grid: &[(u32, bool, bool)], opts: &Options, grid_pass: fn(&(u32, bool, bool)) -> bool, pass: fn(&Point) -> bool) -> Bracket {
+    let Some(first_fail) = grid.iter().position(|g| !grid_pass(g)) else {
+        return Bracket { max_hz: grid.last().map_or(0, |g| g.0), fail_hz: None };
+    };
+    let mut lo = if first_fail == 0 { 0 } else { grid[first_fail - 1].0 };
+    let mut hi = grid[first_fail].0;
+    loop {
+        let mid = (lo + (hi - lo) / 2) / 1000 * 1000;
+        if hi - lo <= opts.resolution_hz || mid <= lo || mid >= hi {
             break;
         }
         if pass(&run(mid)) {
             lo = mid;
         } else {
-            hi = Some(mid);
+            hi = mid;
         }
     }
-    Bracket { max_hz: lo, fail_hz: hi }
+    Bracket { max_hz: lo, fail_hz: Some(hi) }
 }
 
 // the whole sweep, `opts.jobs` axis counts at a time
@@ -469,7 +478,7 @@ pub fn sweep(elf: &Path, opts: &Options) -> Result<Sweep> {
 // one line per point for progress output
 pub fn point_line(p: &Point) -> String {
     format!(
-        "{} axes @ {:>6.1} kHz: {:<22} (ISR only: {:<16}) CPU {:>5.1}/{:>5.1} %, ISR {:>5.1}/{:>5.1} % (mean/max), ISR {:>6.1} cyc/step ({:>5.1} mean / {:>4} max per entry), BSRR {}..{}, {:.2} s sim in {:.1} s",
+        "{} axes @ {:>6.1} kHz: {:<22} (ISR only: {:<16}) CPU {:>5.1}/{:>5.1} %, ISR {:>5.1}/{:>5.1} % (mean/max), ISR {:>6.1} cyc/step ({:>5.1} mean / {:>4} max per entry), BSRR {}..{}, X high ≥ {} ns, {:.2} s sim in {:.1} s",
         p.axes,
         p.target_hz as f64 / 1000.0,
         verdict_text(&p.verdict),
@@ -483,16 +492,34 @@ pub fn point_line(p: &Point) -> String {
         p.isr_max_cycles,
         p.bsrr_min.map_or("-".into(), |v| v.to_string()),
         p.bsrr_max.map_or("-".into(), |v| v.to_string()),
+        p.min_high_ns.map_or("-".into(), |v| format!("{v:.0}")),
         p.sim_s,
         p.wall_s
     )
+}
+
+// a verdict for a table cell
+fn short_verdict(v: &Verdict) -> String {
+    match v {
+        Verdict::Counts(s) => match s.split_once(" (") {
+            Some((_, over)) => format!("steps lost ({}", over),
+            None => "steps lost".into(),
+        },
+        Verdict::NoCruise(_) => "no cruise".into(),
+        Verdict::Error(_) => "error".into(),
+        v => verdict_text(v),
+    }
+}
+
+fn overruns_text(n: u64) -> String {
+    format!("{n} overrun{}", if n == 1 { "" } else { "s" })
 }
 
 // a short verdict
 pub fn verdict_text(v: &Verdict) -> String {
     match v {
         Verdict::Ok => "ok".into(),
-        Verdict::Overrun(n) => format!("{n} overruns"),
+        Verdict::Overrun(n) => overruns_text(*n),
         Verdict::Load(l) => format!("load {:.1} %", l * 100.0),
         Verdict::Counts(s) => format!("counts: {s}"),
         Verdict::NoCruise(r) => format!("no cruise ({:.1} kHz)", r / 1000.0),
@@ -512,7 +539,7 @@ impl Sweep {
                     let mark = if p.ok() { "" } else if p.isr_ok() { " ¹" } else { " ²" };
                     format!("{:.0} / {:.0} %{mark}", p.load_max * 100.0, p.isr_load_max * 100.0)
                 }
-                Some(p) => verdict_text(&p.verdict),
+                Some(p) => short_verdict(&p.verdict),
                 None => "-".into(),
             };
             let (cps, isr) = match r.at(50_000) {
@@ -522,8 +549,9 @@ impl Sweep {
             let bsrr_min = r.tried.iter().filter_map(|p| p.bsrr_min).min();
             let bsrr_max = r.tried.iter().filter(|p| p.isr_ok()).filter_map(|p| p.bsrr_max).max();
             let bsrr = format!("{} / {}", bsrr_min.map_or("-".into(), |v| v.to_string()), bsrr_max.map_or("-".into(), |v| v.to_string()));
+            let again = r.cpu_passes_again_hz.map_or(String::new(), |hz| format!(" ³ {:.0}", hz as f64 / 1000.0));
             s += &format!(
-                "| {} | {} | {} | {} | {} | {} | {cps} | {isr} | {bsrr} |\n",
+                "| {} | {}{again} | {} | {} | {} | {} | {cps} | {isr} | {bsrr} |\n",
                 r.axes,
                 bracket_text(&r.cpu),
                 bracket_text(&r.isr),
@@ -569,11 +597,19 @@ pub fn results_markdown(s: &Sweep, command: &str, firmware: &str, elf: &Path) ->
     writeln!(m, "there is no timer overrun, every axis made exactly its steps (rising edges and net count),")?;
     writeln!(m, "cruise held, and no measured window is over 95 % busy. \"CPU\" is everything not asleep in")?;
     writeln!(m, "WFI (step ISR, other interrupts, `idle`); \"ISR\" is the step interrupt's share alone (entry to")?;
-    writeln!(m, "end of return). The search bisects on a 1 kHz grid to {} kHz.\n", Options::default().resolution_hz / 1000)?;
+    let o = Options::default();
+    writeln!(m, "end of return). Per axis count the search scans up from {0} kHz in {0} kHz steps until the step", o.grid_hz / 1000)?;
+    writeln!(m, "ISR fails, then bisects each criterion between its last pass and first failure of the scan to")?;
+    writeln!(m, "{} kHz: \"max\" is sustainable at every scanned rate up to it.\n", o.resolution_hz / 1000)?;
     writeln!(m, "## Results\n")?;
     m += &s.table();
-    writeln!(m, "\nLoad cells: busiest measured window, CPU / step ISR. ¹ sustained except the CPU load (over 95 %);")?;
-    writeln!(m, "² the step ISR alone is over 95 % too. A failure is named when the rate was not sustained at all.")?;
+    writeln!(m, "\nLoad cells: busiest measured window, CPU / step ISR; ¹ sustained except the CPU load (over 95 %),")?;
+    writeln!(m, "² the step ISR alone is over 95 % too. A failure is named when the rate was not sustained at all")?;
+    writeln!(m, "(\"steps lost\": fewer rising edges on the pins than the move's steps).")?;
+    if s.rows.iter().any(|r| r.cpu_passes_again_hz.is_some()) {
+        writeln!(m, "³ a scanned rate above the failure where the CPU criterion passes again: the CPU load is not")?;
+        writeln!(m, "monotone in the rate (how often `idle` completes its loop and reaches WFI between steps).")?;
+    }
     writeln!(m, "BSRR offset: update event to the handler's first GPIOB store, over the points the ISR sustained.\n")?;
     // Cost per master step against slave count.
     let pts: Vec<(f64, f64)> = s.rows.iter().filter_map(|r| r.at(50_000).filter(|p| p.isr_entries > 0).map(|p| ((r.axes - 1) as f64, p.isr_cycles_per_step))).collect();
@@ -593,6 +629,7 @@ pub fn results_markdown(s: &Sweep, command: &str, firmware: &str, elf: &Path) ->
         writeln!(m, "at 72 MHz / cycles: ≈ {:.0} kHz for 1 axis, ≈ {:.0} kHz for 7. 500 kHz needs", 72e3 / a, 72e3 / (a + 6.0 * b))?;
         writeln!(m, "≤ 144 cycles per step including entry and return (26).\n")?;
     }
+    let mut thread_per_entry = 0.0f64;
     for (axes, hz) in [(7usize, 50_000u32), (1, 50_000)] {
         let p = run_point(elf, axes, hz, cruise_ms, 0.95, true);
         let e = p.isr_entries.max(1) as f64;
@@ -606,9 +643,13 @@ pub fn results_markdown(s: &Sweep, command: &str, firmware: &str, elf: &Path) ->
             writeln!(m, "| `{name}` | {:.1} | {:.1} |", *cycles as f64 / e, *cycles as f64 / (*runs).max(1) as f64)?;
         }
         let thread: u64 = p.profile_thread.iter().map(|f| f.cycles).sum();
+        thread_per_entry = thread_per_entry.max(thread as f64 / e);
         writeln!(m, "\nThread mode in the same windows: {:.0} cycles per step-ISR entry ({}).\n", thread as f64 / e, p.profile_thread.iter().take(4).map(|f| format!("`{}` {:.0}", f.function, f.cycles as f64 / e)).collect::<Vec<_>>().join(", "))?;
     }
     writeln!(m, "## Notes\n")?;
+    if thread_per_entry > 50.0 {
+        m += IDLE_NOTE;
+    }
     m += NOTES;
     writeln!(m, "\n<details><summary>Every point tried</summary>\n\n```")?;
     for r in &s.rows {
@@ -620,18 +661,27 @@ pub fn results_markdown(s: &Sweep, command: &str, firmware: &str, elf: &Path) ->
     Ok(m)
 }
 
+/// Printed when thread mode runs more than 50 cycles per step interrupt.
+const IDLE_NOTE: &str = "\
+- Thread mode runs about as often as the step interrupt (the \"Thread mode\" figures above): `idle`
+  goes round its loop after every wake-up from WFI. Its cycles are preemptible (they never delay
+  a step), but they are CPU load: that is why the CPU column stops below the ISR column.
+";
+
 /// Notes that hold for the method (findings specific to a firmware version go in the report
 /// that accompanies a regeneration).
 const NOTES: &str = "\
-- `idle` wakes from WFI after every interrupt, so at cruise it runs its loop once per step: the
-  \"Thread mode\" figure above. Its cycles are preemptible (they never delay a step), but they are
-  CPU load: that is why the CPU column stops well below the ISR column.
 - Above the ISR limit the firmware does not slow down: the timer keeps its period, handlers run
   back to back, updates are missed (overruns) and a rising edge can merge with the previous pulse
   (a step lost on the pins while the position counter counts it).
-- The BSRR offset grows when an update arrives while the previous handler is still running; the
-  firmware stretches the pulse by 48 ticks (`STORE_LATENCY_TICKS`) for it, so at offsets above 48
-  the high time is shorter than `$0` by the difference.
+- The BSRR offset grows when an update arrives while the previous handler is still running. The
+  falling edge comes at the compare event (`$0` + 48 ticks, `STORE_LATENCY_TICKS`, after the
+  update) or at the end of the update handler, whichever is later: with the sweep's short pulse
+  it is the handler's end (the X high times in the point list); with a pulse longer
+  than the handler an offset above 48 ticks makes the high time shorter than `$0`.
+- Modeled, not measured: peripheral accesses cost what an SRAM access costs. On silicon a read
+  of TIM2 (APB1 at 36 MHz) stalls for the bridge, a few cycles more for each TIM2 register read
+  in the step handler than the figures here.
 - The sweep measures one straight move per point; it says nothing about move-to-move refills
   (`Engine::load`, ~1 000 modeled cycles) at high rates.
 ";
