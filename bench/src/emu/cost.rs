@@ -16,6 +16,7 @@
 //! | LDRD/STRD, LDM/STM/PUSH/POP             | 1 + N                             |
 //! | taken branch, write to PC               | 1 + P, P = 1, + 2 if target in flash |
 //! | TBB/TBH                                 | 2 + P (+ 2 for the table read)     |
+//! | ISB                                     | 1 + P (pipeline refill, + 2 in flash) |
 //! | not-taken conditional branch            | 1                                 |
 
 use std::collections::HashMap;
@@ -207,7 +208,7 @@ fn misc16(hw: u16) -> Decoded {
 }
 
 // 32-bit Thumb-2 instruction
-fn decode32(hw1: u16, hw2: u16, _addr: u32) -> Decoded {
+fn decode32(hw1: u16, hw2: u16, addr: u32) -> Decoded {
     match hw1 >> 11 {
         0b11101 if hw1 & 0x0600 == 0 => {
             if hw1 & 0x0040 == 0 {
@@ -229,8 +230,11 @@ fn decode32(hw1: u16, hw2: u16, _addr: u32) -> Decoded {
                 branch(1, Flow::Branch) // B.W, BL
             } else if (hw1 >> 6) & 0xE != 0xE {
                 branch(1, Flow::CondBranch) // B<c>.W
+            } else if hw1 == 0xF3BF && hw2 & 0xFFF0 == 0x8F60 {
+                // ISB: 1 + B, B at least a pipeline refill (TRM table 18-1).
+                Decoded { cost: 1 + refill(addr + 4), flow: Flow::Next, single_mem: false }
             } else {
-                alu() // MSR, MRS, hints, barriers
+                alu() // MSR, MRS, hints, DSB/DMB (1 + B, B ≥ 0)
             }
         }
         0b11111 => match (hw1 >> 8) & 0x7 {
@@ -273,5 +277,12 @@ mod tests {
         assert_eq!(costs, vec![1, 4, 1, 1, 1]);
         assert_eq!(b.insns[4].flow, Flow::Branch);
         assert_eq!(b.cost_to(0x0800_0100), 8 + 3);
+    }
+
+    #[test]
+    fn isb_refills_the_pipeline() {
+        // isb sy; nop
+        let b = decode_block(0x0800_0000, &[0xBF, 0xF3, 0x6F, 0x8F, 0x00, 0xBF]);
+        assert_eq!(b.insns.iter().map(|i| i.cost).collect::<Vec<_>>(), vec![4, 1]);
     }
 }
