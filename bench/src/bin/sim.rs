@@ -44,7 +44,7 @@ struct Args {
     /// With --sweep: worker threads.
     #[arg(long, default_value_t = 2)]
     jobs: usize,
-    /// With --results: how to describe the firmware (default: the repository's HEAD, marked when
+    /// With --results: how to describe the firmware (default: the last commit of src/, marked when
     /// src/ has uncommitted changes).
     #[arg(long)]
     firmware_label: Option<String>,

@@ -702,12 +702,13 @@ fn utc_date() -> String {
     format!("{y:04}-{mo:02}-{d:02}")
 }
 
-// the repository's HEAD, marked when firmware sources have uncommitted changes
+// the last commit of the firmware sources, marked when they have uncommitted changes
 pub fn firmware_commit() -> String {
     let git = |args: &[&str]| {
         std::process::Command::new("git").current_dir(super::repo_root()).args(args).output().ok().map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
     };
-    let head = git(&["rev-parse", "--short", "HEAD"]).unwrap_or_else(|| "?".into());
+    // The last commit that touched the firmware, not HEAD (bench-only commits change nothing).
+    let head = git(&["log", "-1", "--format=%h", "--", "src", "Cargo.toml", "Cargo.lock", "memory.x", "build.rs"]).unwrap_or_else(|| "?".into());
     let dirty = git(&["status", "--porcelain", "--", "src", "Cargo.toml", "Cargo.lock", "memory.x", "build.rs"]).is_some_and(|s| !s.is_empty());
     if dirty {
         format!("`{head}` + uncommitted changes in src/")
