@@ -475,10 +475,15 @@ pub fn sweep(elf: &Path, opts: &Options) -> Result<Sweep> {
     Ok(Sweep { cap_hz, settings: settings_lines(), rows, wall_s: wall.elapsed().as_secs_f64(), points })
 }
 
-// one line per point for progress output
+// one line per point for progress output (with the simulated and wall time)
 pub fn point_line(p: &Point) -> String {
+    format!("{}, {:.2} s sim in {:.1} s", point_text(p), p.sim_s, p.wall_s)
+}
+
+// one line per point, deterministic (for RESULTS.md)
+pub fn point_text(p: &Point) -> String {
     format!(
-        "{} axes @ {:>6.1} kHz: {:<22} (ISR only: {:<16}) CPU {:>5.1}/{:>5.1} %, ISR {:>5.1}/{:>5.1} % (mean/max), ISR {:>6.1} cyc/step ({:>5.1} mean / {:>4} max per entry), BSRR {}..{}, X high ≥ {} ns, {:.2} s sim in {:.1} s",
+        "{} axes @ {:>6.1} kHz: {:<22} (ISR only: {:<16}) CPU {:>5.1}/{:>5.1} %, ISR {:>5.1}/{:>5.1} % (mean/max), ISR {:>6.1} cyc/step ({:>5.1} mean / {:>4} max per entry), BSRR {}..{}, X high ≥ {} ns",
         p.axes,
         p.target_hz as f64 / 1000.0,
         verdict_text(&p.verdict),
@@ -493,8 +498,6 @@ pub fn point_line(p: &Point) -> String {
         p.bsrr_min.map_or("-".into(), |v| v.to_string()),
         p.bsrr_max.map_or("-".into(), |v| v.to_string()),
         p.min_high_ns.map_or("-".into(), |v| format!("{v:.0}")),
-        p.sim_s,
-        p.wall_s
     )
 }
 
@@ -580,7 +583,8 @@ pub fn results_markdown(s: &Sweep, command: &str, firmware: &str, elf: &Path) ->
     let cruise_ms = Options::default().cruise_ms;
     writeln!(m, "# Step-rate sweep on the virtual bench\n")?;
     writeln!(m, "Made by `{command}` on {date} (UTC), firmware {commit}, flash image {flash} bytes;")?;
-    writeln!(m, "{} points in {:.0} s wall. Regenerate with the same command after a firmware change.\n", s.points, s.wall_s)?;
+    writeln!(m, "{} points (about a minute on two cores). Regenerate with the same command after a firmware", s.points)?;
+    writeln!(m, "change: on the same firmware only the date changes.\n")?;
     writeln!(m, "## What the numbers are\n")?;
     writeln!(m, "Every cycle and load figure is **modeled**: the release ELF runs on unicorn and the bench charges")?;
     writeln!(m, "Cortex-M3 TRM cycle costs per instruction, 2 flash wait states on taken branches and literal loads")?;
@@ -654,7 +658,7 @@ pub fn results_markdown(s: &Sweep, command: &str, firmware: &str, elf: &Path) ->
     writeln!(m, "\n<details><summary>Every point tried</summary>\n\n```")?;
     for r in &s.rows {
         for p in &r.tried {
-            writeln!(m, "{}", point_line(p))?;
+            writeln!(m, "{}", point_text(p))?;
         }
     }
     writeln!(m, "```\n</details>")?;
