@@ -464,7 +464,7 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
             Timing::UNSET => Timing::DEFAULT,
             t => t,
         };
-        self.min_period = Period::from_bits(t.min_period_ticks.saturating_mul(16));
+        self.min_period = Period::from_bits(t.min_period_for(n as u32).saturating_mul(16));
         self.dir_setup = (t.dir_setup_ticks + STORE_JITTER_TICKS).max(t.min_period_ticks);
         self.idx = 0;
         self.hold_stop = false;

@@ -14,6 +14,7 @@
 //! the timing's fastest rate; both are printed by `$I`). Every move starts and ends at rest (no
 //! look-ahead).
 
+use crate::timing::Timing;
 use crate::protocol::Error;
 use crate::queue::Move;
 use crate::settings::Settings;
@@ -27,6 +28,8 @@ pub struct Limits<const N: usize> {
     pub max_rate: [f64; N],
     /// Fastest master cruise, steps/s.
     pub vmax_hz: u32,
+    /// Step timing: a move with more slave axes has a lower ceiling (`Timing::max_rate_for`).
+    pub timing: Timing,
 }
 
 impl<const N: usize> Limits<N> {
@@ -36,6 +39,7 @@ impl<const N: usize> Limits<N> {
             steps_per_mm: core::array::from_fn(|i| s.steps_per_mm[i] as f64),
             max_rate: core::array::from_fn(|i| s.max_rate[i] as f64),
             vmax_hz: vmax_hz.max(1),
+            timing: s.timing(),
         }
     }
 }
@@ -129,8 +133,11 @@ impl<const N: usize> Planner<N> {
             minutes = minutes.max(len / f);
         }
         let wanted_hz = master_steps as f64 / (minutes * 60.0);
+        // The step handler's ceiling for this many slave axes, and the ramp table's top.
+        let slaves = delta.iter().filter(|d| **d != 0).count() as u32 - 1;
+        let top = lim.vmax_hz.min(lim.timing.max_rate_for(slaves));
         // max/min, not f64::clamp: its panic message would link float formatting into the firmware.
-        let cruise = libm::round(wanted_hz).max(1.0).min(lim.vmax_hz as f64) as u32;
+        let cruise = libm::round(wanted_hz).max(1.0).min(top as f64) as u32;
         let mv = Move::new(delta, cruise).map_err(|_| Error::InvalidTarget)?;
         self.mm = *target;
         self.steps = to;

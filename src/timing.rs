@@ -66,11 +66,43 @@ impl Timing {
         }
     }
 
-    /// Fastest master rate (steps/s) this timing allows.
+    /// Shortest master period for a move with `slaves` slave axes: the pulse timing, the step
+    /// handler's cost (so the CPU stays ≤ 95 % busy), and room for a low time of at least one
+    /// pulse after a falling edge that a short pulse gets only at the end of the handler.
+    pub const fn min_period_for(&self, slaves: u32) -> u32 {
+        let cpu = HANDLER_BASE_TICKS + HANDLER_PER_SLAVE_TICKS * slaves;
+        let low = HANDLER_FALL_TICKS + HANDLER_PER_SLAVE_TICKS * slaves + self.pulse_ticks;
+        let mut p = self.min_period_ticks;
+        if cpu > p {
+            p = cpu;
+        }
+        if low > p {
+            p = low;
+        }
+        p
+    }
+
+    /// Fastest master rate (steps/s) for a move with `slaves` slave axes.
+    pub fn max_rate_for(&self, slaves: u32) -> u32 {
+        (crate::TIMER_HZ / self.min_period_for(slaves).max(1)).min(MAX_RATE_HZ)
+    }
+
+    /// Fastest master rate (steps/s) this timing allows any move (a single axis).
     pub fn max_rate_hz(&self) -> u32 {
-        (crate::TIMER_HZ / self.min_period_ticks.max(1)).min(MAX_RATE_HZ)
+        self.max_rate_for(0)
     }
 }
+
+/// Step-handler cost per master step, timer ticks: the virtual bench measures ≈ 190 + 14.4 per
+/// slave modeled cycles (bench/RESULTS.md, firmware 9e80f71), and the CPU stays ≤ 95 % busy
+/// up to 331 kHz with one axis and 235 kHz with seven; these keep every move inside that.
+pub const HANDLER_BASE_TICKS: u32 = 220;
+/// Extra handler ticks per slave axis (see [`HANDLER_BASE_TICKS`]).
+pub const HANDLER_PER_SLAVE_TICKS: u32 = 15;
+/// Where a short pulse's falling edge lands after its rising edge when the compare event is
+/// already pending at the end of the update handler (measured high time ≈ 122 + 12 per slave
+/// modeled cycles), rounded up.
+pub const HANDLER_FALL_TICKS: u32 = 130;
 
 /// Timer ticks from an update event to the step handler's BSRR store: 40..45 modeled cycles
 /// on the virtual bench (bench/RESULTS.md), rounded up. The firmware sets the compare event

@@ -95,7 +95,8 @@ proptest! {
         // cruise rate within 0.5 % (or one tick).
         let t = rig.times(master);
         let t0 = t[0];
-        let vc = cruise.min(table_vmax).min(Rig::<7>::FAST.max_rate_hz()) as f64;
+        let slaves = counts.iter().filter(|&&c| c > 0).count() as u32 - 1;
+        let vc = cruise.min(table_vmax).min(Rig::<7>::FAST.max_rate_for(slaves)) as f64;
         let a = accel as f64;
         let t_acc = if vc > v0 as f64 { (vc - v0 as f64) / a } else { 0.0 };
         let total = analytic_time(m as f64, v0 as f64, vc, a);
