@@ -63,7 +63,7 @@ fn sigrok_unit_fs(rate_hz: f64) -> u128 {
 }
 
 // "24 MHz", "1 kHz", "500 Hz"
-fn parse_rate(text: &str) -> Option<f64> {
+pub(super) fn parse_rate(text: &str) -> Option<f64> {
     let mut words = text.split_whitespace();
     let number: f64 = words.next()?.parse().ok()?;
     let scale = match words.next().unwrap_or("Hz") {

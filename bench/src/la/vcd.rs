@@ -338,14 +338,7 @@ pub fn parse_timescale(text: &str) -> Result<u128> {
 // sample rate from sigrok's "Acquisition with 4/8 channels at 24 MHz" comment
 fn sigrok_sample_rate(comment: &str) -> Option<f64> {
     let rest = &comment[comment.find(" at ")? + 4..];
-    let mut words = rest.split_whitespace();
-    let number: f64 = words.next()?.parse().ok()?;
-    let scale = match words.next()? {
-        "Hz" => 1.0,
-        "kHz" => 1e3,
-        "MHz" => 1e6,
-        "GHz" => 1e9,
-        _ => return None,
-    };
-    Some(number * scale)
+    // Here the unit is required ("at 24 MHz"); the CSV header's parser defaults it to Hz.
+    rest.split_whitespace().nth(1)?;
+    super::csv::parse_rate(rest)
 }
