@@ -259,6 +259,13 @@ impl Machine {
         if word == 0x4002_2010 && v & (1 << 6) != 0 && v & (1 << 1) != 0 {
             self.flash_erase = self.regs.get(&0x4002_2014).copied(); // CR.STRT with PER: AR page
         }
+        // FLASH_KEYR: the second key of the unlock sequence clears CR.LOCK (RM0008 §3.3.1),
+        // so a program/erase after the HAL re-locked the controller works as on silicon.
+        if word == 0x4002_2004 && v == 0xCDEF_89AB {
+            if let Some(cr) = self.regs.get_mut(&0x4002_2010) {
+                *cr &= !(1 << 7);
+            }
+        }
         self.log_unmodeled(word);
     }
 
