@@ -179,20 +179,16 @@ mod app {
             if act.save || act.restart {
                 hw::save_settings(cx.local.flash, &ctl.settings().to_bytes());
             }
-            if act.restart {
-                // Let the reply leave, then reset: the engine takes the pin map at boot.
-                while !tx_in_empty(tx_in) {}
-                cortex_m::peripheral::SCB::sys_reset();
-            }
             hw::heartbeat(now);
             if tx_in.len() > 0 {
                 cx.shared.tx.lock(|tx| tx.listen());
             }
+            if act.restart {
+                // Let the reply leave (TX interrupt on, above), then reset: the engine takes
+                // the pin map at boot.
+                while tx_in.len() > 0 {}
+                cortex_m::peripheral::SCB::sys_reset();
+            }
         }
-    }
-
-    /// True once the TX ring has drained.
-    fn tx_in_empty(tx_in: &Producer<'static, u8>) -> bool {
-        tx_in.len() == 0
     }
 }
