@@ -19,8 +19,9 @@ use crate::MAX_AXES;
 pub const SETTINGS_LEN: usize = 140;
 const MAGIC: u8 = 0xD5;
 const VERSION: u8 = 1;
-/// Shortest step period the step interrupt sustains (ticks): the interrupt floor that
-/// `Timing::DEFAULT` is built with (144 ticks = 2 µs, 500 kHz), before the 2 × pulse rule.
+/// Absolute floor of the step period (ticks; 144 = 500 kHz, the engine's design limit). The
+/// binding limits are the pulse rule and the step handler's measured cost, both applied by
+/// `Timing::min_period_for`.
 pub const ISR_FLOOR_TICKS: u32 = 144;
 
 /// Setting numbers of our own (free in Grbl 1.1, which uses 0-6, 10-13, 20-27, 30-32, 100+).

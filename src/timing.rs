@@ -49,7 +49,8 @@ pub struct Timing {
 impl Timing {
     /// 3 µs pulses, 5 µs direction setup: safe for every driver in this module until
     /// settings say otherwise. The 3 µs pulse (216 ticks) sets the shortest period to 480
-    /// ticks, so this allows 150 kHz; the interrupt's own floor is 144 ticks (500 kHz).
+    /// ticks, so this allows 150 kHz; 144 ticks (500 kHz) is only the absolute floor, below the
+    /// handler's measured cost (`min_period_for`).
     pub const DEFAULT: Timing = Timing::new(216, 360, 144);
 
     /// All zero: "not set yet"; the engine uses [`Timing::DEFAULT`] in its place.
