@@ -1,32 +1,27 @@
 //! ddastep: a multi-axis step/direction pulse generator for one STM32F103 "Blue Pill".
 //!
-//! This library is the whole motion core, free of HAL and PAC types so that every line the
-//! step interrupt runs is also run by host tests:
+//! This library is the whole controller but the hardware shell, free of HAL and PAC types so
+//! that every line the firmware runs is also run by host tests. It is organised by layer:
 //!
-//! - [`interp`]: the DDA (Bresenham) interpolator — master axis plus up to six slaves in
-//!   exact integer ratio, every slave within ½ step of the ideal line.
-//! - [`ramp`]: per-millisecond ramp tables (trapezoid or S-curve) of master timer periods.
-//! - [`engine`]: the step engine behind TIM2; one [`engine::Engine::tick`] computes the next
-//!   GPIO BSRR word and the next timer period.
-//! - [`timing`]: driver timing (pulse width, direction setup) as typed constants.
-//! - [`sim`]: a model of the TIM2 preload pipeline that turns ticks into timed edges (host tests,
-//!   benchmarks).
+//! - [`motion`]: the motion core the step interrupt runs — DDA interpolator, ramp tables, step
+//!   engine, move queue, driver timing, and a TIM2 model for host tests.
+//! - [`planning`]: the planner that turns targets into moves.
+//! - [`grbl`]: the Grbl 1.1 front end — protocol, G-code, settings, reports, controller.
+//! - [`board`]: the Blue Pill pin map as numbers (the firmware shell in `src/firmware/`
+//!   turns it into registers).
+//!
+//! The modules are also re-exported at the crate root (`ddastep::engine`, …).
 #![no_std]
 #![cfg_attr(not(test), deny(warnings))]
 
 pub mod board;
-pub mod controller;
-pub mod engine;
-pub mod gcode;
-pub mod interp;
-pub mod planner;
-pub mod protocol;
-pub mod queue;
-pub mod ramp;
-pub mod report;
-pub mod settings;
-pub mod sim;
-pub mod timing;
+pub mod grbl;
+pub mod motion;
+pub mod planning;
+
+pub use grbl::{controller, gcode, protocol, report, settings};
+pub use motion::{engine, interp, queue, ramp, sim, timing};
+pub use planning::planner;
 
 /// Timer clock of TIM2 (APB1 at 36 MHz, doubled for timers): one timer tick is 1/72 µs.
 pub const TIMER_HZ: u32 = 72_000_000;

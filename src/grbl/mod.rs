@@ -1,0 +1,8 @@
+//! The Grbl 1.1 front end: the serial line protocol, G-code, `$` settings, reports and the
+//! controller that ties them to the planner.
+
+pub mod controller;
+pub mod gcode;
+pub mod protocol;
+pub mod report;
+pub mod settings;
