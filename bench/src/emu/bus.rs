@@ -32,7 +32,44 @@ const RCC: u32 = 0x4002_1000;
 const FLASH_IF: u32 = 0x4002_2000;
 const RCC_CFGR: u32 = 0x4002_1004;
 const SCS: u32 = 0xE000_E000;
+const DWT_CTRL: u32 = 0xE000_1000;
 const DWT_CYCCNT: u32 = 0xE000_1004;
+const DEMCR: u32 = 0xE000_EDFC;
+/// DWT_CTRL.NUMCOMP of a Cortex-M3 (4 comparators), read-only.
+const DWT_NUMCOMP_4: u32 = 4 << 28;
+
+/// DWT cycle counter: counts core cycles while DEMCR.TRCENA and DWT_CTRL.CYCCNTENA are set,
+/// holds its value otherwise (ARMv7-M ARM C1.8.8). Sleep is not distinguished: it counts
+/// through WFI like the bench's clock.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Dwt {
+    pub ctrl: u32,
+    running: bool,
+    /// Cycle at which a running counter read 0 (mod 2^32).
+    base: u64,
+    /// Value while stopped.
+    held: u32,
+}
+
+impl Dwt {
+    // CYCCNT at cycle `t`
+    pub fn cyccnt(&self, t: u64) -> u32 {
+        if self.running {
+            t.wrapping_sub(self.base) as u32
+        } else {
+            self.held
+        }
+    }
+
+    // new CTRL / DEMCR (and optionally a CYCCNT write) at cycle `t`
+    fn set(&mut self, t: u64, ctrl: u32, demcr: u32, cyccnt: Option<u32>) {
+        let value = cyccnt.unwrap_or_else(|| self.cyccnt(t));
+        self.ctrl = ctrl;
+        self.running = ctrl & 1 != 0 && demcr & 1 << 24 != 0;
+        self.held = value;
+        self.base = t.wrapping_sub(value as u64);
+    }
+}
 
 /// Why the block hook stopped the CPU.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -69,8 +106,7 @@ pub struct Machine {
     pub regs: HashMap<u32, u32>,
     pub unmodeled: BTreeMap<u32, u32>,
     logged: HashSet<u32>,
-    pub dwt_ctrl: u32,
-    pub dwt_base: u64,
+    pub dwt: Dwt,
     /// Current PC as synced by unicorn's per-instruction counter hook.
     pub pc: u32,
     /// First GPIOB BSRR/BRR store cycle since the last TIM2 entry.
@@ -113,8 +149,7 @@ impl Machine {
             regs,
             unmodeled: BTreeMap::new(),
             logged: HashSet::new(),
-            dwt_ctrl: 0,
-            dwt_base: 0,
+            dwt: Dwt::default(),
             pc: 0,
             first_bsrr: None,
             flash_erase: None,
@@ -224,7 +259,8 @@ impl Machine {
                 self.ports[p].read((word - GPIOA) % 0x400)
             }
             0xE000_E010..=0xE000_E01F => self.systick.read(word - 0xE000_E010, t),
-            DWT_CYCCNT => (t - self.dwt_base) as u32,
+            DWT_CTRL => self.dwt.ctrl | DWT_NUMCOMP_4,
+            DWT_CYCCNT => self.dwt.cyccnt(t),
             SCS..=0xE000_EFFF if self.nvic.read(word - SCS).is_some() => self.nvic.read(word - SCS).unwrap(),
             _ => self.plain_read(word),
         };
@@ -257,13 +293,19 @@ impl Machine {
             USART1..=0x4001_3BFF => self.usart1.write(word - USART1, v, t),
             GPIOA..=0x4001_1BFF => self.gpio_write(word, v, mask, lands),
             0xE000_E010..=0xE000_E01F => self.systick.write(word - 0xE000_E010, v, t),
-            0xE000_1000 => {
-                if v & 1 != 0 && self.dwt_ctrl & 1 == 0 {
-                    self.dwt_base = t;
-                }
-                self.dwt_ctrl = v;
+            DWT_CTRL => {
+                let demcr = self.regs.get(&DEMCR).copied().unwrap_or(0);
+                self.dwt.set(t, (self.dwt.ctrl & !mask) | v, demcr, None);
             }
-            DWT_CYCCNT => self.dwt_base = t.wrapping_sub(v as u64),
+            DWT_CYCCNT => {
+                let demcr = self.regs.get(&DEMCR).copied().unwrap_or(0);
+                self.dwt.set(t, self.dwt.ctrl, demcr, Some(v));
+            }
+            DEMCR => {
+                let demcr = (self.regs.get(&DEMCR).copied().unwrap_or(0) & !mask) | v;
+                self.regs.insert(DEMCR, demcr);
+                self.dwt.set(t, self.dwt.ctrl, demcr, None);
+            }
             SCS..=0xE000_EFFF if self.nvic.read(word - SCS).is_some() || word == SCS + 0xF00 => {
                 let merged = match word - SCS {
                     0x400..=0x4EF | 0xD18..=0xD23 => (self.nvic.read(word - SCS).unwrap() & !mask) | v,
