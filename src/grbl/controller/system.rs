@@ -33,6 +33,9 @@ impl<const N: usize> Controller<'_, N> {
             b"I" => {
                 need_idle(idle)?;
                 report::build_info(out, self.feeder.capacity(), &self.ramped);
+                if let Some(t) = crate::steptime::STEP_TIME.take() {
+                    report::step_time(out, &t);
+                }
             }
             b"N" => {
                 need_idle(idle)?;
