@@ -19,7 +19,7 @@ pub mod grbl;
 pub mod motion;
 pub mod planning;
 
-pub use grbl::{controller, gcode, protocol, report, settings};
+pub use grbl::{controller, coords, gcode, jog, protocol, report, settings, store};
 pub use motion::{engine, interp, queue, ramp, sim, timing};
 pub use planning::planner;
 
