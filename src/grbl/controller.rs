@@ -15,8 +15,11 @@
 
 mod system;
 
+use crate::arc::Segments;
 use crate::gcode::{self, Modal, Stop};
+use crate::inverse_time;
 use crate::planner::{Limits, Planned, Planner};
+use crate::ramp::RampConfig;
 use crate::protocol::{put_error, put_ok, Error, LineBuf, LineEvent, Out, LINE_LEN, REPLY_ROOM};
 use crate::queue::{Feeder, Shared, State};
 use crate::ramp::RampSlot;
@@ -53,6 +56,17 @@ enum Listing {
     Params(u8),
 }
 
+/// How fast a straight move (or an arc's chord) runs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Rate {
+    /// G0: the axes' max rates.
+    Rapid,
+    /// G94: path feed, mm/min.
+    Feed(f64),
+    /// G93: the move's time, minutes.
+    Minutes(f64),
+}
+
 /// One accepted line still being carried out; each stage is cleared when done.
 #[derive(Clone, Copy, Debug)]
 struct Job<const N: usize> {
@@ -61,6 +75,9 @@ struct Job<const N: usize> {
     dwell_end: Option<u32>,
     set_steps: Option<[i32; N]>,
     mv: Option<Planned<N>>,
+    /// G2/G3: chord ends still to plan, at `rate` each.
+    arc: Option<Segments<N>>,
+    rate: Rate,
     drivers_off: bool,
     pause: bool,
     end: bool,
@@ -76,6 +93,8 @@ impl<const N: usize> Job<N> {
         dwell_end: None,
         set_steps: None,
         mv: None,
+        arc: None,
+        rate: Rate::Rapid,
         drivers_off: false,
         pause: false,
         end: false,
@@ -280,7 +299,7 @@ impl<'a, const N: usize> Controller<'a, N> {
             return;
         }
         self.enabled_at.get_or_insert(self.now);
-        let waiting = self.job.is_some_and(|j| j.mv.is_some());
+        let waiting = self.job.is_some_and(|j| j.mv.is_some() || j.arc.is_some());
         let keep = self.m17 || self.settings.idle_delay_ms == 255;
         if keep || waiting || !self.drained() {
             self.idle_since = None;
@@ -333,18 +352,29 @@ impl<'a, const N: usize> Controller<'a, N> {
                 self.shared.set_positions(steps);
                 job.set_steps = None;
             }
-            if let Some(pl) = job.mv {
-                if !self.drivers_ready() {
-                    self.drivers_on = true;
-                    break 'run false;
+            loop {
+                if let Some(pl) = job.mv {
+                    if !self.drivers_ready() {
+                        self.drivers_on = true;
+                        break 'run false;
+                    }
+                    if self.profile_dirty || self.feeder.push(pl.mv).is_err() {
+                        break 'run false;
+                    }
+                    self.feed_ring[self.pushed as usize % FEED_RING] = pl.mm_per_step;
+                    self.pushed = self.pushed.wrapping_add(1);
+                    self.idle_since = None;
+                    job.mv = None;
                 }
-                if self.profile_dirty || self.feeder.push(pl.mv).is_err() {
-                    break 'run false;
+                // The next chord of an arc. `Arc::check_range` made planning infallible; were it
+                // not, the chord would merge into the next one (the position stays exact).
+                let Some(seg) = job.arc.as_mut() else { break };
+                match seg.next() {
+                    Some(p) => {
+                        job.mv = plan(&mut self.planner, &p, job.rate, &self.limits, &self.ramped.cfg).unwrap_or(None)
+                    }
+                    None => job.arc = None,
                 }
-                self.feed_ring[self.pushed as usize % FEED_RING] = pl.mm_per_step;
-                self.pushed = self.pushed.wrapping_add(1);
-                self.idle_since = None;
-                job.mv = None;
             }
             if job.drivers_off || job.pause || job.end {
                 if !self.drained() {
@@ -382,9 +412,25 @@ impl<'a, const N: usize> Controller<'a, N> {
             Some(set) => Some(planner.set_position(&set, &self.limits)?),
             None => None,
         };
+        // G93: F is 1/minutes (checked positive where a motion needs it).
+        let rate = if modal.inverse_time { Rate::Minutes(1.0 / modal.feed) } else { Rate::Feed(modal.feed) };
+        let cfg = self.ramped.cfg;
         let mv = match fx.motion {
-            Some((target, rapid)) => planner.line(&target, (!rapid).then_some(modal.feed), &self.limits)?,
+            Some((target, rapid)) => plan(&mut planner, &target, if rapid { Rate::Rapid } else { rate }, &self.limits, &cfg)?,
             None => None,
+        };
+        let (arc, rate) = match fx.arc {
+            Some(a) => {
+                a.check_range(&self.limits.steps_per_mm)?;
+                let seg = a.segments(self.settings.arc_tolerance as f64);
+                // G93 over an arc: its time shared by the (equal) chords.
+                let per = match rate {
+                    Rate::Minutes(t) => Rate::Minutes(t / seg.chords() as f64),
+                    r => r,
+                };
+                (Some(seg), per)
+            }
+            None => (None, Rate::Rapid),
         };
         self.modal = modal;
         self.planner = planner;
@@ -396,6 +442,8 @@ impl<'a, const N: usize> Controller<'a, N> {
             dwell_ms: fx.dwell_ms,
             set_steps,
             mv,
+            arc,
+            rate,
             drivers_off: fx.drivers == Some(false),
             pause: fx.stop == Some(Stop::Pause),
             end: fx.stop == Some(Stop::End),
@@ -421,4 +469,30 @@ impl<'a, const N: usize> Controller<'a, N> {
         let per_step = self.feed_ring[self.shared.moves_done() as usize % FEED_RING] as f64;
         report::status(out, state, &mpos, rate * per_step * 60.0);
     }
+}
+
+/// Plans one straight move at `rate`. G93: the move's master steps decide the cruise rate that
+/// makes it last its time on the ramp `cfg` ([`inverse_time::cruise_hz`]), given to the planner
+/// as the equivalent feed, so its axis-rate clamps apply as to any feed.
+fn plan<const N: usize>(
+    planner: &mut Planner<N>,
+    target: &[f64; N],
+    rate: Rate,
+    lim: &Limits<N>,
+    cfg: &RampConfig,
+) -> Result<Option<Planned<N>>, crate::protocol::Error> {
+    let feed = match rate {
+        Rate::Rapid => return planner.line(target, None, lim),
+        Rate::Feed(f) => f,
+        Rate::Minutes(t) => {
+            // At 1 mm/min no axis limit binds: the planner's rate is exactly master / (len·60).
+            let mut dry = *planner;
+            let Some(probe) = dry.line(target, Some(1.0), lim)? else {
+                return planner.line(target, Some(1.0), lim);
+            };
+            let master = probe.mv.steps().iter().map(|s| s.unsigned_abs()).max().unwrap_or(0);
+            inverse_time::cruise_hz(master as u64, t * 60.0, cfg) / probe.wanted_hz
+        }
+    };
+    planner.line(target, Some(feed), lim)
 }

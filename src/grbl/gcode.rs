@@ -1,4 +1,4 @@
-//! G-code: numbers, blocks and the modal state, for Grbl 1.1's straight-line subset.
+//! G-code: numbers, blocks and the modal state, for Grbl 1.1's lines, arcs and feed modes.
 //!
 //! Who uses it: the controller, on each line from [`crate::protocol::LineBuf`] (upper case, no
 //! whitespace, no comments).
@@ -9,6 +9,7 @@
 //! Numbers are read exactly: up to 15 significant digits as an integer, divided once by a power
 //! of ten, which is the nearest `f64` to the decimal (as `str::parse` gives).
 
+use crate::arc::{Arc, Center};
 use crate::protocol::Error;
 use crate::AXIS_NAMES;
 
@@ -78,6 +79,10 @@ pub enum Motion {
     Rapid,
     /// G1: at the feed rate.
     Linear,
+    /// G2: clockwise arc.
+    CwArc,
+    /// G3: counter-clockwise arc.
+    CcwArc,
     /// G80: no motion mode (axis words are an error).
     Cancel,
 }
@@ -134,7 +139,12 @@ pub struct Block<const N: usize> {
     pub stop: Option<Stop>,
     /// M17 (`true`) / M18, M84 (`false`): drivers on or off.
     pub drivers: Option<bool>,
+    /// G93 (`true`) / G94.
+    pub inverse_time: Option<bool>,
     pub axes: [Option<f64>; N],
+    /// I J K arc offsets.
+    pub ijk: [Option<f64>; 3],
+    pub r: Option<f64>,
     pub f: Option<f64>,
     pub p: Option<f64>,
     pub s: Option<f64>,
@@ -153,7 +163,10 @@ impl<const N: usize> Block<N> {
         inches: None,
         stop: None,
         drivers: None,
+        inverse_time: None,
         axes: [None; N],
+        ijk: [None; 3],
+        r: None,
         f: None,
         p: None,
         s: None,
@@ -217,13 +230,15 @@ fn g_word<const N: usize>(b: &mut Block<N>, v: f64) -> Result<(), Error> {
     use group::*;
     let (code, mut mantissa) = split_code(v)?;
     let g = match code {
-        0 | 1 | 80 => {
+        0..=3 | 80 => {
             if code != 80 {
                 b.axis_command()?;
             }
             b.motion = Some(match code {
                 0 => Motion::Rapid,
                 1 => Motion::Linear,
+                2 => Motion::CwArc,
+                3 => Motion::CcwArc,
                 _ => Motion::Cancel,
             });
             MOTION
@@ -253,12 +268,15 @@ fn g_word<const N: usize>(b: &mut Block<N>, v: f64) -> Result<(), Error> {
             mantissa = 0;
             ARC_DISTANCE
         }
-        94 => FEED_MODE,
+        93 | 94 => {
+            b.inverse_time = Some(code == 93);
+            FEED_MODE
+        }
         40 => CUTTER,
         49 => TOOL_LENGTH,
         54 => COORD,
         61 => PATH,
-        // Arcs, probing, G10/G28/G30/G53, G92.1, G43.1, other coordinate systems, inverse time.
+        // Probing, G10/G28/G30/G53, G92.1, G43.1, other coordinate systems.
         _ => return Err(Error::UnsupportedCommand),
     };
     if mantissa != 0 {
@@ -301,6 +319,8 @@ fn value_word<const N: usize>(b: &mut Block<N>, letter: u8, v: f64) -> Result<()
         b'P' => &mut b.p,
         b'S' => &mut b.s,
         b'T' => &mut b.t,
+        b'I' | b'J' | b'K' => &mut b.ijk[(letter - b'I') as usize],
+        b'R' => &mut b.r,
         _ => match AXIS_NAMES[..N].iter().position(|&a| a as u8 == letter) {
             Some(i) => &mut b.axes[i],
             None => return Err(Error::UnsupportedCommand),
@@ -328,6 +348,8 @@ pub struct Effects<const N: usize> {
     pub set_position: Option<[Option<f64>; N]>,
     /// G0/G1: absolute target (mm) of every axis, and whether it is a rapid.
     pub motion: Option<([f64; N], bool)>,
+    /// G2/G3, checked.
+    pub arc: Option<Arc<N>>,
     pub stop: Option<Stop>,
 }
 
@@ -338,7 +360,9 @@ pub struct Modal {
     pub plane: u8,
     pub relative: bool,
     pub inches: bool,
-    /// Feed rate, mm/min (0: none yet).
+    /// G93: F is the inverse of each move's time in minutes, given on every motion line.
+    pub inverse_time: bool,
+    /// Feed rate, mm/min, or 1/min under G93 (0: none yet).
     pub feed: f64,
     pub spindle: f64,
     pub tool: u32,
@@ -353,7 +377,16 @@ impl Default for Modal {
 impl Modal {
     /// After power-up or soft reset: G0 G17 G90 G21 G94, no feed.
     pub const RESET: Modal =
-        Modal { motion: Motion::Rapid, plane: 17, relative: false, inches: false, feed: 0.0, spindle: 0.0, tool: 0 };
+        Modal {
+        motion: Motion::Rapid,
+        plane: 17,
+        relative: false,
+        inches: false,
+        inverse_time: false,
+        feed: 0.0,
+        spindle: 0.0,
+        tool: 0,
+    };
 
     /// Applies `b` to a copy of the state, given the current position (mm): the new state and
     /// what to do. Nothing changes on error.
@@ -367,8 +400,21 @@ impl Modal {
         m.plane = b.plane.unwrap_or(m.plane);
         m.motion = b.motion.unwrap_or(m.motion);
         let unit = if m.inches { 25.4 } else { 1.0 };
-        if let Some(f) = b.f {
+        m.inverse_time = b.inverse_time.unwrap_or(m.inverse_time);
+        let feed_motion = matches!(m.motion, Motion::Linear | Motion::CwArc | Motion::CcwArc);
+        // A motion command: axis words not taken by G92, or an explicit G0-G3.
+        let moves = b.non_modal != Some(NonModal::SetPosition)
+            && (b.has_axes() || b.motion.is_some_and(|mo| mo != Motion::Cancel));
+        if m.inverse_time {
+            // G93 (Grbl): every motion line carries its own F; nothing carries over.
+            if feed_motion && moves && b.f.is_none() {
+                return Err(Error::UndefinedFeedRate);
+            }
+            m.feed = b.f.unwrap_or(0.0);
+        } else if let Some(f) = b.f {
             m.feed = f * unit;
+        } else if self.inverse_time {
+            m.feed = 0.0; // G93 to G94 without F: no feed rate (Grbl)
         }
         if let Some(s) = b.s {
             m.spindle = s;
@@ -379,7 +425,7 @@ impl Modal {
             }
             m.tool = t as u32;
         }
-        let mut fx = Effects { drivers: b.drivers, dwell_ms: None, set_position: None, motion: None, stop: b.stop };
+        let mut fx = Effects { drivers: b.drivers, dwell_ms: None, set_position: None, motion: None, arc: None, stop: b.stop };
         match (b.non_modal, b.p) {
             (Some(NonModal::Dwell), None) => return Err(Error::ValueWordMissing),
             (Some(NonModal::Dwell), Some(p)) if p > MAX_DWELL_S => return Err(Error::BadNumberFormat),
@@ -397,23 +443,49 @@ impl Modal {
                 *s = a.map(|v| in_range(v * unit)).transpose()?;
             }
             fx.set_position = Some(set);
-        } else if b.has_axes() {
-            let rapid = match m.motion {
-                Motion::Cancel => return Err(Error::AxisWordsExist),
-                Motion::Linear if m.feed <= 0.0 => return Err(Error::UndefinedFeedRate),
-                mo => mo == Motion::Rapid,
-            };
+        } else if b.has_axes() || (moves && matches!(m.motion, Motion::CwArc | Motion::CcwArc)) {
+            if m.motion == Motion::Cancel {
+                return Err(Error::AxisWordsExist);
+            }
+            if feed_motion && m.feed <= 0.0 {
+                return Err(Error::UndefinedFeedRate);
+            }
             let mut target = *pos;
             for (t, a) in target.iter_mut().zip(&b.axes) {
                 if let Some(v) = a {
                     *t = in_range(if m.relative { *t + v * unit } else { v * unit })?;
                 }
             }
-            fx.motion = Some((target, rapid));
+            match m.motion {
+                Motion::CwArc | Motion::CcwArc => fx.arc = Some(arc(b, &m, pos, target, unit)?),
+                mo => fx.motion = Some((target, mo == Motion::Rapid)),
+            }
+        }
+        // I J K R that no arc used (also I J K beside R): Grbl's unused words.
+        let arc_words = b.ijk.iter().any(Option::is_some) as u8 + b.r.is_some() as u8;
+        if arc_words > fx.arc.is_some() as u8 {
+            return Err(Error::UnusedWords);
         }
         if b.stop == Some(Stop::End) {
-            m = Modal { motion: Motion::Linear, plane: 17, relative: false, ..m };
+            m = Modal { motion: Motion::Linear, plane: 17, relative: false, inverse_time: false, ..m };
         }
         Ok((m, fx))
     }
+}
+
+/// G2/G3 words to a checked arc, in Grbl's order: axis words (`error:26`), axis words in the
+/// plane (`error:32`), then the geometry ([`Arc::new`]).
+fn arc<const N: usize>(b: &Block<N>, m: &Modal, pos: &[f64; N], target: [f64; N], unit: f64) -> Result<Arc<N>, Error> {
+    if !b.has_axes() {
+        return Err(Error::NoAxisWords);
+    }
+    let (p, q) = crate::arc::plane_axes(m.plane);
+    if b.axes.get(p).copied().flatten().is_none() && b.axes.get(q).copied().flatten().is_none() {
+        return Err(Error::NoAxisWordsInPlane);
+    }
+    let center = match b.r {
+        Some(r) => Center::Radius(r * unit),
+        None => Center::Offsets(b.ijk.map(|o| o.map(|v| v * unit))),
+    };
+    Arc::new(m.plane, *pos, target, m.motion == Motion::CwArc, center)
 }

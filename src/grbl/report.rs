@@ -68,13 +68,15 @@ pub fn modes(out: &mut impl Out, m: &Modal) {
     out.put(match m.motion {
         Motion::Rapid => b"[GC:G0",
         Motion::Linear => b"[GC:G1",
+        Motion::CwArc => b"[GC:G2",
+        Motion::CcwArc => b"[GC:G3",
         Motion::Cancel => b"[GC:G80",
     });
     out.put(b" G54 G");
     put_u32(out, m.plane as u32);
     out.put(if m.inches { b" G20" } else { b" G21" });
     out.put(if m.relative { b" G91" } else { b" G90" });
-    out.put(b" G94 M5 M9 T");
+    out.put(if m.inverse_time { b" G93 M5 M9 T" } else { b" G94 M5 M9 T" });
     put_u32(out, m.tool);
     out.put(b" F");
     put_fixed(out, m.feed, 0);

@@ -16,9 +16,11 @@ use crate::timing::{ns_to_ticks, Timing};
 use crate::MAX_AXES;
 
 /// Bytes of the flash image.
-pub const SETTINGS_LEN: usize = 140;
+pub const SETTINGS_LEN: usize = 160;
 const MAGIC: u8 = 0xD5;
-const VERSION: u8 = 1;
+const VERSION: u8 = 2;
+/// Byte offset of the settings after the axis arrays (`$12`; 140..156 reserved for spindle).
+const TAIL: usize = 24 + 4 * 4 * MAX_AXES;
 /// Absolute floor of the step period (ticks; 144 = 500 kHz, the engine's design limit). The
 /// binding limits are the pulse rule and the step handler's measured cost, both applied by
 /// `Timing::min_period_for`.
@@ -30,10 +32,9 @@ pub const RAMP_START: u16 = 40;
 pub const RAMP_SHAPE: u16 = 41;
 
 /// Grbl settings we report but do not implement, with the only value they accept.
-const FIXED: [(u16, f32, u8); 15] = [
+const FIXED: [(u16, f32, u8); 14] = [
     (10, 1.0, 0),    // status report mask: MPos
     (11, 0.010, 3),  // junction deviation: every move stops (no look-ahead)
-    (12, 0.002, 3),  // arc tolerance: no arcs
     (13, 0.0, 0),    // report inches: no
     (20, 0.0, 0),    // soft limits: not implemented
     (21, 0.0, 0),    // hard limits: not implemented
@@ -74,6 +75,8 @@ pub struct Settings {
     pub limit_invert: bool,
     /// `$6` probe pin invert (stored only).
     pub probe_invert: bool,
+    /// `$12` arc tolerance: largest distance of a chord from its arc, mm.
+    pub arc_tolerance: f32,
     /// `$29` direction setup before the next step edge, µs (0..=1000).
     pub dir_setup_us: f32,
     /// `$40` ramp start rate v0, master steps/s.
@@ -139,6 +142,7 @@ impl Settings {
         enable_invert: false,
         limit_invert: false,
         probe_invert: false,
+        arc_tolerance: 0.002,
         dir_setup_us: 5.0,
         ramp_start_hz: 1000,
         shape: Shape::Trapezoid,
@@ -173,6 +177,7 @@ impl Settings {
             4 => (self.enable_invert as u8 as f64, 0),
             5 => (self.limit_invert as u8 as f64, 0),
             6 => (self.probe_invert as u8 as f64, 0),
+            12 => (self.arc_tolerance as f64, 3),
             DIR_SETUP => (self.dir_setup_us as f64, 3),
             RAMP_START => (self.ramp_start_hz as f64, 0),
             RAMP_SHAPE => ((self.shape == Shape::SCurve) as u8 as f64, 0),
@@ -241,6 +246,11 @@ impl Settings {
             }
             6 => {
                 self.probe_invert = int != 0.0;
+                Ok(Change::Shell)
+            }
+            12 => {
+                // Grbl takes any positive value; below 0.1 µm a chord is far below a step.
+                self.arc_tolerance = range(1e-4, 1000.0)?;
                 Ok(Change::Shell)
             }
             DIR_SETUP => {
@@ -370,6 +380,7 @@ impl Settings {
         for (w, v) in b[24..].chunks_exact_mut(4).zip(values) {
             w.copy_from_slice(&v.to_le_bytes());
         }
+        b[TAIL..TAIL + 4].copy_from_slice(&self.arc_tolerance.to_le_bytes());
         let crc = crc32(&b[..SETTINGS_LEN - 4]);
         b[SETTINGS_LEN - 4..].copy_from_slice(&crc.to_le_bytes());
         b
@@ -390,6 +401,7 @@ impl Settings {
             pulse_us: f32::from_le_bytes(word(4)),
             dir_setup_us: f32::from_le_bytes(word(8)),
             ramp_start_hz: u32::from_le_bytes(word(12)),
+            arc_tolerance: f32::from_le_bytes(word(TAIL)),
             idle_delay_ms: b[16],
             step_invert: b[17],
             dir_invert: b[18],
@@ -434,7 +446,7 @@ mod tests {
 
     #[test]
     fn low_ids_are_ours_and_every_fixed_one() {
-        let ours = [0, 1, 2, 3, 4, 5, 6, DIR_SETUP, RAMP_START, RAMP_SHAPE];
+        let ours = [0, 1, 2, 3, 4, 5, 6, 12, DIR_SETUP, RAMP_START, RAMP_SHAPE];
         assert_eq!(LOW_IDS.len(), ours.len() + FIXED.len());
         assert!(ours.iter().chain(FIXED.iter().map(|f| &f.0)).all(|id| LOW_IDS.contains(id)));
     }

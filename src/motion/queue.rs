@@ -13,7 +13,7 @@ use core::sync::atomic::{fence, AtomicI32, AtomicU32, AtomicU8, Ordering::{Acqui
 use heapless::spsc::Producer;
 
 use crate::interp::master_axis;
-use crate::ramp::{period_of_hz, Period, MAX_RATE_HZ, MIN_RATE_HZ};
+use crate::ramp::{period_of_millihz, Period, MAX_RATE_HZ, MIN_RATE_HZ};
 
 /// What the engine is doing, as published in [`Shared::state`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -53,7 +53,13 @@ pub struct Move<const N: usize> {
 impl<const N: usize> Move<N> {
     /// A move of `steps` (signed, per axis) whose master axis cruises at `cruise_hz` steps/s.
     pub fn new(steps: [i64; N], cruise_hz: u32) -> Result<Self, MoveError> {
-        if !(MIN_RATE_HZ..=MAX_RATE_HZ).contains(&cruise_hz) {
+        Self::new_millihz(steps, cruise_hz as u64 * 1000)
+    }
+
+    /// The same with the cruise rate in milli-steps per second (G93 times need more than whole
+    /// steps/s at low rates).
+    pub fn new_millihz(steps: [i64; N], cruise_millihz: u64) -> Result<Self, MoveError> {
+        if !(MIN_RATE_HZ as u64 * 1000..=MAX_RATE_HZ as u64 * 1000).contains(&cruise_millihz) {
             return Err(MoveError::RateOutOfRange);
         }
         let mut s = [0i32; N];
@@ -69,7 +75,7 @@ impl<const N: usize> Move<N> {
         if counts[master] == 0 {
             return Err(MoveError::ZeroLength);
         }
-        Ok(Move { steps: s, master: master as u8, cruise: period_of_hz(cruise_hz), epoch: 0 })
+        Ok(Move { steps: s, master: master as u8, cruise: period_of_millihz(cruise_millihz), epoch: 0 })
     }
 
     /// Signed steps per axis.
