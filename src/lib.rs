@@ -19,7 +19,7 @@ pub mod grbl;
 pub mod motion;
 pub mod planning;
 
-pub use grbl::{controller, gcode, protocol, report, settings};
+pub use grbl::{controller, gcode, protocol, report, settings, spindle};
 pub use motion::{engine, interp, queue, ramp, sim, timing};
 pub use planning::{arc, inverse_time, planner};
 

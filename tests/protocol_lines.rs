@@ -39,7 +39,7 @@ fn errors_use_grbl_numbers_and_change_nothing() {
         ("G2 X1 Y1 I3 F100", 33),
         ("G38.2 Z-1 F100", 20),
         ("A1", 20),
-        ("M3 S1000", 20),
+        ("M6 T1", 20),
         ("G4", 28),
         ("G92", 26),
         ("G0 X1 P2", 36),

@@ -134,6 +134,7 @@ proptest! {
         idle: u8, step_inv: u8, dir_inv: u8, flags in 0u8..8, scurve: bool,
         start in 1u32..=1_000_000,
         arc_tol in 1e-4f32..1000.0,
+        spindle in (0.0f32..1e6, 0.0f32..1e6, any::<bool>(), 1u32..=100_000),
         axes in prop::array::uniform4(prop::array::uniform7(0.001f32..1e5)),
         flip in 0usize..SETTINGS_LEN, bit in 0u8..8,
     ) {
@@ -146,6 +147,10 @@ proptest! {
             limit_invert: flags & 2 != 0,
             probe_invert: flags & 4 != 0,
             arc_tolerance: arc_tol,
+            spindle_max: spindle.0,
+            spindle_min: spindle.1,
+            laser_mode: spindle.2,
+            spindle_pwm_hz: spindle.3,
             dir_setup_us: dir,
             ramp_start_hz: start,
             shape: if scurve { Shape::SCurve } else { Shape::Trapezoid },

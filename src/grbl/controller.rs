@@ -14,6 +14,7 @@
 //! and M18 wait until the queue has run out and the engine is idle.
 
 mod system;
+mod tool;
 
 use crate::arc::Segments;
 use crate::gcode::{self, Modal, Stop};
@@ -25,6 +26,7 @@ use crate::queue::{Feeder, Shared, State};
 use crate::ramp::RampSlot;
 use crate::report;
 use crate::settings::{Ramped, Settings};
+use crate::spindle::{Power, PwmTiming, SpindleDir, SpindleOut};
 
 /// Time from enabling the drivers to the first step, in poll milliseconds (2 ≥ 1 ms real).
 pub const ENABLE_SETTLE_MS: u32 = 2;
@@ -47,6 +49,10 @@ pub struct Actions {
     /// `$2`/`$3` (or `$RST`) changed the pin map, which the engine takes at boot: save, then
     /// reset the MCU.
     pub restart: bool,
+    /// Spindle/laser PWM compare value and the spindle and coolant pins, every poll.
+    pub spindle: SpindleOut,
+    /// New spindle PWM timing for TIM1 (at the first poll and after `$33` changes).
+    pub pwm: Option<PwmTiming>,
 }
 
 /// A long reply written a line at a time as TX room appears.
@@ -78,6 +84,10 @@ struct Job<const N: usize> {
     /// G2/G3: chord ends still to plan, at `rate` each.
     arc: Option<Segments<N>>,
     rate: Rate,
+    /// M3/M4/M5, S, M7/M8/M9 to apply once the queue has run out (before the motion).
+    tool: Option<(SpindleDir, f64, u8)>,
+    /// Laser mode: the power the block's moves carry.
+    power: Power,
     drivers_off: bool,
     pause: bool,
     end: bool,
@@ -95,6 +105,8 @@ impl<const N: usize> Job<N> {
         mv: None,
         arc: None,
         rate: Rate::Rapid,
+        tool: None,
+        power: Power { speed: 0.0, dynamic: false, cruise_hz: 0.0 },
         drivers_off: false,
         pause: false,
         end: false,
@@ -127,6 +139,12 @@ pub struct Controller<'a, const N: usize> {
     pulse_changed: bool,
     pushed: u32,
     feed_ring: [f32; FEED_RING],
+    /// Laser power of each move in the queue (laser mode), indexed like `feed_ring`.
+    power_ring: [Power; FEED_RING],
+    /// Spindle direction and speed, and coolant, in force.
+    tool: (SpindleDir, f64, u8),
+    /// `$33` last handed to the shell (0: none yet).
+    pwm_hz: u32,
 }
 
 impl<'a, const N: usize> Controller<'a, N> {
@@ -157,6 +175,9 @@ impl<'a, const N: usize> Controller<'a, N> {
             pulse_changed: true,
             pushed: shared.moves_done(),
             feed_ring: [0.0; FEED_RING],
+            power_ring: [Power::default(); FEED_RING],
+            tool: (SpindleDir::Off, 0.0, 0),
+            pwm_hz: 0,
         };
         c.apply_profile();
         c.planner.sync(shared.positions(), &c.limits);
@@ -265,7 +286,13 @@ impl<'a, const N: usize> Controller<'a, N> {
             self.status(out);
         }
         let pulse = core::mem::take(&mut self.pulse_changed).then(|| self.settings.timing().pulse_ticks);
+        let pwm = (self.pwm_hz != self.settings.spindle_pwm_hz).then(|| {
+            self.pwm_hz = self.settings.spindle_pwm_hz;
+            PwmTiming::new(self.pwm_hz)
+        });
         Actions {
+            spindle: self.spindle_out(),
+            pwm,
             enable: self.drivers_on,
             enable_pin_high: self.drivers_on == self.settings.enable_invert,
             pulse_ticks: pulse,
@@ -334,6 +361,14 @@ impl<'a, const N: usize> Controller<'a, N> {
                     break 'run false;
                 }
             }
+            if let Some(t) = job.tool {
+                // Grbl stops for a spindle or coolant change (laser mode: see `tool_sync`).
+                if !self.drained() {
+                    break 'run false;
+                }
+                self.tool = t;
+                job.tool = None;
+            }
             if let Some(ms) = job.dwell_ms {
                 // The dwell starts at a poll (its clock) once the queue has run out.
                 if !self.drained() || (job.dwell_end.is_none() && !in_poll) {
@@ -362,6 +397,8 @@ impl<'a, const N: usize> Controller<'a, N> {
                         break 'run false;
                     }
                     self.feed_ring[self.pushed as usize % FEED_RING] = pl.mm_per_step;
+                    let cruise_hz = crate::ramp::hz_of_period(pl.mv.cruise()) as f32;
+                    self.power_ring[self.pushed as usize % FEED_RING] = Power { cruise_hz, ..job.power };
                     self.pushed = self.pushed.wrapping_add(1);
                     self.idle_since = None;
                     job.mv = None;
@@ -432,6 +469,7 @@ impl<'a, const N: usize> Controller<'a, N> {
             }
             None => (None, Rate::Rapid),
         };
+        let (tool, power) = self.tool_sync(&modal, mv.is_some() || arc.is_some(), fx.motion.is_some_and(|m| m.1));
         self.modal = modal;
         self.planner = planner;
         if fx.drivers == Some(true) {
@@ -444,6 +482,8 @@ impl<'a, const N: usize> Controller<'a, N> {
             mv,
             arc,
             rate,
+            tool,
+            power,
             drivers_off: fx.drivers == Some(false),
             pause: fx.stop == Some(Stop::Pause),
             end: fx.stop == Some(Stop::End),

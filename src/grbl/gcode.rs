@@ -11,6 +11,7 @@
 
 use crate::arc::{Arc, Center};
 use crate::protocol::Error;
+use crate::spindle::{SpindleDir, FLOOD, MIST};
 use crate::AXIS_NAMES;
 
 /// Largest axis target accepted, mm (beyond it: `error:33`).
@@ -141,6 +142,10 @@ pub struct Block<const N: usize> {
     pub drivers: Option<bool>,
     /// G93 (`true`) / G94.
     pub inverse_time: Option<bool>,
+    /// M3 / M4 / M5.
+    pub spindle: Option<SpindleDir>,
+    /// M7 / M8 / M9 (the code).
+    pub coolant: Option<u8>,
     pub axes: [Option<f64>; N],
     /// I J K arc offsets.
     pub ijk: [Option<f64>; 3],
@@ -164,6 +169,8 @@ impl<const N: usize> Block<N> {
         stop: None,
         drivers: None,
         inverse_time: None,
+        spindle: None,
+        coolant: None,
         axes: [None; N],
         ijk: [None; 3],
         r: None,
@@ -300,13 +307,23 @@ fn m_word<const N: usize>(b: &mut Block<N>, v: f64) -> Result<(), Error> {
             });
             STOP
         }
-        5 => SPINDLE,
-        9 => COOLANT,
+        3..=5 => {
+            b.spindle = Some(match code {
+                3 => SpindleDir::Cw,
+                4 => SpindleDir::Ccw,
+                _ => SpindleDir::Off,
+            });
+            SPINDLE
+        }
+        7..=9 => {
+            b.coolant = Some(code as u8);
+            COOLANT
+        }
         17 | 18 | 84 => {
             b.drivers = Some(code == 17);
             DRIVERS
         }
-        // Spindle/coolant on, tool change and the rest: nothing here could do them.
+        // Tool change and the rest: nothing here could do them.
         _ => return Err(Error::UnsupportedCommand),
     };
     b.claim(g)
@@ -364,7 +381,12 @@ pub struct Modal {
     pub inverse_time: bool,
     /// Feed rate, mm/min, or 1/min under G93 (0: none yet).
     pub feed: f64,
+    /// S.
     pub spindle: f64,
+    /// M3 / M4 / M5.
+    pub spindle_dir: SpindleDir,
+    /// M7 / M8 bits ([`MIST`], [`FLOOD`]); M9 clears both.
+    pub coolant: u8,
     pub tool: u32,
 }
 
@@ -385,6 +407,8 @@ impl Modal {
         inverse_time: false,
         feed: 0.0,
         spindle: 0.0,
+        spindle_dir: SpindleDir::Off,
+        coolant: 0,
         tool: 0,
     };
 
@@ -419,6 +443,13 @@ impl Modal {
         if let Some(s) = b.s {
             m.spindle = s;
         }
+        m.spindle_dir = b.spindle.unwrap_or(m.spindle_dir);
+        m.coolant = match b.coolant {
+            Some(7) => m.coolant | MIST,
+            Some(8) => m.coolant | FLOOD,
+            Some(_) => 0,
+            None => m.coolant,
+        };
         if let Some(t) = b.t {
             if t > 255.0 {
                 return Err(Error::MaxValueExceeded);
@@ -467,7 +498,15 @@ impl Modal {
             return Err(Error::UnusedWords);
         }
         if b.stop == Some(Stop::End) {
-            m = Modal { motion: Motion::Linear, plane: 17, relative: false, inverse_time: false, ..m };
+            m = Modal {
+                motion: Motion::Linear,
+                plane: 17,
+                relative: false,
+                inverse_time: false,
+                spindle_dir: SpindleDir::Off,
+                coolant: 0,
+                ..m
+            };
         }
         Ok((m, fx))
     }

@@ -6,3 +6,4 @@ pub mod gcode;
 pub mod protocol;
 pub mod report;
 pub mod settings;
+pub mod spindle;

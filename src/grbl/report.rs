@@ -5,6 +5,7 @@
 //! integers.
 
 use crate::gcode::{Modal, Motion};
+use crate::spindle::{SpindleDir, FLOOD, MIST};
 use crate::protocol::{put_fixed, put_u32, Out, RX_BUFFER_LEN};
 use crate::ramp::Shape;
 use crate::settings::Ramped;
@@ -76,7 +77,22 @@ pub fn modes(out: &mut impl Out, m: &Modal) {
     put_u32(out, m.plane as u32);
     out.put(if m.inches { b" G20" } else { b" G21" });
     out.put(if m.relative { b" G91" } else { b" G90" });
-    out.put(if m.inverse_time { b" G93 M5 M9 T" } else { b" G94 M5 M9 T" });
+    out.put(if m.inverse_time { b" G93" } else { b" G94" });
+    out.put(match m.spindle_dir {
+        SpindleDir::Off => b" M5",
+        SpindleDir::Cw => b" M3",
+        SpindleDir::Ccw => b" M4",
+    });
+    if m.coolant == 0 {
+        out.put(b" M9");
+    }
+    if m.coolant & MIST != 0 {
+        out.put(b" M7");
+    }
+    if m.coolant & FLOOD != 0 {
+        out.put(b" M8");
+    }
+    out.put(b" T");
     put_u32(out, m.tool);
     out.put(b" F");
     put_fixed(out, m.feed, 0);

@@ -29,6 +29,23 @@ pub enum State {
     Held = 3,
 }
 
+/// Grbl's override percentages (feed, rapid, spindle; 100 = as programmed).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Overrides {
+    pub feed: u8,
+    pub rapid: u8,
+    pub spindle: u8,
+}
+
+impl Overrides {
+    /// Everything as programmed.
+    pub const NONE: Overrides = Overrides { feed: 100, rapid: 100, spindle: 100 };
+
+    const fn pack(self) -> u32 {
+        self.feed as u32 | (self.rapid as u32) << 8 | (self.spindle as u32) << 16
+    }
+}
+
 /// Why a move cannot be built.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MoveError {
@@ -114,6 +131,8 @@ pub struct Shared<const N: usize> {
     pub(crate) state: AtomicU8,
     pub(crate) moves_done: AtomicU32,
     pub(crate) period_bits: AtomicU32,
+    /// [`Overrides`], one byte each.
+    overrides: AtomicU32,
 }
 
 impl<const N: usize> Default for Shared<N> {
@@ -134,6 +153,7 @@ impl<const N: usize> Shared<N> {
             state: AtomicU8::new(State::Idle as u8),
             moves_done: AtomicU32::new(0),
             period_bits: AtomicU32::new(0),
+            overrides: AtomicU32::new(Overrides::NONE.pack()),
         }
     }
 
@@ -177,6 +197,17 @@ impl<const N: usize> Shared<N> {
             0 => 0,
             b => ((crate::TIMER_HZ as u64 * 16) / b as u64) as u32,
         }
+    }
+
+    /// The override percentages in force.
+    pub fn overrides(&self) -> Overrides {
+        let w = self.overrides.load(Relaxed);
+        Overrides { feed: w as u8, rapid: (w >> 8) as u8, spindle: (w >> 16) as u8 }
+    }
+
+    /// Sets the override percentages (realtime commands).
+    pub fn set_overrides(&self, o: Overrides) {
+        self.overrides.store(o.pack(), Relaxed);
     }
 
     /// Position of every axis in steps: the step words handed out so far.
