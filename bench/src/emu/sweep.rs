@@ -681,7 +681,7 @@ const NOTES: &str = "\
   back to back, updates are missed (overruns) and a rising edge can merge with the previous pulse
   (a step lost on the pins while the position counter counts it).
 - The BSRR offset grows when an update arrives while the previous handler is still running. The
-  falling edge comes at the compare event (`$0` + 48 ticks, `STORE_LATENCY_TICKS`, after the
+  falling edge comes at the compare event (`$0` + 72 ticks, `STORE_LATENCY_TICKS`, after the
   update) or at the end of the update handler, whichever is later: with the sweep's short pulse
   it is the handler's end (the X high times in the point list); with a pulse longer
   than the handler an offset above 48 ticks makes the high time shorter than `$0`.
