@@ -159,6 +159,10 @@ fn main() -> Result<()> {
     eprintln!();
     let report = board.report();
     println!("{report}");
+    // The firmware's own DWT timing of its step path over the run (what `$I` gives on a board).
+    if let Ok(info) = board.send_line_wait_ok("$I") {
+        info.lines().filter(|l| l.contains("step isr")).for_each(|l| println!("firmware self-report: {l}"));
+    }
     if args.profile {
         print!("{}", isr_profile(&board, 12));
     }

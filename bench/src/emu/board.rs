@@ -15,7 +15,7 @@ use unicorn_engine::RegisterARM;
 
 use super::bus::{Stop, TIM2_IRQ};
 use super::cpu::{self, Cpu, Image};
-use super::exception::{self, ENTRY_CYCLES, RETURN_CYCLES, TAIL_CHAIN_CYCLES};
+use super::exception;
 use super::gpio::PinEdge;
 use super::nvic::IRQ0;
 use super::profile::{self, FnCost};
@@ -378,14 +378,16 @@ impl Board {
             self.sleeping = false;
             if let Some(ret) = self.sleep_on_exit.take() {
                 let n = self.cpu.get_data().nvic.preempting(basepri, primask).unwrap_or(0);
-                self.take(n, ret, TAIL_CHAIN_CYCLES);
+                let tail = self.cpu.get_data().exception_cycles().2;
+                self.take(n, ret, tail);
                 return Ok(());
             }
         }
         if self.split.is_none() && self.cpu.get_data().pending {
             if let Some(n) = self.cpu.get_data().nvic.preempting(basepri, primask) {
                 let ret = exception::stack_frame(&mut self.cpu);
-                self.take(n, ret, ENTRY_CYCLES);
+                let entry = self.cpu.get_data().exception_cycles().0;
+                self.take(n, ret, entry);
                 return Ok(());
             }
         }
@@ -472,31 +474,32 @@ impl Board {
         let primask = self.reg(RegisterARM::PRIMASK) != 0;
         let next = self.cpu.get_data().nvic.preempting(basepri, primask);
         // A tail-chain replaces the return: its cost is charged to the next handler's entry.
-        let ret = if next.is_some() { 0 } else { RETURN_CYCLES };
+        let (_, return_cycles, tail) = self.cpu.get_data().exception_cycles();
+        let ret = if next.is_some() { 0 } else { return_cycles };
         if n == IRQ0 + TIM2_IRQ {
             let m = self.cpu.get_data();
             self.stats.isr_done(now + ret, m.insns, m.first_bsrr);
         }
         if let Some(next) = next {
-            self.take(next, exc_return, TAIL_CHAIN_CYCLES);
+            self.take(next, exc_return, tail);
             return;
         }
-        self.profile_return(n);
+        self.profile_return(n, return_cycles);
         let to_thread = exc_return & 8 != 0;
         if to_thread && self.cpu.get_data().nvic.scr & 2 != 0 {
             self.sleeping = true;
             self.sleep_on_exit = Some(exc_return);
-            self.cpu.get_data_mut().now += RETURN_CYCLES;
+            self.cpu.get_data_mut().now += return_cycles;
             return;
         }
         exception::unstack(&mut self.cpu, exc_return);
-        self.cpu.get_data_mut().now += RETURN_CYCLES;
+        self.cpu.get_data_mut().now += return_cycles;
     }
 
     // charge an exception return of exception `n` to the profile (the clock is charged apart)
-    fn profile_return(&mut self, n: u32) {
+    fn profile_return(&mut self, n: u32, cycles: u64) {
         if let Some(h) = &mut self.cpu.get_data_mut().profile {
-            h.add(n, profile::RETURN, RETURN_CYCLES, 0);
+            h.add(n, profile::RETURN, cycles, 0);
         }
     }
 }
