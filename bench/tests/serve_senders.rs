@@ -120,6 +120,16 @@ fn stream_py(c: &mut Client, job: &[&str]) -> Vec<String> {
     replies
 }
 
+// the paper's bench settings on X, Y, Z at a tenth of its acceleration (the firmware's safe
+// defaults suit a small gantry: 500 mm/min), so the jobs here take a second, not a minute
+fn bench_settings(c: &mut Client) {
+    for axis in 0..3 {
+        for (n, value) in [(100, "100"), (110, "6000"), (120, "1000")] {
+            assert_eq!(c.command(&format!("${}={value}", n + axis)), ["ok"]);
+        }
+    }
+}
+
 // poll `?` until the state starts with `want`
 fn wait_state(c: &mut Client, want: &str, timeout: Duration) -> String {
     let start = Instant::now();
@@ -141,6 +151,7 @@ fn ugs_then_stream_py_over_the_pty_symlink() {
     assert!(server.pty.starts_with("/dev/pts/"), "{}", server.pty);
     let mut c = Client::pty(link.to_str().unwrap());
     ugs_connect(&mut c);
+    bench_settings(&mut c);
     // A short job, 35 lines of 4 to 30 bytes: more than 128 bytes in flight without counting.
     let mut job = vec!["G91", "G21"];
     let moves: Vec<String> = (0..32).map(|i| format!("G1 X{}.25 Y-0.125 F{}", i % 3, 3000 + 60 * i)).collect();
@@ -149,7 +160,7 @@ fn ugs_then_stream_py_over_the_pty_symlink() {
     let replies = stream_py(&mut c, &job);
     assert_eq!(replies.len(), job.len());
     assert!(replies.iter().all(|r| r == "ok"), "{replies:?}");
-    let s = wait_state(&mut c, "Idle", Duration::from_secs(5));
+    let s = wait_state(&mut c, "Idle", Duration::from_secs(10));
     let x: f64 = (0..32).map(|i| (i % 3) as f64 + 0.25).sum();
     assert!((mpos_x(&s) - x).abs() < 0.006, "{s}: X should be {x}");
     assert!(c.errors().is_empty(), "{:?}", c.errors());
@@ -178,6 +189,7 @@ fn cncjs_and_bcnc_over_tcp_and_pty_at_once() {
 fn realtime_commands_mid_move_over_tcp() {
     let server = Server::start(&["--tcp", "127.0.0.1:0"]);
     let mut c = Client::tcp(server.tcp.as_deref().unwrap());
+    bench_settings(&mut c);
     assert_eq!(c.command("G91"), ["ok"]);
     // 30 mm at 40 mm/s: about 0.8 s of motion
     assert_eq!(c.command("G1 X30 F2400"), ["ok"]);
@@ -187,7 +199,7 @@ fn realtime_commands_mid_move_over_tcp() {
     assert!(mpos_x(&run) > 0.0 && mpos_x(&run) < 30.0, "{run}");
     // feed hold: decelerates and stops
     c.send(b"!");
-    let held = wait_state(&mut c, "Hold:0", Duration::from_secs(1));
+    let held = wait_state(&mut c, "Hold:0", Duration::from_secs(5));
     c.pump(MS(200));
     let still = c.status();
     assert_eq!(mpos_x(&held), mpos_x(&still), "no motion while held: {held} {still}");
@@ -196,7 +208,7 @@ fn realtime_commands_mid_move_over_tcp() {
     c.send(b"~");
     let resumed = c.status();
     assert!(state(&resumed) == "Run" || state(&resumed).starts_with("Hold"), "{resumed}");
-    let done = wait_state(&mut c, "Idle", Duration::from_secs(3));
+    let done = wait_state(&mut c, "Idle", Duration::from_secs(10));
     assert!((mpos_x(&done) - 30.0).abs() < 0.006, "{done}");
 
     // soft reset while moving: motion stops, the banner comes back
@@ -219,7 +231,7 @@ fn realtime_commands_mid_move_over_tcp() {
     c.command("G1 X10 F2400");
     c.pump(MS(150));
     c.send(b"!");
-    let held = wait_state(&mut c, "Hold:0", Duration::from_secs(1));
+    let held = wait_state(&mut c, "Hold:0", Duration::from_secs(5));
     let mark = c.mark();
     c.send(&[0x18]);
     assert!(c.wait(mark, Duration::from_secs(1), |t| t.contains("Grbl 1.1")), "{:?}", &c.text[mark..]);
@@ -230,10 +242,13 @@ fn realtime_commands_mid_move_over_tcp() {
 
 #[test]
 fn reconnecting_finds_the_board_still_running() {
-    let server = Server::start(&["--tcp", "127.0.0.1:0"]);
+    let tmp = std::env::temp_dir();
+    let (vcd, json) = (tmp.join(format!("serve-{}.vcd", std::process::id())), tmp.join(format!("serve-{}.json", std::process::id())));
+    let server = Server::start(&["--tcp", "127.0.0.1:0", "--vcd", vcd.to_str().unwrap(), "--json", json.to_str().unwrap()]);
     let addr = server.tcp.clone().unwrap();
     // pty: start a 1 s move, close the port mid-move
     let mut c = Client::pty(&server.pty);
+    bench_settings(&mut c);
     c.command("G91");
     c.command("G1 X20 F1200");
     c.pump(MS(200));
@@ -249,7 +264,7 @@ fn reconnecting_finds_the_board_still_running() {
     drop(c);
     // TCP: connect, disconnect, connect again: same board, same position
     let mut t = Client::tcp(&addr);
-    let done = wait_state(&mut t, "Idle", Duration::from_secs(3));
+    let done = wait_state(&mut t, "Idle", Duration::from_secs(10));
     assert!((mpos_x(&done) - 20.0).abs() < 0.006, "{done}");
     drop(t);
     std::thread::sleep(MS(100));
@@ -259,6 +274,14 @@ fn reconnecting_finds_the_board_still_running() {
     drop(t);
     let err = server.stop();
     assert!(err.matches("disconnected").count() >= 1, "{err}");
+    // --vcd and --json recorded the session: 20 mm at 100 steps/mm on X, nothing else
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(report["axes"]["X"]["rising_edges"], 2000, "{report}");
+    assert_eq!(report["axes"]["X"]["net_steps"], 2000, "{report}");
+    assert_eq!(report["axes"]["Y"]["rising_edges"], 0, "{report}");
+    let text = std::fs::read_to_string(&vcd).unwrap();
+    assert!(text.contains("X_STEP") && text.lines().count() > 4000, "VCD of the session");
+    let _ = (std::fs::remove_file(vcd), std::fs::remove_file(json));
 }
 
 #[test]

@@ -69,10 +69,14 @@ impl Server {
             let mut sink = String::new();
             while out.read_line(&mut sink).unwrap_or(0) > 0 {}
         });
-        // The board boots in about 50 ms of simulated time; a sender connects after that (bytes
-        // sent while the firmware is still in init would be lost, as on a real board).
-        std::thread::sleep(Duration::from_millis(300));
-        Server { child, pty: pty.expect("serial: line"), tcp, stdout_head: head, stderr }
+        let server = Server { child, pty: pty.expect("serial: line"), tcp, stdout_head: head, stderr };
+        // Senders connect to a board that has booted (bytes sent while the firmware is still in
+        // init are lost, as on a real board): read the banner off the pty, so the clients of
+        // the test find a quiet line, however loaded the host is.
+        let mut boot = Client::pty(&server.pty);
+        let booted = boot.wait(0, Duration::from_secs(20), |t| t.find("Grbl 1.1").is_some_and(|i| t[i..].contains('\n')));
+        assert!(booted, "no banner: {:?} {}", boot.text, server.stderr());
+        server
     }
 
     // what the server printed on stderr so far
