@@ -309,6 +309,16 @@ fn bad_use_is_a_clear_error() {
         assert!(err.contains(message), "{args:?}: {err}");
         assert!(!err.contains("panicked"), "{err}");
     }
+    // no pseudo-terminal to be had (no file descriptors left for it)
+    let out = std::process::Command::new("bash")
+        .arg("-c")
+        .arg(format!("ulimit -n 4; exec {} --elf {} --serve", env!("CARGO_BIN_EXE_sim"), elf.display()))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("sim: error: cannot create a pseudo-terminal") && err.contains("Too many open files"), "{err}");
+    assert_eq!(err.lines().count(), 1, "one line, no backtrace: {err}");
     // --pty-link without --serve is a usage error
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_sim")).args(["--pty-link", "/tmp/x"]).output().unwrap();
     assert_eq!(out.status.code(), Some(2));
