@@ -80,8 +80,18 @@ fn parse_pin(s: &str) -> Result<InputFlip> {
     Ok(InputFlip { cycle: (t * HZ as f64) as u64, port, pin: n, level: level == "1" })
 }
 
-fn main() -> Result<()> {
-    let args = Args::parse();
+// run, and on failure say why in one line (exit 1); usage errors exit 2 (clap)
+fn main() -> std::process::ExitCode {
+    match run(Args::parse()) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("sim: error: {e:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(args: Args) -> Result<()> {
     let elf = match args.elf.clone() {
         Some(p) => p,
         None => firmware_elf()?,
