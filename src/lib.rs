@@ -21,7 +21,7 @@ pub mod motion;
 pub mod planning;
 pub mod steptime;
 
-pub use grbl::{controller, gcode, protocol, report, settings};
+pub use grbl::{controller, coords, gcode, jog, protocol, report, settings, store};
 pub use motion::{engine, interp, queue, ramp, sim, timing};
 pub use planning::planner;
 

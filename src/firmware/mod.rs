@@ -35,6 +35,8 @@ mod app {
     static STATUS_REQ: AtomicBool = AtomicBool::new(false);
     /// Ctrl-X arrived.
     static RESET_REQ: AtomicBool = AtomicBool::new(false);
+    /// 0x85 (jog cancel) arrived.
+    static JOG_CANCEL_REQ: AtomicBool = AtomicBool::new(false);
     /// Work for `idle`: set by SysTick (every ms) and USART1, not by the step interrupt, so
     /// `idle` sleeps through step ticks instead of polling after each one.
     static POLL: AtomicBool = AtomicBool::new(true);
@@ -65,13 +67,14 @@ mod app {
         let mut core = cx.core;
         hw::start_cycle_counter(&mut core.DCB, &mut core.DWT);
         let board = hw::Board::setup(cx.device, core.SYST);
-        let settings = hw::load_settings();
+        let stored = hw::load_store();
+        let settings = stored.settings;
         let (mv_in, mv_out) = cx.local.moves.split();
         let (rx_in, rx_out) = cx.local.rxq.split();
         let (tx_in, tx_out) = cx.local.txq.split();
         let pins = board::pin_map::<AXES>(settings.step_invert, settings.dir_invert);
         let engine = Engine::new(&SHARED, mv_out, &PROFILE, pins);
-        let controller = Controller::new(Feeder::new(mv_in, &SHARED), &SHARED, &PROFILE, settings);
+        let controller = Controller::new(Feeder::new(mv_in, &SHARED), &SHARED, &PROFILE, stored);
         defmt::info!("ddastep up: 72 MHz, {} axes", AXES);
         hw::start_step_timer();
         (
@@ -120,6 +123,7 @@ mod app {
                 Some(Realtime::Resume) => SHARED.set_hold(false),
                 Some(Realtime::Status) => STATUS_REQ.store(true, Relaxed),
                 Some(Realtime::Reset) => RESET_REQ.store(true, Relaxed),
+                Some(Realtime::JogCancel) => JOG_CANCEL_REQ.store(true, Relaxed),
                 Some(Realtime::Extended(_)) => {}
                 // A full ring drops the byte: a character-counting sender never fills it.
                 None => {
@@ -172,19 +176,23 @@ mod app {
             if STATUS_REQ.swap(false, Relaxed) {
                 ctl.status_request();
             }
+            if JOG_CANCEL_REQ.swap(false, Relaxed) {
+                ctl.jog_cancel();
+            }
             while let Some(&b) = rx_out.peek() {
                 if !ctl.byte(b, tx_in) {
                     break;
                 }
                 rx_out.dequeue();
             }
+            ctl.set_rx_free(rx_out.capacity() - rx_out.len());
             let act = ctl.poll(now, tx_in);
             hw::set_enable(act.enable_pin_high);
             if let Some(ticks) = act.pulse_ticks {
                 hw::set_pulse_ticks(ticks);
             }
             if act.save || act.restart {
-                hw::save_settings(cx.local.flash, &ctl.settings().to_bytes());
+                hw::save_store(cx.local.flash, &ctl.image());
             }
             hw::heartbeat(now);
             if tx_in.len() > 0 {

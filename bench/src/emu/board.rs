@@ -181,6 +181,22 @@ impl Board {
         m.usart1.start_rx(now);
     }
 
+    // queue bytes ahead of everything not yet on the wire (Grbl's realtime commands from a
+    // sender: they reach the receiver at the next byte slot, still at line pace)
+    pub fn serial_send_urgent(&mut self, bytes: &[u8]) {
+        let m = self.cpu.get_data_mut();
+        for &b in bytes.iter().rev() {
+            m.usart1.rx_queue.push_front(b);
+        }
+        let now = m.now;
+        m.usart1.start_rx(now);
+    }
+
+    // host bytes queued for USART1 RX and not yet on the wire
+    pub fn serial_pending(&self) -> usize {
+        self.cpu.get_data().usart1.rx_queue.len()
+    }
+
     // everything the firmware sent on USART1 TX
     pub fn serial_output(&self) -> String {
         String::from_utf8_lossy(&self.cpu.get_data().usart1.transcript).into_owned()
@@ -242,6 +258,11 @@ impl Board {
     // every output latch change so far
     pub fn edges(&self) -> &[PinEdge] {
         &self.cpu.get_data().edges
+    }
+
+    // hand over the pin edges recorded so far and forget them (long runs that only count)
+    pub fn take_edges(&mut self) -> Vec<PinEdge> {
+        std::mem::take(&mut self.cpu.get_data_mut().edges)
     }
 
     // keep (default) or drop the pin edge history (long sweeps)
