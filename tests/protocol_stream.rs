@@ -87,7 +87,7 @@ fn listings_wait_for_tx_room_instead_of_being_cut() {
     let full = big.line("$$");
     let mut b = Bench::<3>::new(Settings::BENCH);
     b.take();
-    b.tx.cap = 260;
+    b.tx.cap = 340;
     // The UART sends 20 bytes per millisecond here.
     for &c in b"$$\n" {
         assert!(b.ctl.byte(c, &mut b.tx));

@@ -15,6 +15,7 @@ mod app {
     use ddastep::protocol::{realtime, Realtime};
     use ddastep::queue::{Feeder, Move, Shared};
     use ddastep::ramp::RampSlot;
+    use ddastep::steptime::STEP_TIME;
     use heapless::spsc::{Consumer, Producer, Queue};
     use stm32f1xx_hal::pac;
     use stm32f1xx_hal::serial::{Rx, Tx};
@@ -63,7 +64,9 @@ mod app {
         txq: Queue<u8, 512> = Queue::new(),
     ])]
     fn init(cx: init::Context) -> (SharedRes, Local) {
-        let board = hw::Board::setup(cx.device, cx.core.SYST);
+        let mut core = cx.core;
+        hw::start_cycle_counter(&mut core.DCB, &mut core.DWT);
+        let board = hw::Board::setup(cx.device, core.SYST);
         let stored = hw::load_store();
         let settings = stored.settings;
         let (mv_in, mv_out) = cx.local.moves.split();
@@ -89,9 +92,11 @@ mod app {
         )
     }
 
-    /// The step interrupt: store the precomputed word first, then compute the next one.
+    /// The step interrupt: store the precomputed word first, then compute the next one. The
+    /// body times itself with the DWT cycle counter (`$I` reports it, see `ddastep::steptime`).
     #[task(binds = TIM2, priority = 3, local = [engine])]
     fn step(cx: step::Context) {
+        let t0 = hw::cycles();
         let engine = cx.local.engine;
         let sr = hw::tim2().sr().read().bits();
         if sr & hw::SR_UIF != 0 {
@@ -105,6 +110,7 @@ mod app {
             hw::gpiob().bsrr().write(|w| unsafe { w.bits(engine.step_off()) });
             hw::tim2().sr().write(|w| unsafe { w.bits(!hw::SR_CC1IF) });
         }
+        STEP_TIME.record(hw::cycles().wrapping_sub(t0));
     }
 
     /// USART1: realtime bytes act at once, line bytes go to the RX ring, the TX ring drains.
@@ -146,6 +152,7 @@ mod app {
     fn systick(_: systick::Context) {
         MILLIS.store(MILLIS.load(Relaxed).wrapping_add(1), Relaxed);
         POLL.store(true, Relaxed);
+        STEP_TIME.tick_ms();
     }
 
     /// The protocol loop: bytes into the controller, its actions onto the pins and flash.

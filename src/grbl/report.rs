@@ -157,6 +157,22 @@ pub fn build_info(out: &mut impl Out, info: &[u8], queue_moves: usize, r: &Rampe
     out.put(if r.table_limited { b" (table-limited)]\r\n" } else { b"]\r\n" });
 }
 
+/// `$I`'s step-interrupt line: the firmware's own DWT timing of the step path since the last
+/// `$I` (`steptime`): body cycles min/mean/max, average and peak 1 ms load.
+pub fn step_time(out: &mut impl Out, t: &crate::steptime::StepTimeReport) {
+    out.put(b"[MSG:step isr ");
+    put_u32(out, t.min);
+    out.put(b"/");
+    put_fixed(out, t.mean as f64, 1);
+    out.put(b"/");
+    put_u32(out, t.max);
+    out.put(b" cycles min/mean/max, load ");
+    put_fixed(out, t.load as f64 * 100.0, 1);
+    out.put(b" % peak ");
+    put_fixed(out, t.peak_load as f64 * 100.0, 1);
+    out.put(b" %]\r\n");
+}
+
 /// Lines `$#` prints: G54..G59, G28, G30, G92, TLO, PRB.
 pub const PARAM_LINES: usize = 11;
 
@@ -238,6 +254,16 @@ mod tests {
              [MSG:ramp 1000-60000 Hz 1000000 Hz/s trapezoid]\r\n"
         );
         assert!(info.len() <= crate::protocol::REPLY_ROOM);
+        let t = crate::steptime::StepTimeReport { entries: 9, min: 190, mean: 191.44, max: 1402, load: 0.0812, peak_load: 0.156 };
+        assert_eq!(text(|o| step_time(o, &t)), "[MSG:step isr 190/191.4/1402 cycles min/mean/max, load 8.1 % peak 15.6 %]\r\n");
+        let worst = crate::steptime::StepTimeReport { entries: 1, min: u32::MAX, mean: u32::MAX as f32, max: u32::MAX, load: 1.0, peak_load: 1.0 };
+        let r = Ramped { table_limited: true, ..r };
+        let all = text(|o| {
+            build_info(o, b"", 15, &r);
+            step_time(o, &worst);
+            o.put(b"ok\r\n");
+        });
+        assert!(all.len() <= crate::protocol::REPLY_ROOM, "{}", all.len());
     }
 
     #[test]

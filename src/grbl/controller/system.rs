@@ -47,6 +47,9 @@ impl<const N: usize> Controller<'_, N> {
             b"I" => {
                 need_idle(idle)?;
                 report::build_info(out, self.stored.build_info.as_bytes(), self.feeder.capacity(), &self.ramped);
+                if let Some(t) = crate::steptime::STEP_TIME.take() {
+                    report::step_time(out, &t);
+                }
             }
             [b'I', b'=', text @ ..] => {
                 need_idle(idle)?;

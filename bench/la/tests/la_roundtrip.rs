@@ -2,9 +2,9 @@
 //! yields the generated counts, net steps, minimum widths, dir setup and hold, ratio and slave
 //! deviation (computed here by brute force).
 
-use ddastep_bench::la::capture::Capture;
-use ddastep_bench::la::synth::{self, AxisTrace, Pulse};
-use ddastep_bench::la::{reduce, Analyzer, AxisChannels, Config, Report};
+use ddastep_la::capture::Capture;
+use ddastep_la::synth::{self, AxisTrace, Pulse};
+use ddastep_la::{reduce, Analyzer, AxisChannels, Config, Report};
 use proptest::prelude::*;
 
 /// One generated axis: pulses as (low gap before, width), dir start and toggle offsets.

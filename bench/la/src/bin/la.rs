@@ -7,7 +7,8 @@ use std::process::ExitCode;
 
 use anyhow::{anyhow, Context, Result};
 use clap::Parser;
-use ddastep_bench::la::{self, map, Analyzer, AxisChannels, Config, Format, Report};
+use ddastep_la as la;
+use ddastep_la::{map, Analyzer, AxisChannels, Config, Format, Report};
 use serde::Serialize;
 
 /// Check step/dir pulse trains in a sigrok capture (VCD or CSV) or a bench VCD.
@@ -112,6 +113,10 @@ fn run(args: &Args) -> Result<bool> {
         .stream(&mut analyzer)
         .with_context(|| format!("cannot read {}", args.capture.display()))?;
     let report = analyzer.finish();
+    if let Some(problem) = report.expect.as_ref().and_then(|e| e.mapping_error.as_ref()) {
+        print!("{report}");
+        return Err(anyhow!("{problem}"));
+    }
 
     let lines = axes.iter().map(|a| lines_of(a, &info.channels)).collect();
     let output = Output {

@@ -1,14 +1,15 @@
 //! Logic-analyzer checker against committed sigrok captures with known answers
-//! (bench/fixtures/la/, made by make_fixtures.py: 24 MHz, 24 samples = 1 µs).
+//! (bench/la/fixtures/, made by make_fixtures.py: 24 MHz, 24 samples = 1 µs).
 
 use std::path::PathBuf;
 
-use ddastep_bench::la::{self, map, synth, Analyzer, Config, Report};
+use ddastep_la as la;
+use ddastep_la::{map, synth, Analyzer, Config, Report};
 
 // path of a fixture
 fn fixture(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("fixtures/la")
+        .join("fixtures")
         .join(name)
 }
 
@@ -231,7 +232,7 @@ fn bench_fixture_matches_its_generator() {
 }
 
 #[test]
-#[ignore = "writes bench/fixtures/la/bench_xyzu.vcd"]
+#[ignore = "writes bench/la/fixtures/bench_xyzu.vcd"]
 fn regenerate_bench_fixture() {
     let file = std::fs::File::create(fixture("bench_xyzu.vcd")).unwrap();
     synth::write_vcd(&bench_trace(), 820_000, file).unwrap();

@@ -6,7 +6,7 @@ use std::process::{Command, Output};
 // path of a fixture
 fn fixture(name: &str) -> String {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("fixtures/la")
+        .join("fixtures")
         .join(name)
         .display()
         .to_string()
@@ -202,7 +202,15 @@ fn bad_inputs_exit_2_with_a_message() {
                 "--expect".into(),
                 "5:3".into(),
             ],
-            "2 terms but 3 axes",
+            "--expect 5:3 has 2 terms but 3 of the 3 mapped axes stepped (X, Y, Z); give one term per stepping axis, or pick the axes in ratio order with --map, e.g. --map X=X_STEP,Y=Y_STEP",
+        ),
+        (
+            vec![
+                fixture("bresenham_532.vcd"),
+                "--expect".into(),
+                "5:3:2:1".into(),
+            ],
+            "4 terms but only 3 axes are mapped (X, Y, Z); name the step channel of each axis in ratio order with --map",
         ),
         (
             vec![
@@ -228,4 +236,41 @@ fn bad_inputs_exit_2_with_a_message() {
     for path in [garbage, truncated, backwards, binary] {
         let _ = std::fs::remove_file(path);
     }
+}
+
+// a bench-style VCD of a 50:30:20 move on X, Y, Z with A, B, C, U present and never stepping
+fn seven_axis_vcd(name: &str) -> PathBuf {
+    let names = ["X", "Y", "Z", "A", "B", "C", "U"];
+    let axes = ddastep_la::synth::dda_move(&names, &[50, 30, 20, 0, 0, 0, 0], 10_000, 20_000, 2_000);
+    let path = temp(name);
+    let file = std::fs::File::create(&path).unwrap();
+    ddastep_la::synth::write_vcd(&axes, 1_100_000, file).unwrap();
+    path
+}
+
+#[test]
+fn axes_that_never_step_do_not_count_against_expect() {
+    let vcd = seven_axis_vcd("idle.vcd");
+    let out = la(&[vcd.to_str().unwrap(), "--expect", "5:3:2"]);
+    let (stdout, stderr) = text(&out);
+    assert_eq!(out.status.code(), Some(0), "{stdout}{stderr}");
+    assert!(
+        stdout.contains("X:Y:Z = 50:30:20 = 5:3:2 exact") && stdout.contains("no steps on A, B, C, U"),
+        "{stdout}"
+    );
+    // A wrong ratio over the stepping axes still fails the check.
+    let out = la(&[vcd.to_str().unwrap(), "--expect", "5:3:1"]);
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out).0);
+    // All seven terms: the idle axes are compared too (as zeros).
+    let out = la(&[vcd.to_str().unwrap(), "--expect", "5:3:2:0:0:0:0"]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out).0);
+    // Two terms for three stepping axes: a mapping problem, with the fix in the message.
+    let out = la(&[vcd.to_str().unwrap(), "--expect", "5:3"]);
+    let (stdout, stderr) = text(&out);
+    assert_eq!(out.status.code(), Some(2), "{stdout}{stderr}");
+    assert!(stderr.contains("3 of the 7 mapped axes stepped (X, Y, Z)") && stderr.contains("--map X=X_STEP,Y=Y_STEP"), "{stderr}");
+    // --map picks the axes explicitly.
+    let out = la(&[vcd.to_str().unwrap(), "--map", "X=X_STEP,Y=Y_STEP", "--expect", "5:3"]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out).0);
+    let _ = std::fs::remove_file(vcd);
 }

@@ -57,7 +57,13 @@ pub struct AxisReport {
 #[derive(Clone, Debug, Serialize)]
 pub struct Expectation {
     pub expected: Vec<u64>,
+    /// The axes compared, in order: all mapped axes when the ratio has a term for each, else
+    /// those with steps.
+    pub axes: Vec<String>,
     pub pass: bool,
+    /// Set when the terms do not fit the axes that stepped: what to change (the `la` binary
+    /// exits 2 with it).
+    pub mapping_error: Option<String>,
 }
 
 /// The longest run of bins where the master's rate is within 1 % of its maximum.
@@ -86,13 +92,18 @@ impl Report {
 
     // "X:Y:Z = 5000:3000:2000 = 5:3:2 exact, cruise 50.0 kHz, ..."
     pub fn summary(&self) -> String {
-        let names: Vec<_> = self.axes.iter().map(|a| a.name.as_str()).collect();
-        let counts: Vec<_> = self.axes.iter().map(|a| a.steps).collect();
+        // Axes that never stepped are listed apart, so a 7-axis bench VCD of a 3-axis move
+        // reads "X:Y:Z = 5000:3000:2000 = 5:3:2".
+        let (moved, idle): (Vec<&AxisReport>, Vec<&AxisReport>) =
+            self.axes.iter().partition(|a| a.steps > 0);
+        let shown = if moved.is_empty() { self.axes.iter().collect() } else { moved };
+        let names: Vec<_> = shown.iter().map(|a| a.name.as_str()).collect();
+        let counts: Vec<_> = shown.iter().map(|a| a.steps).collect();
         let mut line = format!(
             "{} = {} = {}",
             names.join(":"),
             join(&counts),
-            join(&self.ratio)
+            join(&super::reduce(&counts))
         );
         if let Some(expect) = &self.expect {
             if expect.pass {
@@ -114,6 +125,10 @@ impl Report {
         line += &format!(", dir setup {}", ns(min(|a| a.min_dir_setup_ns)));
         if self.glitches > 0 {
             line += &format!(", {} glitches dropped", self.glitches);
+        }
+        if !idle.is_empty() && idle.len() < self.axes.len() {
+            let names: Vec<_> = idle.iter().map(|a| a.name.as_str()).collect();
+            line += &format!(", no steps on {}", names.join(", "));
         }
         line
     }

@@ -7,8 +7,8 @@ use std::io::Write;
 use std::time::Instant;
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use ddastep_bench::la::capture::Capture;
-use ddastep_bench::la::{Analyzer, AxisChannels, Config};
+use ddastep_la::capture::Capture;
+use ddastep_la::{Analyzer, AxisChannels, Config};
 
 const RATE: u64 = 24_000_000;
 const SECONDS: u64 = 10;

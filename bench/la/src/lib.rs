@@ -11,7 +11,7 @@
 //! # Using it without files (virtual bench)
 //!
 //! ```
-//! use ddastep_bench::la::{Analyzer, AxisChannels, Config};
+//! use ddastep_la::{Analyzer, AxisChannels, Config};
 //!
 //! // Channels are plain indices: here 0 = X step, 1 = X dir, 2 = Y step.
 //! let mut config = Config::new(vec![AxisChannels::new("X", 0, Some(1)), AxisChannels::new("Y", 2, None)]);

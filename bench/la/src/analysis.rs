@@ -1,5 +1,5 @@
 //! The streaming analyzer: level reports in, [`Report`] out. Readers and the virtual bench both
-//! feed it; see the module docs of [`crate::la`] for the rules.
+//! feed it; see the module docs of [`crate`] for the rules.
 //!
 //! Pipeline per report: glitch filter (confirms edges in time order) → batch of one timestamp →
 //! dir edges, then step edges, then one deviation sample per axis that stepped. Applying dir
@@ -90,11 +90,14 @@ impl Analyzer {
             bail!("no axes to check");
         }
         if let Some(expect) = &config.expect {
-            if expect.len() != config.axes.len() {
+            if expect.len() > config.axes.len() {
+                let names: Vec<_> = config.axes.iter().map(|a| a.name.as_str()).collect();
                 bail!(
-                    "--expect has {} terms but {} axes are mapped",
+                    "--expect has {} terms but only {} axes are mapped ({}); name the step \
+                     channel of each axis in ratio order with --map, e.g. --map X=D0,Y=D1,Z=D2",
                     expect.len(),
-                    config.axes.len()
+                    names.len(),
+                    names.join(", ")
                 );
             }
         }
@@ -263,10 +266,11 @@ impl Analyzer {
             })
         });
         let ratio = reduce(&self.counts);
-        let expect = self.config.expect.as_ref().map(|expected| Expectation {
-            pass: self.counts.iter().any(|&c| c > 0) && reduce(expected) == ratio,
-            expected: expected.clone(),
-        });
+        let expect = self
+            .config
+            .expect
+            .as_ref()
+            .map(|expected| self.expectation(expected));
         Report {
             duration_ns: ps_to_ns(duration_ps),
             bin_ms: ms_per_bin,
@@ -277,6 +281,47 @@ impl Analyzer {
             cruise,
             series: self.series(master, bins, rates),
             axes,
+        }
+    }
+
+    // the --expect check: every mapped axis when the terms cover them all, else the axes
+    // that stepped (axes with no steps do not count against a shorter ratio)
+    fn expectation(&self, expected: &[u64]) -> Expectation {
+        let names = |idx: &[usize]| -> Vec<String> {
+            idx.iter().map(|&i| self.config.axes[i].name.clone()).collect()
+        };
+        let compared: Vec<usize> = if expected.len() == self.counts.len() {
+            (0..self.counts.len()).collect()
+        } else {
+            (0..self.counts.len())
+                .filter(|&i| self.counts[i] > 0)
+                .collect()
+        };
+        let mapping = (compared.len() != expected.len()).then(|| {
+            let stepped = names(&compared);
+            format!(
+                "--expect {} has {} terms but {} of the {} mapped axes stepped ({}); give one \
+                 term per stepping axis, or pick the axes in ratio order with --map, e.g. --map {}",
+                expected.iter().map(u64::to_string).collect::<Vec<_>>().join(":"),
+                expected.len(),
+                stepped.len(),
+                self.counts.len(),
+                if stepped.is_empty() { "none".to_string() } else { stepped.join(", ") },
+                self.config.axes[..expected.len()]
+                    .iter()
+                    .map(|a| format!("{0}={0}_STEP", a.name))
+                    .collect::<Vec<_>>()
+                    .join(",")
+            )
+        });
+        let counts: Vec<u64> = compared.iter().map(|&i| self.counts[i]).collect();
+        Expectation {
+            pass: mapping.is_none()
+                && counts.iter().any(|&c| c > 0)
+                && reduce(expected) == reduce(&counts),
+            expected: expected.to_vec(),
+            axes: names(&compared),
+            mapping_error: mapping,
         }
     }
 

@@ -1,8 +1,8 @@
 //! VCD and CSV readers on small hand-written inputs: the corners of both formats, and the
 //! common change stream they produce (time in ps, channel index, level).
 
-use ddastep_bench::la::capture::{from_text, Recorded};
-use ddastep_bench::la::{Analyzer, AxisChannels, Config, Format};
+use ddastep_la::capture::{from_text, Recorded};
+use ddastep_la::{Analyzer, AxisChannels, Config, Format};
 
 // read a capture from text into a recorder
 fn read(text: &str, format: Option<Format>, rate: Option<f64>) -> (Vec<String>, Recorded) {

@@ -1,6 +1,6 @@
 //! PNG plot of a [`Report`]: step rate of every axis over time, and each slave's deviation from
 //! the ideal line of the master. Draws with plotters' bitmap backend and an embedded font
-//! (DejaVu Sans, ASCII subset, under `bench/fixtures/la/font/`), so it needs no system fonts.
+//! (DejaVu Sans, ASCII subset, under `bench/la/fixtures/font/`), so it needs no system fonts.
 
 use std::path::Path;
 use std::sync::Once;
@@ -11,7 +11,7 @@ use plotters::style::{register_font, FontStyle};
 
 use super::Report;
 
-static FONT: &[u8] = include_bytes!("../../fixtures/la/font/DejaVuSans-ascii.ttf");
+static FONT: &[u8] = include_bytes!("../fixtures/font/DejaVuSans-ascii.ttf");
 const PALETTE: [RGBColor; 8] = [
     RGBColor(31, 119, 180),
     RGBColor(255, 127, 14),
