@@ -578,8 +578,8 @@ fn set_coord_data<const N: usize>(
         return Err(Error::UnsupportedCoordSys);
     }
     let l20 = match b.l.map(libm::trunc) {
-        Some(v) if v == 20.0 => true,
-        Some(v) if v == 2.0 => false,
+        Some(20.0) => true,
+        Some(2.0) => false,
         _ => return Err(Error::UnsupportedCommand),
     };
     let slot = if p > 0.0 { p as usize - 1 } else { active as usize };

@@ -92,7 +92,8 @@ impl<const N: usize> Controller<'_, N> {
                     self.settings_changed(Change::Profile, out);
                 }
                 self.save_later(out);
-                self.reset_after = true;
+                // A pin map change restarts the MCU after the save (its own banner).
+                self.reset_after = !self.restart;
             }
             [b'J', b'=', text @ ..] => self.jog_line(text, out)?,
             [b'0'..=b'9', ..] => {
