@@ -116,6 +116,7 @@ fn axis_count_setting_governs_reports_listing_and_words() {
     let list = b.line("$$");
     assert!(list.contains("$102=250.000\r\n") && !list.contains("$103"));
     assert_eq!(b.line("G0 A1"), "error:20\r\n");
+    assert_eq!(b.line("$J=G91 A0 F100"), "error:20\r\n");
     assert_eq!(b.line("$42=8"), "error:3\r\n");
     assert_eq!(b.line("$42=2"), "error:3\r\n");
     assert_eq!(b.line("$103=80"), "error:3\r\n");
