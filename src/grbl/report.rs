@@ -259,11 +259,7 @@ mod tests {
         let worst = crate::steptime::StepTimeReport { entries: 1, min: u32::MAX, mean: u32::MAX as f32, max: u32::MAX, load: 1.0, peak_load: 1.0 };
         let r = Ramped { table_limited: true, ..r };
         let all = text(|o| {
-<<<<<<< HEAD
-            build_info(o, b"", 15, &r);
-=======
             build_info(o, &[b'x'; crate::grbl::store::TEXT_LEN], 15, &r);
->>>>>>> main
             step_time(o, &worst);
             o.put(b"ok\r\n");
         });
