@@ -62,7 +62,7 @@ fn laser_m4_pwm_duty_follows_the_step_rate_through_a_ramp() {
     let mut b = boot();
     // Laser mode; a slow ramp (10^4 steps/s², 1 kHz to 5 kHz in 0.4 s) so the ramp is long
     // against the 1 ms poll and the 1 ms PWM period.
-    for line in ["$32=1", "$120=100", "$121=100", "$122=100", "G1 F3000 M4 S1000", "G1 X30"] {
+    for line in ["$32=1", "$120=100", "$121=100", "$122=100", "M8", "G1 F3000 M4 S1000", "G1 X30"] {
         ok(&mut b, line);
     }
     wait_idle(&mut b, 5.0);
@@ -96,5 +96,10 @@ fn laser_m4_pwm_duty_follows_the_step_rate_through_a_ramp() {
     assert_eq!(b.pwm_changes().last().unwrap().duty, 0.0, "laser off once stopped");
     let sp = b.report().spindle;
     assert!((sp.max_duty - 1.0).abs() < 1e-9, "full power at cruise: {sp:?}");
-    assert_eq!(sp.pin_rises[..2], [1, 1], "spindle enable and M4 direction");
+    assert_eq!(sp.pin_rises, [1, 1, 1, 0], "spindle enable, M4 direction, flood; no mist");
+    ok(&mut b, "M5 M9");
+    b.run_seconds(0.01).unwrap();
+    for (pin, name) in ddastep_bench::emu::TOOL_PINS {
+        assert!(!b.output(ddastep_bench::emu::Port::A, pin), "{name} off after M5 M9");
+    }
 }
