@@ -9,6 +9,7 @@
 //! - [`grbl`]: the Grbl 1.1 front end — protocol, G-code, settings, reports, controller.
 //! - [`board`]: the Blue Pill pin map as numbers (the firmware shell in `src/firmware/`
 //!   turns it into registers).
+//! - [`steptime`]: the step interrupt's self-measurement (DWT cycles), reported by `$I`.
 //!
 //! The modules are also re-exported at the crate root (`ddastep::engine`, …).
 #![no_std]
@@ -18,8 +19,9 @@ pub mod board;
 pub mod grbl;
 pub mod motion;
 pub mod planning;
+pub mod steptime;
 
-pub use grbl::{controller, gcode, protocol, report, settings, spindle};
+pub use grbl::{controller, coords, gcode, jog, protocol, report, settings, spindle, store};
 pub use motion::{engine, interp, queue, ramp, sim, timing};
 pub use planning::{arc, inverse_time, planner};
 

@@ -130,7 +130,7 @@ proptest! {
         let seg = arc.segments(tol);
         let ends = check_chords(&arc, start, seg, tol);
         // Step counts: the chords as planned moves add up to the whole arc's steps.
-        let lim = Limits::<3>::new(&Settings::DEFAULT, 60_000);
+        let lim = Limits::<3>::new(&Settings::BENCH, 60_000);
         let mut p = Planner::<3>::new();
         p.set_position(&start.map(Some), &lim).unwrap();
         let mut sum = [0i64; 3];

@@ -158,7 +158,6 @@ fn pin_invert_setting_answers_ok_and_reaches_flash_before_the_restart() {
     // Let the banner finish, so the TX interrupt is off when the reply is queued.
     b.run_seconds(0.1).unwrap();
     ok(&mut b, "$3=5");
-    let image = b.read_mem(0x0800_0000 + 63 * 1024, ddastep::settings::SETTINGS_LEN);
-    let saved = ddastep::settings::Settings::decode(&image).unwrap_or_else(|| panic!("settings image in flash: {image:02x?}"));
-    assert_eq!(saved.dir_invert, 5);
+    let saved = stored(&mut b).expect("an image in flash");
+    assert_eq!(saved.settings.dir_invert, 5);
 }

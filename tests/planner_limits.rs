@@ -7,7 +7,7 @@ use ddastep::settings::Settings;
 
 #[test]
 fn cruise_is_clamped_to_the_ceiling_for_the_moves_axis_count() {
-    let mut s = Settings::DEFAULT;
+    let mut s = Settings::BENCH;
     s.set(0, 0.5, 7).unwrap();
     for i in 0..7 {
         s.set(110 + i, 600_000.0, 7).unwrap();

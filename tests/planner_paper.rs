@@ -15,7 +15,7 @@ fn feed_for(x_hz: f64) -> f64 {
 
 /// A bench with default settings, banner read.
 fn bench() -> Bench<3> {
-    let mut b = Bench::<3>::new(Settings::DEFAULT);
+    let mut b = Bench::<3>::new(Settings::BENCH);
     b.take();
     b
 }

@@ -37,7 +37,7 @@ proptest! {
         blocks in prop::collection::vec(block(), 1..12),
         nudges in 0usize..40,
     ) {
-        let mut b = Bench::<3>::new(Settings::DEFAULT);
+        let mut b = Bench::<3>::new(Settings::BENCH);
         for (i, s) in spm.iter().enumerate() {
             b.line(&format!("$10{i}={s}"));
         }

@@ -144,7 +144,7 @@ proptest! {
         x in 1u32..3000, y in 0u32..3000, z in 0u32..100,
         seconds in 0.05f64..3.0,
     ) {
-        let s = Settings::DEFAULT;
+        let s = Settings::BENCH;
         let line = format!("G1 X{}.{:02} Y-{}.{:02} Z{}.{:02} F{:.9}", x / 100, x % 100, y / 100, y % 100, z / 100, z % 100, 1.0 / (seconds / 60.0));
         let (first, last, b) = g93_duration(s, &line);
         let master = x.max(y).max(z) as u64;
@@ -167,9 +167,9 @@ proptest! {
 #[test]
 fn g93_time_too_short_is_clamped_to_the_max_rate() {
     // 100 mm in 0.1 s would need 60 000 mm/min on X: the move runs at X's 36 000 mm/min.
-    let (first, last, _) = g93_duration(Settings::DEFAULT, "G1 X100 F600");
+    let (first, last, _) = g93_duration(Settings::BENCH, "G1 X100 F600");
     let measured = (last - first) as f64 / TIMER_HZ as f64;
-    let at_max = inverse_time::duration_s(10_000, 60_000.0, &Settings::DEFAULT.ramp_config(3, &Settings::DEFAULT.timing()));
+    let at_max = inverse_time::duration_s(10_000, 60_000.0, &Settings::BENCH.ramp_config(3, &Settings::BENCH.timing()));
     assert!((measured - at_max).abs() < 2e-3, "measured {measured} s, at the max rate {at_max} s");
     assert!(measured > 0.1 + 0.05);
 }
@@ -177,7 +177,7 @@ fn g93_time_too_short_is_clamped_to_the_max_rate() {
 #[test]
 fn g93_arc_lasts_one_over_f_minutes() {
     // A full circle of r = 10 in 2 s at $12=0.1 (23 chords): the chords share the time.
-    let s = Settings { arc_tolerance: 0.1, ..Settings::DEFAULT };
+    let s = Settings { arc_tolerance: 0.1, ..Settings::BENCH };
     let (first, last, b) = g93_duration(s, "G2 X0 Y0 I10 F30");
     let measured = (last - first) as f64 / TIMER_HZ as f64;
     assert_eq!(b.shared.positions(), [0, 0, 0]);

@@ -62,7 +62,7 @@ fn modal_state_follows_grbl() {
     assert_eq!(run(&m, "G4P1.5").unwrap().1.dwell_ms, Some(1500));
     assert_eq!(run(&m, "G0X1P1").err(), Some(Error::UnusedWords));
     assert_eq!(run(&m, "G92").err(), Some(Error::NoAxisWords));
-    assert_eq!(run(&m, "G92Y7").unwrap().1.set_position, Some([None, Some(7.0), None]));
+    assert_eq!(run(&m, "G92Y7").unwrap().1.g92, Some([0.0, -5.0, 0.0])); // Y reads 7 at 2
     assert_eq!(run(&m, "X1000001").err(), Some(Error::InvalidTarget));
     assert_eq!(run(&m, "N10000001").err(), Some(Error::InvalidLineNumber));
     let (m3, _) = run(&m2, "M30").unwrap();

@@ -53,12 +53,32 @@ fn errors_use_grbl_numbers_and_change_nothing() {
         ("$100=abc", 2),
         ("$0=0.1", 6),
         ("$100=-1", 4),
-        ("$J=G91 X1 F100", 20),
-        ("$C", 3),
+        ("$J=G91 X1", 22),
+        ("$J=G0 X1 F100", 16),
+        ("$J=G91 X1 F100 S5", 36),
+        ("$J=G92 X1 F100", 16),
+        ("$J G91 X1 F100", 3),
+        ("G10 L2 P7 X0", 29),
+        ("G10 L3 P1 X0", 20),
+        ("G10 L2 P1", 26),
+        ("G10 X0", 28),
+        ("G10 L20 P1 X0 G0", 24),
+        ("G80 G53 X0", 30),
+        ("G43.1 X1", 37),
+        ("G43.1 Z1 Y1", 37),
+        ("G43 Z1", 20),
+        ("G92.2 X0", 20),
+        ("G59.1", 23),
+        ("G28.2", 20),
+        ("G54 G55", 21),
+        ("G92 G28 X0", 24),
+        ("G0 X1 L2", 36),
+        ("$N2=G0", 3),
+        ("$I=", 0),
         ("T300", 38),
         ("N99999999", 27),
     ];
-    for (line, code) in cases {
+    for (line, code) in cases.into_iter().filter(|c| c.1 != 0) {
         assert_eq!(b.line(line), format!("error:{code}\r\n"), "{line}");
     }
     b.run_ms(5);
@@ -95,11 +115,14 @@ fn garbage_bytes_and_overlong_lines_are_errors_not_panics() {
 #[test]
 fn status_report_shows_state_position_and_feed() {
     let mut b = Bench::<3>::with_defaults();
-    assert_eq!(b.status(), "<Idle|MPos:0.000,0.000,0.000|FS:0,0>\r\n");
+    // The first report after a reset carries WCO (Grbl's refresh counters start at zero).
+    assert_eq!(b.status(), "<Idle|MPos:0.000,0.000,0.000|FS:0,0|WCO:0.000,0.000,0.000>\r\n");
     assert_eq!(b.line("G1 X100 Y-50.5 F6000"), "ok\r\n");
     b.run_ms(300);
     let s = b.status();
     assert!(s.starts_with("<Run|MPos:"), "{s}");
+    // Ov: comes in the report after the one with WCO:, then every 20th while busy.
+    assert!(s.ends_with("|Ov:100,100,100>\r\n"), "{s}");
     // 6000 mm/min along the path: cruise reached after 1 ms of ramp at most.
     let fs: f64 = s.split("FS:").nth(1).unwrap().split(',').next().unwrap().parse().unwrap();
     assert!((fs - 6000.0).abs() < 60.0, "{s}");
@@ -115,7 +138,8 @@ fn settings_list_change_and_refuse_while_moving() {
     let list = b.line("$$");
     assert!(list.starts_with("$0=3.000\r\n$1=25\r\n$2=0\r\n"), "{list}");
     assert!(list.contains("$29=5.000\r\n$30=1000\r\n"));
-    assert!(list.contains("$40=1000\r\n$41=0\r\n$100=100.000\r\n"));
+    assert!(list.contains("$40=1000\r\n$41=0\r\n$42=3\r\n$100=100.000\r\n"));
+    assert!(list.contains("$6=0\r\n$10=1\r\n$11=0.010\r\n"));
     assert!(list.ends_with("$132=1000.000\r\nok\r\n"), "{list}");
     assert!(!list.contains("$103"));
     assert_eq!(replies(&list), (1, 0));
@@ -155,7 +179,7 @@ fn seven_axes_list_and_move() {
     b.run_to_idle(5000);
     assert_eq!(b.shared.positions(), [100, -200, 300, 400, -500, 600, 7]);
     let s = b.status();
-    assert_eq!(s, "<Idle|MPos:1.000,-2.000,3.000,4.000,-5.000,6.000,0.070|FS:0,0>\r\n");
+    assert_eq!(s, "<Idle|MPos:1.000,-2.000,3.000,4.000,-5.000,6.000,0.070|FS:0,0|WCO:0.000,0.000,0.000,0.000,0.000,0.000,0.000>\r\n");
     assert_eq!(b.line("G0 V1"), "error:20\r\n");
 }
 
@@ -173,14 +197,15 @@ fn build_info_names_us_and_the_rate_limit() {
     b.run_ms(2);
     assert!(b.line("$I").contains("[MSG:ramp 1000-11239 Hz 10000 Hz/s trapezoid (table-limited)]"));
     assert!(b.line("$#").starts_with("[G54:0.000,0.000,0.000]\r\n[G55:"));
-    assert_eq!(b.line("$"), "[HLP:$$ $# $G $I $N $x=val $X $H $RST=$ ~ ! ? ctrl-x]\r\nok\r\n");
+    assert_eq!(b.line("$"), "[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $SLP $C $X $H ~ ! ? ctrl-x]\r\nok\r\n");
 }
 
 #[test]
 fn restore_defaults() {
     let mut b = Bench::<3>::with_defaults();
     assert_eq!(b.line("$110=500").lines().last(), Some("ok"));
-    assert_eq!(b.line("$RST=$"), "[MSG:Restoring defaults]\r\nok\r\n");
+    // Grbl resets after a restore: the banner follows the `ok`.
+    assert_eq!(b.line("$RST=$"), "[MSG:Restoring defaults]\r\nok\r\n\r\nGrbl 1.1h ['$' for help]\r\n");
     assert_eq!(*b.ctl.settings(), Settings::DEFAULT);
 }
 
@@ -223,16 +248,25 @@ fn dwell_waits_for_the_queue_then_the_time() {
 }
 
 #[test]
-fn g92_sets_the_position_after_the_queue_runs_out() {
+fn g92_offsets_work_coordinates_and_leaves_the_machine_position() {
     let mut b = Bench::<3>::with_defaults();
     b.line("G0 X5");
+    // G92 takes effect at once (Grbl: parser state), while X is still on its way.
     assert_eq!(b.line("G92 X0 Y10"), "ok\r\n");
-    assert_eq!(b.shared.positions(), [0, 1000, 0], "set once X reached 5");
-    assert_eq!(b.status(), "<Idle|MPos:0.000,10.000,0.000|FS:0,0>\r\n");
+    assert!(b.ctl.pending_moves() > 0);
+    b.run_to_idle(1000);
+    assert_eq!(b.shared.positions(), [500, 0, 0]);
+    assert!(b.line("$#").contains("[G92:5.000,-10.000,0.000]\r\n"));
+    b.line("$10=0");
+    assert!(b.status().starts_with("<Idle|WPos:0.000,10.000,0.000|"));
+    b.line("G0 X1 Y0");
+    b.run_to_idle(1000);
+    assert_eq!(b.shared.positions(), [600, -1000, 0]);
+    b.line("G92.1");
     b.line("G91 G0 X-1 Y-1");
     b.run_to_idle(1000);
-    assert_eq!(b.shared.positions(), [-100, 900, 0]);
-    assert_eq!(b.ctl.planned_steps(), [-100, 900, 0]);
+    assert_eq!(b.shared.positions(), [500, -1100, 0]);
+    assert_eq!(b.ctl.planned_steps(), [500, -1100, 0]);
 }
 
 #[test]

@@ -57,7 +57,7 @@ fn fast_settings() -> Settings {
         steps_per_mm: [1.0; 7],
         max_rate: [3_600_000.0; 7],
         accel: [1_000_000.0; 7],
-        ..Settings::DEFAULT
+        ..Settings::BENCH
     }
 }
 
@@ -137,6 +137,7 @@ proptest! {
         spindle in (0.0f32..1e6, 0.0f32..1e6, any::<bool>(), 1u32..=100_000),
         axes in prop::array::uniform4(prop::array::uniform7(0.001f32..1e5)),
         flip in 0usize..SETTINGS_LEN, bit in 0u8..8,
+        mask in 0u8..4, count in 3u8..=7,
     ) {
         let s = Settings {
             pulse_us: pulse,
@@ -158,6 +159,8 @@ proptest! {
             max_rate: axes[1],
             accel: axes[2],
             max_travel: axes[3].map(|v| v * 10.0),
+            status_mask: mask,
+            axes: count,
         };
         prop_assert!(s.is_valid());
         let mut image = s.to_bytes();

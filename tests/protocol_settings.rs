@@ -24,7 +24,7 @@ fn defaults_survive_flash_and_bad_images_fall_back() {
 
 #[test]
 fn set_follows_grbl_rules() {
-    let mut s = Settings::DEFAULT;
+    let mut s = Settings::BENCH;
     assert_eq!(s.set(0, 0.15, 3), Err(Error::StepPulseMin));
     assert_eq!(s.set(100, -1.0, 3), Err(Error::NegativeValue));
     assert_eq!(s.set(103, 10.0, 3), Err(Error::InvalidStatement));
@@ -43,16 +43,16 @@ fn set_follows_grbl_rules() {
 fn ids_cover_every_gettable_setting_once() {
     let s = Settings::DEFAULT;
     let ids: heapless::Vec<u16, 64> = Settings::ids(3).collect();
-    assert_eq!(ids.len(), 7 + 15 + 4 + 12); // ours: $29, $33, $40, $41
+    assert_eq!(ids.len(), 7 + 14 + 6 + 12); // ours: $29, $33, $40, $41, $42 and $10's mask
     assert!(ids.windows(2).all(|w| w[0] < w[1]), "{ids:?}");
     assert!(ids.iter().all(|&id| s.get(id, 3).is_some()));
     assert_eq!(s.get(133, 3), None);
-    assert_eq!(Settings::ids(7).count(), 7 + 15 + 4 + 28);
+    assert_eq!(Settings::ids(7).count(), 7 + 14 + 6 + 28);
 }
 
 #[test]
 fn profile_uses_the_slowest_accel_and_the_fastest_axis() {
-    let mut s = Settings::DEFAULT;
+    let mut s = Settings::BENCH;
     s.set(121, 500.0, 3).unwrap(); // Y: 50 000 steps/s²
     s.set(112, 60_000.0, 3).unwrap(); // Z: 100 kHz
     s.set(120, 1.0, 3).unwrap();
@@ -69,15 +69,15 @@ fn profile_uses_the_slowest_accel_and_the_fastest_axis() {
     assert_eq!(r.cfg.vmax, 1000 + 50_000 * 1024 / 1000 - 1);
     assert_eq!(g.ramp.config(), r.cfg);
     assert_eq!(r.max_rate_hz, 150_000);
-    // Defaults fit: 59 ms to 60 kHz.
-    let r = Settings::DEFAULT.build_profile(3, &mut g);
+    // The bench settings fit: 59 ms to 60 kHz.
+    let r = Settings::BENCH.build_profile(3, &mut g);
     assert!(!r.table_limited);
     assert_eq!((r.cfg.vmax, g.ramp.len()), (60_000, 59));
 }
 
 #[test]
 fn short_pulses_raise_the_rate_limit() {
-    let mut s = Settings::DEFAULT;
+    let mut s = Settings::BENCH;
     // Period floor: 2 × pulse + 48 ticks of store latency, and the step handler's cost (220
     // ticks + 15 per slave axis) with a pulse's low time after its end.
     s.set(0, 2.0, 3).unwrap();

@@ -105,7 +105,7 @@ fn trace(b: &mut Bench<3>, max_ms: u32) -> Vec<(u32, u16)> {
 
 #[test]
 fn laser_m4_power_follows_the_rate_through_the_ramps() {
-    let mut b = Bench::<3>::new(Settings { laser_mode: true, ..Settings::DEFAULT });
+    let mut b = Bench::<3>::new(Settings { laser_mode: true, ..Settings::BENCH });
     b.line("G1 F3000 M4 S1000");
     b.run_ms(2);
     assert_eq!(out(&b).ccr, 0, "M4: off while not moving");
@@ -130,7 +130,7 @@ fn laser_m4_power_follows_the_rate_through_the_ramps() {
 
 #[test]
 fn laser_s_changes_do_not_stop_motion_and_g0_is_dark() {
-    let mut b = Bench::<3>::new(Settings { laser_mode: true, ..Settings::DEFAULT });
+    let mut b = Bench::<3>::new(Settings { laser_mode: true, ..Settings::BENCH });
     b.line("G1 F600 M3 S100");
     b.run_ms(1);
     assert_eq!(out(&b).ccr, 3_600, "M3 in G1 mode: on while stopped (focusing)");

@@ -47,7 +47,7 @@ fn stream(b: &mut Bench<3>, lines: &[String]) -> Vec<String> {
 
 #[test]
 fn character_counting_stream_loses_nothing() {
-    let mut b = Bench::<3>::new(Settings::DEFAULT);
+    let mut b = Bench::<3>::new(Settings::BENCH);
     b.take();
     let mut lines = vec!["G91 G1 F20000".to_string()];
     let mut want = [0i64; 3];
@@ -70,7 +70,7 @@ fn character_counting_stream_loses_nothing() {
 
 #[test]
 fn errors_in_a_stream_answer_their_own_line() {
-    let mut b = Bench::<3>::new(Settings::DEFAULT);
+    let mut b = Bench::<3>::new(Settings::BENCH);
     b.take();
     let lines: Vec<String> =
         ["G91 G0 X1", "G1 X1", "G0 X1", "X--1", "Y2", "M6", "G1 Z1 F100"].iter().map(|s| s.to_string()).collect();
@@ -82,12 +82,12 @@ fn errors_in_a_stream_answer_their_own_line() {
 
 #[test]
 fn listings_wait_for_tx_room_instead_of_being_cut() {
-    let mut big = Bench::<3>::new(Settings::DEFAULT);
+    let mut big = Bench::<3>::new(Settings::BENCH);
     big.take();
     let full = big.line("$$");
-    let mut b = Bench::<3>::new(Settings::DEFAULT);
+    let mut b = Bench::<3>::new(Settings::BENCH);
     b.take();
-    b.tx.cap = 200;
+    b.tx.cap = ddastep::protocol::REPLY_ROOM + 20;
     // The UART sends 20 bytes per millisecond here.
     for &c in b"$$\n" {
         assert!(b.ctl.byte(c, &mut b.tx));
@@ -102,7 +102,7 @@ fn listings_wait_for_tx_room_instead_of_being_cut() {
         }
     }
     assert_eq!(String::from_utf8(out).unwrap(), full);
-    assert!(full.len() > 300, "{}", full.len()); // more than the 200-byte TX ring
+    assert!(full.len() > b.tx.cap, "{}", full.len()); // more than the TX ring holds
     // Line bytes wait while the TX ring is nearly full, so a reply is never dropped.
     b.tx.buf = vec![b' '; 100];
     assert!(!b.ctl.byte(b'\n', &mut b.tx));

@@ -161,7 +161,7 @@ fn net_steps_follow_the_grbl_dir_convention() {
     assert!(b.run_until_quiet(HZ / 20, 2 * HZ).unwrap());
     let r = b.report();
     let net: Vec<i64> = r.axes.0.iter().map(|(_, a)| a.net_steps).collect();
-    assert_eq!(net, [100, -50, 0, 0, 0, 0, 0], "dir low = positive");
+    assert_eq!(net, [250, -125, 0, 0, 0, 0, 0], "dir low = positive (default 250 steps/mm)");
     assert!(r.cpu_load_peak < 1.0 && r.cpu_load_peak_with_boot >= r.cpu_load_peak, "{} / {}", r.cpu_load_peak, r.cpu_load_peak_with_boot);
     assert!(r.boot_cycles.is_some());
 }

@@ -4,8 +4,9 @@
 use cortex_m::peripheral::syst::SystClkSource;
 use ddastep::board;
 use ddastep::engine::IDLE_TICKS;
-use ddastep::settings::{Settings, SETTINGS_LEN};
+use ddastep::settings::Settings;
 use ddastep::spindle::{PwmTiming, SpindleOut};
+use ddastep::store::{Stored, IMAGE_LEN, PAGE_LEN};
 use stm32f1xx_hal::flash;
 use stm32f1xx_hal::pac;
 use stm32f1xx_hal::prelude::*;
@@ -32,6 +33,19 @@ pub fn gpiob() -> &'static pac::gpiob::RegisterBlock {
     unsafe { &*pac::GPIOB::ptr() }
 }
 
+/// Starts the DWT cycle counter (DEMCR.TRCENA, DWT_CTRL.CYCCNTENA) for the step path's
+/// self-measurement.
+pub fn start_cycle_counter(dcb: &mut cortex_m::peripheral::DCB, dwt: &mut cortex_m::peripheral::DWT) {
+    dcb.enable_trace();
+    dwt.enable_cycle_counter();
+}
+
+/// DWT_CYCCNT: core cycles, wrapping (one load from the private peripheral bus).
+#[inline(always)]
+pub fn cycles() -> u32 {
+    cortex_m::peripheral::DWT::cycle_count()
+}
+
 /// What `init` hands to the tasks.
 pub struct Board {
     pub tx: Tx<pac::USART1>,
@@ -39,24 +53,31 @@ pub struct Board {
     pub flash: flash::Parts,
 }
 
-/// Settings live in the last 1 KiB flash page (memory.x keeps the program out of it).
-const SETTINGS_OFFSET: u32 = 63 * 1024;
+/// The persistent image lives in the last two 1 KiB flash pages, A/B (`ddastep::store`):
+/// memory.x keeps the program out of them.
+const STORE_OFFSETS: [u32; 2] = [62 * 1024, 63 * 1024];
 
-/// Settings from flash, or the defaults when the page is blank or corrupt.
-pub fn load_settings() -> Settings {
-    // SAFETY: the settings page is mapped flash, read-only here.
-    let bytes = unsafe {
-        core::slice::from_raw_parts((0x0800_0000 + SETTINGS_OFFSET) as *const u8, SETTINGS_LEN)
-    };
-    Settings::from_bytes(bytes)
+/// Page `i` of the store, as mapped flash.
+fn store_page(i: usize) -> &'static [u8] {
+    // SAFETY: the store pages are mapped flash, read-only here; written only by `save`, which
+    // runs in the same (idle) context.
+    unsafe { core::slice::from_raw_parts((0x0800_0000 + STORE_OFFSETS[i]) as *const u8, PAGE_LEN) }
 }
 
-/// Writes settings to their flash page (the CPU stalls while flash is busy: only when idle).
-pub fn save_settings(parts: &mut flash::Parts, bytes: &[u8; SETTINGS_LEN]) {
+/// The newest valid image of the two pages (defaults when both are blank or torn).
+pub fn load_store() -> Stored {
+    Stored::load([store_page(0), store_page(1)]).0
+}
+
+/// Writes the image into the page not holding the newest valid one, then reads it back (the
+/// CPU stalls while flash is busy: only when idle). A power cut leaves the other page intact.
+pub fn save_store(parts: &mut flash::Parts, image: &[u8; IMAGE_LEN]) {
+    let target = Stored::load([store_page(0), store_page(1)]).1;
+    let at = STORE_OFFSETS[target];
     let mut w = parts.writer(flash::SectorSize::Sz1K, flash::FlashSize::Sz64K);
-    let ok = w.erase(SETTINGS_OFFSET, 1024).is_ok() && w.write(SETTINGS_OFFSET, bytes).is_ok();
-    if !ok {
-        defmt::warn!("settings: flash write failed");
+    let ok = w.erase(at, 1024).is_ok() && w.write(at, image).is_ok();
+    if !ok || store_page(target).get(..IMAGE_LEN) != Some(&image[..]) {
+        defmt::warn!("store: flash write failed; the previous image stays in force");
     }
 }
 

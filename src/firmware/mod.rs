@@ -15,6 +15,7 @@ mod app {
     use ddastep::protocol::{realtime, Realtime};
     use ddastep::queue::{Feeder, Move, Shared};
     use ddastep::ramp::RampSlot;
+    use ddastep::steptime::STEP_TIME;
     use heapless::spsc::{Consumer, Producer, Queue};
     use stm32f1xx_hal::pac;
     use stm32f1xx_hal::serial::{Rx, Tx};
@@ -34,6 +35,8 @@ mod app {
     static STATUS_REQ: AtomicBool = AtomicBool::new(false);
     /// Ctrl-X arrived.
     static RESET_REQ: AtomicBool = AtomicBool::new(false);
+    /// 0x85 (jog cancel) arrived.
+    static JOG_CANCEL_REQ: AtomicBool = AtomicBool::new(false);
     /// Work for `idle`: set by SysTick (every ms) and USART1, not by the step interrupt, so
     /// `idle` sleeps through step ticks instead of polling after each one.
     static POLL: AtomicBool = AtomicBool::new(true);
@@ -61,14 +64,17 @@ mod app {
         txq: Queue<u8, 512> = Queue::new(),
     ])]
     fn init(cx: init::Context) -> (SharedRes, Local) {
-        let board = hw::Board::setup(cx.device, cx.core.SYST);
-        let settings = hw::load_settings();
+        let mut core = cx.core;
+        hw::start_cycle_counter(&mut core.DCB, &mut core.DWT);
+        let board = hw::Board::setup(cx.device, core.SYST);
+        let stored = hw::load_store();
+        let settings = stored.settings;
         let (mv_in, mv_out) = cx.local.moves.split();
         let (rx_in, rx_out) = cx.local.rxq.split();
         let (tx_in, tx_out) = cx.local.txq.split();
         let pins = board::pin_map::<AXES>(settings.step_invert, settings.dir_invert);
         let engine = Engine::new(&SHARED, mv_out, &PROFILE, pins);
-        let controller = Controller::new(Feeder::new(mv_in, &SHARED), &SHARED, &PROFILE, settings);
+        let controller = Controller::new(Feeder::new(mv_in, &SHARED), &SHARED, &PROFILE, stored);
         defmt::info!("ddastep up: 72 MHz, {} axes", AXES);
         hw::start_step_timer();
         (
@@ -86,9 +92,11 @@ mod app {
         )
     }
 
-    /// The step interrupt: store the precomputed word first, then compute the next one.
+    /// The step interrupt: store the precomputed word first, then compute the next one. The
+    /// body times itself with the DWT cycle counter (`$I` reports it, see `ddastep::steptime`).
     #[task(binds = TIM2, priority = 3, local = [engine])]
     fn step(cx: step::Context) {
+        let t0 = hw::cycles();
         let engine = cx.local.engine;
         let sr = hw::tim2().sr().read().bits();
         if sr & hw::SR_UIF != 0 {
@@ -102,6 +110,7 @@ mod app {
             hw::gpiob().bsrr().write(|w| unsafe { w.bits(engine.step_off()) });
             hw::tim2().sr().write(|w| unsafe { w.bits(!hw::SR_CC1IF) });
         }
+        STEP_TIME.record(hw::cycles().wrapping_sub(t0));
     }
 
     /// USART1: realtime bytes act at once, line bytes go to the RX ring, the TX ring drains.
@@ -114,6 +123,7 @@ mod app {
                 Some(Realtime::Resume) => SHARED.set_hold(false),
                 Some(Realtime::Status) => STATUS_REQ.store(true, Relaxed),
                 Some(Realtime::Reset) => RESET_REQ.store(true, Relaxed),
+                Some(Realtime::JogCancel) => JOG_CANCEL_REQ.store(true, Relaxed),
                 Some(Realtime::Extended(_)) => {}
                 // A full ring drops the byte: a character-counting sender never fills it.
                 None => {
@@ -142,6 +152,7 @@ mod app {
     fn systick(_: systick::Context) {
         MILLIS.store(MILLIS.load(Relaxed).wrapping_add(1), Relaxed);
         POLL.store(true, Relaxed);
+        STEP_TIME.tick_ms();
     }
 
     /// The protocol loop: bytes into the controller, its actions onto the pins and flash.
@@ -165,12 +176,16 @@ mod app {
             if STATUS_REQ.swap(false, Relaxed) {
                 ctl.status_request();
             }
+            if JOG_CANCEL_REQ.swap(false, Relaxed) {
+                ctl.jog_cancel();
+            }
             while let Some(&b) = rx_out.peek() {
                 if !ctl.byte(b, tx_in) {
                     break;
                 }
                 rx_out.dequeue();
             }
+            ctl.set_rx_free(rx_out.capacity() - rx_out.len());
             let act = ctl.poll(now, tx_in);
             hw::set_enable(act.enable_pin_high);
             if let Some(ticks) = act.pulse_ticks {
@@ -181,7 +196,7 @@ mod app {
             }
             hw::set_spindle(act.spindle);
             if act.save || act.restart {
-                hw::save_settings(cx.local.flash, &ctl.settings().to_bytes());
+                hw::save_store(cx.local.flash, &ctl.image());
             }
             hw::heartbeat(now);
             if tx_in.len() > 0 {

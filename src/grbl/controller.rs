@@ -2,31 +2,38 @@
 //!
 //! Who uses it: the firmware's serial task. The RX interrupt sorts bytes with
 //! [`crate::protocol::realtime`]: `!`/`~` go straight to `Shared::set_hold`, `?` to
-//! [`Controller::status_request`], Ctrl-X to [`Controller::soft_reset`] (the shell also empties
-//! its RX ring), the rest into an RX ring of at least 128 bytes. The task feeds that ring to
-//! [`Controller::byte`] while it returns `true`, and calls [`Controller::poll`] at least every
-//! millisecond or two (also when no byte arrives) and applies the [`Actions`] it returns.
+//! [`Controller::status_request`], 0x85 to [`Controller::jog_cancel`], Ctrl-X to
+//! [`Controller::soft_reset`] (the shell also empties its RX ring), the rest into an RX ring of
+//! at least 128 bytes. The task feeds that ring to [`Controller::byte`] while it returns
+//! `true`, and calls [`Controller::poll`] at least every millisecond or two (also when no byte
+//! arrives) and applies the [`Actions`] it returns.
 //!
-//! Every line becomes a job carried out in Grbl's order — listing, dwell, G92, motion, then
+//! Every line becomes a job carried out in Grbl's order — listing, dwell, motion, then
 //! M18/M0/M2 — and gets its `ok` only when the job is done: a motion line whose move does not
 //! fit in the queue is held (and `byte` takes nothing more) until a later `poll` pushes it, so a
-//! character-counting sender never overruns us and nothing accepted is lost. G4, G92, M0, M2
-//! and M18 wait until the queue has run out and the engine is idle.
+//! character-counting sender never overruns us and nothing accepted is lost. G4, M0, M2, M18
+//! and writes to flash wait until the queue has run out and the engine is idle.
+//!
+//! Positions: the planner works in machine millimetres; work offsets ([`Offsets`]) turn
+//! program coordinates into machine ones in the interpreter, and reports subtract them again.
 
+mod jogging;
+mod status;
 mod system;
 mod tool;
 
 use crate::arc::Segments;
+use crate::coords::Offsets;
 use crate::gcode::{self, Modal, Stop};
 use crate::inverse_time;
 use crate::planner::{Limits, Planned, Planner};
-use crate::ramp::RampConfig;
-use crate::protocol::{put_error, put_ok, Error, LineBuf, LineEvent, Out, LINE_LEN, REPLY_ROOM};
-use crate::queue::{Feeder, Shared, State};
-use crate::ramp::RampSlot;
+use crate::protocol::{put_error, put_ok, Error, LineBuf, LineEvent, Out, LINE_LEN, REPLY_ROOM, RX_BUFFER_LEN};
+use crate::queue::{Feeder, Overrides, Shared, State};
+use crate::ramp::{RampConfig, RampSlot};
 use crate::report;
 use crate::settings::{Ramped, Settings};
 use crate::spindle::{Power, PwmTiming, SpindleDir, SpindleOut};
+use crate::store::{Stored, IMAGE_LEN, STARTUP_LINES};
 
 /// Time from enabling the drivers to the first step, in poll milliseconds (2 ≥ 1 ms real).
 pub const ENABLE_SETTLE_MS: u32 = 2;
@@ -44,7 +51,8 @@ pub struct Actions {
     pub enable_pin_high: bool,
     /// New step pulse width for the compare register (CCR1), timer ticks.
     pub pulse_ticks: Option<u32>,
-    /// Settings changed: write [`Controller::settings`]`.to_bytes()` to flash.
+    /// The persistent image changed: write [`Controller::image`] to flash (only ever asked
+    /// while the machine is idle: the flash write stalls the CPU).
     pub save: bool,
     /// `$2`/`$3` (or `$RST`) changed the pin map, which the engine takes at boot: save, then
     /// reset the MCU.
@@ -60,6 +68,16 @@ pub struct Actions {
 enum Listing {
     Settings(u8),
     Params(u8),
+}
+
+/// Jogging, as the status report and 0x85 see it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Jogging {
+    Off,
+    /// Jog moves queued or running.
+    On,
+    /// Cancelled: decelerating with a feed hold, then the queue is flushed.
+    Cancel,
 }
 
 /// How fast a straight move (or an arc's chord) runs.
@@ -79,21 +97,25 @@ struct Job<const N: usize> {
     listing: Option<Listing>,
     dwell_ms: Option<u32>,
     dwell_end: Option<u32>,
-    set_steps: Option<[i32; N]>,
     mv: Option<Planned<N>>,
+    /// G28/G30: the move to the stored position after the intermediate one.
+    mv2: Option<Planned<N>>,
+    /// The moves are a jog.
+    jog: bool,
     /// G2/G3: chord ends still to plan, at `rate` each.
     arc: Option<Segments<N>>,
     rate: Rate,
     /// M3/M4/M5, S, M7/M8/M9 to apply once the queue has run out (before the motion).
     tool: Option<(SpindleDir, f64, u8)>,
-    /// Laser mode: the power the block's moves carry.
+    /// Laser mode: the power the block's moves carry (none for jogs).
     power: Power,
     drivers_off: bool,
     pause: bool,
     end: bool,
-    /// Settings changed: report [`Actions::save`] from the poll that sends the `ok`, so the
-    /// flash write (which stalls the CPU) happens before the next line can start a move.
+    /// Write the persistent image (once the machine is idle) before the `ok`.
     save: bool,
+    /// `$C` off, `$RST`: a soft reset follows the `ok`.
+    reset: bool,
 }
 
 impl<const N: usize> Job<N> {
@@ -101,8 +123,9 @@ impl<const N: usize> Job<N> {
         listing: None,
         dwell_ms: None,
         dwell_end: None,
-        set_steps: None,
         mv: None,
+        mv2: None,
+        jog: false,
         arc: None,
         rate: Rate::Rapid,
         tool: None,
@@ -111,23 +134,30 @@ impl<const N: usize> Job<N> {
         pause: false,
         end: false,
         save: false,
+        reset: false,
     };
 }
 
-/// The Grbl-compatible controller for `N` axes.
+/// The Grbl-compatible controller for up to `N` axes (`$42` of them in use).
 pub struct Controller<'a, const N: usize> {
     feeder: Feeder<'a, N>,
     shared: &'a Shared<N>,
     slot: &'a RampSlot,
     settings: Settings,
+    stored: Stored,
+    axes: usize,
     ramped: Ramped,
     limits: Limits<N>,
     profile_dirty: bool,
     lines: LineBuf,
     modal: Modal,
+    offsets: Offsets<N>,
     planner: Planner<N>,
     job: Option<Job<N>>,
     alarm: bool,
+    check: bool,
+    sleep: bool,
+    jog: Jogging,
     status_wanted: bool,
     now: u32,
     drivers_on: bool,
@@ -145,25 +175,45 @@ pub struct Controller<'a, const N: usize> {
     tool: (SpindleDir, f64, u8),
     /// `$33` last handed to the shell (0: none yet).
     pwm_hz: u32,
+    /// Next `$N` startup line to run (`STARTUP_LINES`: none left).
+    startup_next: usize,
+    /// Status reports until `WCO:` / `Ov:` are due again (Grbl's refresh counters).
+    wco_count: u8,
+    ovr_count: u8,
+    ov_seen: Overrides,
+    rx_free: u32,
 }
 
 impl<'a, const N: usize> Controller<'a, N> {
-    /// A controller at the engine's current position; builds the profile (or does so at the
-    /// first `poll` the engine is parked for).
-    pub fn new(feeder: Feeder<'a, N>, shared: &'a Shared<N>, slot: &'a RampSlot, settings: Settings) -> Self {
+    /// A controller at the engine's current position with the stored settings, coordinates
+    /// and startup lines (a `Settings` converts, with none of the others); builds the profile
+    /// (or does so at the first `poll` the engine is parked for). Startup lines run at the
+    /// first polls.
+    pub fn new(feeder: Feeder<'a, N>, shared: &'a Shared<N>, slot: &'a RampSlot, stored: impl Into<Stored>) -> Self {
+        let mut stored: Stored = stored.into();
+        // A store written for more axes than this build drives shows this build's count.
+        stored.settings.axes = stored.settings.axes.min(N as u8);
+        let settings = stored.settings;
+        let axes = settings.axis_count(N);
         let mut c = Controller {
             feeder,
             shared,
             slot,
             settings,
-            ramped: Ramped::wanted(&settings, N),
+            stored,
+            axes,
+            ramped: Ramped::wanted(&settings, axes),
             limits: Limits::new(&settings, 1),
             profile_dirty: true,
             lines: LineBuf::new(),
             modal: Modal::RESET,
+            offsets: Offsets::new(stored.coords),
             planner: Planner::new(),
             job: None,
             alarm: false,
+            check: false,
+            sleep: false,
+            jog: Jogging::Off,
             status_wanted: false,
             now: 0,
             drivers_on: settings.idle_delay_ms == 255,
@@ -178,20 +228,56 @@ impl<'a, const N: usize> Controller<'a, N> {
             power_ring: [Power::default(); FEED_RING],
             tool: (SpindleDir::Off, 0.0, 0),
             pwm_hz: 0,
+            startup_next: 0,
+            wco_count: 0,
+            ovr_count: 0,
+            ov_seen: Overrides::NONE,
+            rx_free: RX_BUFFER_LEN as u32,
         };
+        c.startup_next = c.next_startup(0);
         c.apply_profile();
         c.planner.sync(shared.positions(), &c.limits);
         c
     }
 
-    /// The settings in force (for flash after [`Actions::save`]).
+    /// The first non-empty startup line from `i` (`STARTUP_LINES`: none).
+    fn next_startup(&self, i: usize) -> usize {
+        (i..STARTUP_LINES).find(|&k| !self.stored.startup[k].as_bytes().is_empty()).unwrap_or(STARTUP_LINES)
+    }
+
+    /// The settings in force.
     pub fn settings(&self) -> &Settings {
         &self.settings
+    }
+
+    /// What flash should hold (after [`Actions::save`]).
+    pub fn stored(&self) -> &Stored {
+        &self.stored
+    }
+
+    /// The flash image of [`Self::stored`].
+    pub fn image(&self) -> [u8; IMAGE_LEN] {
+        self.stored.to_bytes()
     }
 
     /// The ramp the profile was built with (what `$I` reports).
     pub fn ramped(&self) -> &Ramped {
         &self.ramped
+    }
+
+    /// Axes in use (`$42`, at most `N`).
+    pub fn axes(&self) -> usize {
+        self.axes
+    }
+
+    /// The work offsets in force.
+    pub fn offsets(&self) -> &Offsets<N> {
+        &self.offsets
+    }
+
+    /// The G-code modal state.
+    pub fn modal(&self) -> &Modal {
+        &self.modal
     }
 
     /// Moves queued or running.
@@ -204,9 +290,16 @@ impl<'a, const N: usize> Controller<'a, N> {
         *self.planner.position_steps()
     }
 
-    /// True while a line is being carried out: [`Self::byte`] takes nothing until it is done.
+    /// True while a line (or a startup line) is being carried out, or asleep: [`Self::byte`]
+    /// takes nothing until it is done.
     pub fn busy(&self) -> bool {
-        self.job.is_some()
+        self.job.is_some() || self.startup_next < STARTUP_LINES || self.sleep
+    }
+
+    /// Free bytes in the shell's RX ring, for `Bf:` in status reports (at most the announced
+    /// RX buffer size).
+    pub fn set_rx_free(&mut self, n: usize) {
+        self.rx_free = n.min(RX_BUFFER_LEN) as u32;
     }
 
     /// The start-up banner (also after a soft reset).
@@ -252,35 +345,55 @@ impl<'a, const N: usize> Controller<'a, N> {
     }
 
     /// Ctrl-X: stop at once, drop queued moves and any partial or held line, reset the modal
-    /// state, take the engine's position, print the banner. During motion this is ALARM:3
-    /// (positions stay exact, but Grbl asks for `$X`).
+    /// state, G92 and the tool length offset, take the engine's position, print the banner.
+    /// During motion this is ALARM:3 (positions stay exact, but Grbl asks for `$X`); from idle
+    /// or a completed feed hold (`Hold:0`) it is not. Startup lines run again (not in alarm).
     pub fn soft_reset(&mut self, out: &mut impl Out) {
-        let moving = self.feeder.pending() > 0 || self.shared.state() != State::Idle;
+        let state = self.shared.state();
+        let moving = state != State::Held && (self.feeder.pending() > 0 || state != State::Idle);
         self.feeder.abort();
         self.shared.set_hold(false);
+        self.shared.set_overrides(Overrides::NONE);
         self.lines.clear();
         self.job = None;
         self.modal = Modal::RESET;
+        self.offsets = Offsets::new(self.stored.coords);
+        self.jog = Jogging::Off;
+        self.check = false;
         self.pushed = self.shared.moves_done();
         self.planner.sync(self.shared.positions(), &self.limits);
+        self.wco_count = 0;
+        self.ovr_count = 0;
         if moving {
             self.alarm = true;
             out.put(report::ALARM_RESET);
         }
+        // Grbl wakes from `$SLP` into the alarm state.
+        self.alarm |= core::mem::take(&mut self.sleep);
+        self.startup_next = if self.alarm { STARTUP_LINES } else { self.next_startup(0) };
         self.welcome(out);
     }
 
     /// Timekeeping and retries: rebuilds a pending profile, enables/disables the drivers,
-    /// carries on a held line (printing its `ok`), writes a requested status report.
+    /// finishes a jog cancel, carries on a held line (printing its `ok`), runs startup lines,
+    /// writes a requested status report.
     pub fn poll(&mut self, now_ms: u32, out: &mut impl Out) -> Actions {
         self.now = now_ms;
         if self.profile_dirty {
             self.apply_profile();
         }
+        self.jog_poll(out);
         self.drive_enable();
-        if self.job.is_some() && out.room() >= POLL_REPLY_ROOM && self.advance(true, out) {
-            put_ok(out);
+        if self.job.is_some() && out.room() >= POLL_REPLY_ROOM {
+            let reset = self.job.is_some_and(|j| j.reset);
+            if self.advance(true, out) {
+                put_ok(out);
+                if reset {
+                    self.soft_reset(out);
+                }
+            }
         }
+        self.run_startup(out);
         if self.status_wanted && out.room() >= report::status_len(N) {
             self.status_wanted = false;
             self.status(out);
@@ -301,9 +414,29 @@ impl<'a, const N: usize> Controller<'a, N> {
         }
     }
 
-    /// Queue empty and engine idle (not held): G4, G92, `$` settings may act.
+    /// Queue empty and engine idle (not held): G4, flash writes, `$` settings may act.
     fn drained(&self) -> bool {
         self.feeder.pending() == 0 && self.shared.state() == State::Idle
+    }
+
+    /// Runs the `$N` lines, one job at a time (`>line:ok`, as Grbl reports them).
+    fn run_startup(&mut self, out: &mut impl Out) {
+        while self.startup_next < STARTUP_LINES && self.job.is_none() && out.room() >= REPLY_ROOM {
+            let text = self.stored.startup[self.startup_next];
+            self.startup_next = self.next_startup(self.startup_next + 1);
+            let line = text.as_bytes();
+            if line.is_empty() {
+                continue;
+            }
+            out.put(b">");
+            out.put(line);
+            out.put(b":");
+            match self.gcode(line, out) {
+                Err(e) => put_error(out, e),
+                Ok(()) if self.job.is_none() => put_ok(out),
+                Ok(()) => {}
+            }
+        }
     }
 
     /// Rebuilds the ramp table and timing if the engine is parked; otherwise asks it to park.
@@ -312,7 +445,7 @@ impl<'a, const N: usize> Controller<'a, N> {
             self.profile_dirty = true;
             return;
         };
-        self.ramped = self.settings.build_profile(N, &mut guard);
+        self.ramped = self.settings.build_profile(self.axes, &mut guard);
         drop(guard);
         self.limits = Limits::new(&self.settings, self.ramped.cfg.vmax);
         self.profile_dirty = false;
@@ -326,14 +459,14 @@ impl<'a, const N: usize> Controller<'a, N> {
             return;
         }
         self.enabled_at.get_or_insert(self.now);
-        let waiting = self.job.is_some_and(|j| j.mv.is_some() || j.arc.is_some());
-        let keep = self.m17 || self.settings.idle_delay_ms == 255;
+        let waiting = self.job.is_some_and(|j| j.mv.is_some() || j.mv2.is_some() || j.arc.is_some());
+        let keep = (self.m17 || self.settings.idle_delay_ms == 255) && !self.sleep;
         if keep || waiting || !self.drained() {
             self.idle_since = None;
             return;
         }
         let since = *self.idle_since.get_or_insert(self.now);
-        if self.now.wrapping_sub(since) >= self.settings.idle_delay_ms as u32 {
+        if self.sleep || self.now.wrapping_sub(since) >= self.settings.idle_delay_ms as u32 {
             self.drivers_on = false;
             self.enabled_at = None;
             self.idle_since = None;
@@ -344,17 +477,30 @@ impl<'a, const N: usize> Controller<'a, N> {
         self.drivers_on && self.enabled_at.is_some_and(|t| self.now.wrapping_sub(t) >= ENABLE_SETTLE_MS)
     }
 
+    /// Pushes one planned move; false while it does not fit (or the drivers are settling).
+    fn push(&mut self, pl: Planned<N>, jog: bool, power: Power) -> bool {
+        if !self.drivers_ready() {
+            self.drivers_on = true;
+            return false;
+        }
+        if self.profile_dirty || self.feeder.push(pl.mv).is_err() {
+            return false;
+        }
+        self.feed_ring[self.pushed as usize % FEED_RING] = pl.mm_per_step;
+        let cruise_hz = crate::ramp::hz_of_period(pl.mv.cruise()) as f32;
+        self.power_ring[self.pushed as usize % FEED_RING] = Power { cruise_hz, ..power };
+        self.pushed = self.pushed.wrapping_add(1);
+        self.idle_since = None;
+        if jog {
+            self.jog = Jogging::On;
+        }
+        true
+    }
+
     /// Carries the job on as far as it can; true when it just finished.
     fn advance(&mut self, in_poll: bool, out: &mut impl Out) -> bool {
         let Some(mut job) = self.job else { return false };
         let done = 'run: {
-            if job.save {
-                if !in_poll {
-                    break 'run false;
-                }
-                self.save = true;
-                job.save = false;
-            }
             if let Some(l) = job.listing {
                 job.listing = self.list(l, out);
                 if job.listing.is_some() {
@@ -380,37 +526,38 @@ impl<'a, const N: usize> Controller<'a, N> {
                 }
                 job.dwell_ms = None;
             }
-            if let Some(steps) = job.set_steps {
-                if !self.drained() {
+            if job.save {
+                // The flash write stalls the CPU: only from a poll, with the machine at rest.
+                if !in_poll || !self.drained() {
                     break 'run false;
                 }
-                self.shared.set_positions(steps);
-                job.set_steps = None;
+                self.stored.settings = self.settings;
+                self.stored.seq = self.stored.seq.wrapping_add(1);
+                self.save = true;
+                job.save = false;
             }
-            loop {
-                if let Some(pl) = job.mv {
-                    if !self.drivers_ready() {
-                        self.drivers_on = true;
+            for slot in [&mut job.mv, &mut job.mv2] {
+                if let Some(pl) = *slot {
+                    if !self.push(pl, job.jog, job.power) {
                         break 'run false;
                     }
-                    if self.profile_dirty || self.feeder.push(pl.mv).is_err() {
-                        break 'run false;
-                    }
-                    self.feed_ring[self.pushed as usize % FEED_RING] = pl.mm_per_step;
-                    let cruise_hz = crate::ramp::hz_of_period(pl.mv.cruise()) as f32;
-                    self.power_ring[self.pushed as usize % FEED_RING] = Power { cruise_hz, ..job.power };
-                    self.pushed = self.pushed.wrapping_add(1);
-                    self.idle_since = None;
-                    job.mv = None;
+                    *slot = None;
                 }
-                // The next chord of an arc. `Arc::check_range` made planning infallible; were it
-                // not, the chord would merge into the next one (the position stays exact).
-                let Some(seg) = job.arc.as_mut() else { break };
-                match seg.next() {
-                    Some(p) => {
-                        job.mv = plan(&mut self.planner, &p, job.rate, &self.limits, &self.ramped.cfg).unwrap_or(None)
+            }
+            // Arc chords, one planned move at a time. `Arc::check_range` made planning
+            // infallible; were it not, the chord would merge into the next (the position stays
+            // exact).
+            while let Some(seg) = job.arc.as_mut() {
+                let Some(p) = seg.next() else {
+                    job.arc = None;
+                    break;
+                };
+                job.mv = plan(&mut self.planner, &p, job.rate, &self.limits, &self.ramped.cfg).unwrap_or(None);
+                if let Some(pl) = job.mv {
+                    if !self.push(pl, false, job.power) {
+                        break 'run false;
                     }
-                    None => job.arc = None,
+                    job.mv = None;
                 }
             }
             if job.drivers_off || job.pause || job.end {
@@ -421,7 +568,7 @@ impl<'a, const N: usize> Controller<'a, N> {
                     self.drivers_on = false;
                     self.m17 = false;
                 }
-                if job.pause {
+                if job.pause && !self.check {
                     self.shared.set_hold(true);
                 }
                 if job.end {
@@ -440,20 +587,33 @@ impl<'a, const N: usize> Controller<'a, N> {
         self.advance(false, out);
     }
 
-    /// A G-code line: checked in full, then committed and started.
+    /// Marks the line being carried out (or a new job) to write the persistent image.
+    fn save_later(&mut self, out: &mut impl Out) {
+        match &mut self.job {
+            Some(j) => j.save = true,
+            None => self.start(Job { save: true, ..Job::NONE }, out),
+        }
+    }
+
+    /// A G-code line: checked in full, then committed and started. In check mode (`$C`) the
+    /// state and position follow the line, but nothing moves, waits or is stored.
     fn gcode(&mut self, line: &[u8], out: &mut impl Out) -> Result<(), Error> {
         let block = gcode::parse::<N>(line)?;
-        let (modal, fx) = self.modal.interpret(&block, self.planner.position_mm())?;
+        if block.axes[self.axes..].iter().any(Option::is_some) {
+            return Err(Error::UnsupportedCommand);
+        }
+        let (modal, fx) = self.modal.interpret_with(&block, self.planner.position_mm(), &self.offsets)?;
         let mut planner = self.planner;
-        let set_steps = match fx.set_position {
-            Some(set) => Some(planner.set_position(&set, &self.limits)?),
-            None => None,
-        };
+        let mut offsets = self.offsets;
         // G93: F is 1/minutes (checked positive where a motion needs it).
         let rate = if modal.inverse_time { Rate::Minutes(1.0 / modal.feed) } else { Rate::Feed(modal.feed) };
         let cfg = self.ramped.cfg;
         let mv = match fx.motion {
-            Some((target, rapid)) => plan(&mut planner, &target, if rapid { Rate::Rapid } else { rate }, &self.limits, &cfg)?,
+            Some((t, rapid)) => plan(&mut planner, &t, if rapid { Rate::Rapid } else { rate }, &self.limits, &cfg)?,
+            None => None,
+        };
+        let mv2 = match fx.home {
+            Some(t) => planner.line(&t, None, &self.limits)?,
             None => None,
         };
         let (arc, rate) = match fx.arc {
@@ -470,16 +630,45 @@ impl<'a, const N: usize> Controller<'a, N> {
             None => (None, Rate::Rapid),
         };
         let (tool, power) = self.tool_sync(&modal, mv.is_some() || arc.is_some(), fx.motion.is_some_and(|m| m.1));
+        let mut store = false;
+        if let Some((slot, v)) = fx.coord_write {
+            offsets.stored.set(slot, &v);
+            store = true;
+        }
+        if let Some(g) = fx.g92 {
+            offsets.g92 = g;
+        }
+        if let Some(t) = fx.tlo {
+            offsets.tlo = t;
+        }
+        // Commit: nothing below can fail.
+        if offsets.wco(modal.coord) != self.offsets.wco(self.modal.coord) {
+            self.wco_count = 0;
+        }
         self.modal = modal;
         self.planner = planner;
+        self.offsets = offsets;
+        if self.check {
+            if let Some(a) = fx.arc {
+                // Check mode: only the position follows the arc.
+                self.planner.line(a.target(), None, &self.limits)?;
+            }
+            if fx.stop == Some(Stop::End) {
+                out.put(report::PROGRAM_END);
+            }
+            return Ok(());
+        }
+        if store {
+            self.stored.coords = offsets.stored;
+        }
         if fx.drivers == Some(true) {
             self.drivers_on = true;
             self.m17 = true;
         }
         let job = Job {
             dwell_ms: fx.dwell_ms,
-            set_steps,
             mv,
+            mv2,
             arc,
             rate,
             tool,
@@ -487,27 +676,11 @@ impl<'a, const N: usize> Controller<'a, N> {
             drivers_off: fx.drivers == Some(false),
             pause: fx.stop == Some(Stop::Pause),
             end: fx.stop == Some(Stop::End),
+            save: store,
             ..Job::NONE
         };
         self.start(job, out);
         Ok(())
-    }
-
-    /// `<State|MPos:…|FS:feed,0>`: feed from the master rate and the running move's mm/step.
-    fn status(&self, out: &mut impl Out) {
-        let state: &[u8] = match self.shared.state() {
-            _ if self.alarm => b"Alarm",
-            State::Run => b"Run",
-            State::Holding => b"Hold:1",
-            State::Held => b"Hold:0",
-            State::Idle if self.feeder.pending() > 0 => b"Run",
-            State::Idle => b"Idle",
-        };
-        let pos = self.shared.positions();
-        let mpos: [f64; N] = core::array::from_fn(|i| pos[i] as f64 / self.limits.steps_per_mm[i]);
-        let rate = self.shared.rate_hz() as f64;
-        let per_step = self.feed_ring[self.shared.moves_done() as usize % FEED_RING] as f64;
-        report::status(out, state, &mpos, rate * per_step * 60.0);
     }
 }
 
@@ -520,7 +693,7 @@ fn plan<const N: usize>(
     rate: Rate,
     lim: &Limits<N>,
     cfg: &RampConfig,
-) -> Result<Option<Planned<N>>, crate::protocol::Error> {
+) -> Result<Option<Planned<N>>, Error> {
     let feed = match rate {
         Rate::Rapid => return planner.line(target, None, lim),
         Rate::Feed(f) => f,

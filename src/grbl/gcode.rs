@@ -1,4 +1,4 @@
-//! G-code: numbers, blocks and the modal state, for Grbl 1.1's lines, arcs and feed modes.
+//! G-code: numbers, blocks and the modal state, for Grbl 1.1's lines, arcs, offsets and feed modes.
 //!
 //! Who uses it: the controller, on each line from [`crate::protocol::LineBuf`] (upper case, no
 //! whitespace, no comments).
@@ -10,6 +10,7 @@
 //! of ten, which is the nearest `f64` to the decimal (as `str::parse` gives).
 
 use crate::arc::{Arc, Center};
+use crate::coords::{Offsets, G28};
 use crate::protocol::Error;
 use crate::spindle::{SpindleDir, FLOOD, MIST};
 use crate::AXIS_NAMES;
@@ -93,8 +94,18 @@ pub enum Motion {
 pub enum NonModal {
     /// G4 P<seconds>.
     Dwell,
-    /// G92: set the current position.
+    /// G92: offset the work coordinates so the current position reads the given values.
     SetPosition,
+    /// G92.1: clear the G92 offset.
+    ResetOffset,
+    /// G10 L2 / L20 Pn: set coordinate system n (0: the active one).
+    SetCoordData,
+    /// G28 (0) / G30 (1): rapid, through the axis words if any, to the stored position.
+    GoHome(u8),
+    /// G28.1 (0) / G30.1 (1): store the current machine position.
+    SetHome(u8),
+    /// G53: axis words are machine coordinates for this block.
+    Absolute,
 }
 
 /// Program flow (group 4).
@@ -109,7 +120,7 @@ pub enum Stop {
 }
 
 /// Modal group bits, for the one-command-per-group rule.
-mod group {
+pub mod group {
     pub const MOTION: u16 = 1 << 0;
     pub const NON_MODAL: u16 = 1 << 1;
     pub const PLANE: u16 = 1 << 2;
@@ -140,6 +151,10 @@ pub struct Block<const N: usize> {
     pub stop: Option<Stop>,
     /// M17 (`true`) / M18, M84 (`false`): drivers on or off.
     pub drivers: Option<bool>,
+    /// G54..G59 as 0..5.
+    pub coord: Option<u8>,
+    /// G43.1 (`true`) / G49 (`false`).
+    pub tool_length: Option<bool>,
     /// G93 (`true`) / G94.
     pub inverse_time: Option<bool>,
     /// M3 / M4 / M5.
@@ -151,6 +166,7 @@ pub struct Block<const N: usize> {
     pub ijk: [Option<f64>; 3],
     pub r: Option<f64>,
     pub f: Option<f64>,
+    pub l: Option<f64>,
     pub p: Option<f64>,
     pub s: Option<f64>,
     pub t: Option<f64>,
@@ -168,6 +184,8 @@ impl<const N: usize> Block<N> {
         inches: None,
         stop: None,
         drivers: None,
+        coord: None,
+        tool_length: None,
         inverse_time: None,
         spindle: None,
         coolant: None,
@@ -175,6 +193,7 @@ impl<const N: usize> Block<N> {
         ijk: [None; 3],
         r: None,
         f: None,
+        l: None,
         p: None,
         s: None,
         t: None,
@@ -199,8 +218,13 @@ impl<const N: usize> Block<N> {
         Ok(())
     }
 
-    fn has_axes(&self) -> bool {
+    pub fn has_axes(&self) -> bool {
         self.axes.iter().any(Option::is_some)
+    }
+
+    /// Modal groups of the block's G/M commands, as bits of [`group`].
+    pub fn groups(&self) -> u16 {
+        self.groups
     }
 }
 
@@ -250,14 +274,24 @@ fn g_word<const N: usize>(b: &mut Block<N>, v: f64) -> Result<(), Error> {
             });
             MOTION
         }
-        4 => {
-            b.non_modal = Some(NonModal::Dwell);
+        4 | 10 | 28 | 30 | 53 | 92 => {
+            non_modal(b, code, &mut mantissa)?;
             NON_MODAL
         }
-        92 if mantissa == 0 => {
+        43 | 49 => {
+            // G43.1 and G49 are axis commands (Grbl, after NIST): no motion in their block.
             b.axis_command()?;
-            b.non_modal = Some(NonModal::SetPosition);
-            NON_MODAL
+            b.tool_length = Some(match (code, mantissa) {
+                (49, _) => false,
+                (_, 10) => true,
+                _ => return Err(Error::UnsupportedCommand),
+            });
+            mantissa = 0;
+            TOOL_LENGTH
+        }
+        54..=59 => {
+            b.coord = Some((code - 54) as u8);
+            COORD
         }
         17..=19 => {
             b.plane = Some(code as u8);
@@ -280,16 +314,37 @@ fn g_word<const N: usize>(b: &mut Block<N>, v: f64) -> Result<(), Error> {
             FEED_MODE
         }
         40 => CUTTER,
-        49 => TOOL_LENGTH,
-        54 => COORD,
         61 => PATH,
-        // Probing, G10/G28/G30/G53, G92.1, G43.1, other coordinate systems.
+        // Probing.
         _ => return Err(Error::UnsupportedCommand),
     };
     if mantissa != 0 {
         return Err(Error::CommandValueNotInteger);
     }
     b.claim(g)
+}
+
+/// Group 0: G4, G10, G28(.1), G30(.1), G53, G92(.1); clears the mantissa it accepts.
+fn non_modal<const N: usize>(b: &mut Block<N>, code: u32, mantissa: &mut u32) -> Result<(), Error> {
+    // G10/G28/G30/G92 use the axis words (their .1 forms do not).
+    if matches!(code, 10 | 28 | 30 | 92) && *mantissa == 0 {
+        b.axis_command()?;
+    }
+    let k = (code == 30) as u8;
+    b.non_modal = Some(match (code, *mantissa) {
+        (4, _) => NonModal::Dwell,
+        (10, _) => NonModal::SetCoordData,
+        (53, _) => NonModal::Absolute,
+        (28 | 30, 0) => NonModal::GoHome(k),
+        (28 | 30, 10) => NonModal::SetHome(k),
+        (92, 0) => NonModal::SetPosition,
+        (92, 10) => NonModal::ResetOffset,
+        _ => return Err(Error::UnsupportedCommand),
+    });
+    if matches!(code, 28 | 30 | 92) {
+        *mantissa = 0;
+    }
+    Ok(())
 }
 
 fn m_word<const N: usize>(b: &mut Block<N>, v: f64) -> Result<(), Error> {
@@ -332,6 +387,7 @@ fn m_word<const N: usize>(b: &mut Block<N>, v: f64) -> Result<(), Error> {
 fn value_word<const N: usize>(b: &mut Block<N>, letter: u8, v: f64) -> Result<(), Error> {
     let slot = match letter {
         b'F' => &mut b.f,
+        b'L' => &mut b.l,
         b'N' => &mut b.n,
         b'P' => &mut b.p,
         b'S' => &mut b.s,
@@ -353,20 +409,27 @@ fn value_word<const N: usize>(b: &mut Block<N>, letter: u8, v: f64) -> Result<()
     Ok(())
 }
 
-/// What a block asks for, in Grbl's execution order: dwell, set position, motion, then
-/// drivers off / pause / end.
+/// What a block asks for, in Grbl's execution order: dwell, offsets, motion, then
+/// drivers off / pause / end. Positions are machine millimetres.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Effects<const N: usize> {
     /// M17 (before the motion) / M18, M84 (after it).
     pub drivers: Option<bool>,
     /// G4: dwell this many ms once the queue has run out.
     pub dwell_ms: Option<u32>,
-    /// G92: new position of the named axes, mm.
-    pub set_position: Option<[Option<f64>; N]>,
-    /// G0/G1: absolute target (mm) of every axis, and whether it is a rapid.
+    /// G10 / G28.1 / G30.1: stored slot (0..=5 G54..G59, 6 G28, 7 G30) and its new value.
+    pub coord_write: Option<(usize, [f64; N])>,
+    /// G92 / G92.1: the new G92 offset.
+    pub g92: Option<[f64; N]>,
+    /// G43.1 / G49: the new tool length offset.
+    pub tlo: Option<f64>,
+    /// G0/G1 (or G28/G30's intermediate point): machine target of every axis, and whether it
+    /// is a rapid.
     pub motion: Option<([f64; N], bool)>,
-    /// G2/G3, checked.
+    /// G2/G3, checked (machine mm).
     pub arc: Option<Arc<N>>,
+    /// G28/G30: the rapid to the stored position that follows.
+    pub home: Option<[f64; N]>,
     pub stop: Option<Stop>,
 }
 
@@ -377,6 +440,10 @@ pub struct Modal {
     pub plane: u8,
     pub relative: bool,
     pub inches: bool,
+    /// Work coordinate system, 0..=5 for G54..G59.
+    pub coord: u8,
+    /// G43.1 in force (else G49).
+    pub tlo: bool,
     /// G93: F is the inverse of each move's time in minutes, given on every motion line.
     pub inverse_time: bool,
     /// Feed rate, mm/min, or 1/min under G93 (0: none yet).
@@ -397,13 +464,14 @@ impl Default for Modal {
 }
 
 impl Modal {
-    /// After power-up or soft reset: G0 G17 G90 G21 G94, no feed.
-    pub const RESET: Modal =
-        Modal {
+    /// After power-up or soft reset: G0 G54 G17 G90 G21 G94 G49, no feed.
+    pub const RESET: Modal = Modal {
         motion: Motion::Rapid,
         plane: 17,
         relative: false,
         inches: false,
+        coord: 0,
+        tlo: false,
         inverse_time: false,
         feed: 0.0,
         spindle: 0.0,
@@ -412,9 +480,19 @@ impl Modal {
         tool: 0,
     };
 
-    /// Applies `b` to a copy of the state, given the current position (mm): the new state and
-    /// what to do. Nothing changes on error.
+    /// [`Self::interpret_with`] with no work offsets.
     pub fn interpret<const N: usize>(&self, b: &Block<N>, pos: &[f64; N]) -> Result<(Modal, Effects<N>), Error> {
+        self.interpret_with(b, pos, &Offsets::default())
+    }
+
+    /// Applies `b` to a copy of the state, given the current machine position (mm) and the
+    /// offsets in force: the new state and what to do. Nothing changes on error.
+    pub fn interpret_with<const N: usize>(
+        &self,
+        b: &Block<N>,
+        pos: &[f64; N],
+        off: &Offsets<N>,
+    ) -> Result<(Modal, Effects<N>), Error> {
         let mut m = *self;
         if b.n.is_some_and(|n| n > MAX_LINE_NUMBER) {
             return Err(Error::InvalidLineNumber);
@@ -423,12 +501,16 @@ impl Modal {
         m.relative = b.relative.unwrap_or(m.relative);
         m.plane = b.plane.unwrap_or(m.plane);
         m.motion = b.motion.unwrap_or(m.motion);
+        m.coord = b.coord.unwrap_or(m.coord);
+        m.tlo = b.tool_length.unwrap_or(m.tlo);
         let unit = if m.inches { 25.4 } else { 1.0 };
         m.inverse_time = b.inverse_time.unwrap_or(m.inverse_time);
-        let feed_motion = matches!(m.motion, Motion::Linear | Motion::CwArc | Motion::CcwArc);
-        // A motion command: axis words not taken by G92, or an explicit G0-G3.
-        let moves = b.non_modal != Some(NonModal::SetPosition)
-            && (b.has_axes() || b.motion.is_some_and(|mo| mo != Motion::Cancel));
+        let arc_mode = matches!(m.motion, Motion::CwArc | Motion::CcwArc);
+        let feed_motion = arc_mode || m.motion == Motion::Linear;
+        // A motion command: axis words no non-modal command takes, or an explicit G0-G3.
+        let axis_nonmodal = b.tool_length.is_some()
+            || matches!(b.non_modal, Some(NonModal::SetCoordData | NonModal::SetPosition | NonModal::GoHome(_)));
+        let moves = !axis_nonmodal && (b.has_axes() || b.motion.is_some_and(|mo| mo != Motion::Cancel));
         if m.inverse_time {
             // G93 (Grbl): every motion line carries its own F; nothing carries over.
             if feed_motion && moves && b.f.is_none() {
@@ -456,40 +538,85 @@ impl Modal {
             }
             m.tool = t as u32;
         }
-        let mut fx = Effects { drivers: b.drivers, dwell_ms: None, set_position: None, motion: None, arc: None, stop: b.stop };
-        match (b.non_modal, b.p) {
+        let mut fx = Effects {
+            drivers: b.drivers,
+            dwell_ms: None,
+            coord_write: None,
+            g92: None,
+            tlo: None,
+            motion: None,
+            arc: None,
+            home: None,
+            stop: b.stop,
+        };
+        let nm = b.non_modal;
+        if b.l.is_some() && nm != Some(NonModal::SetCoordData) {
+            return Err(Error::UnusedWords);
+        }
+        match (nm, b.p) {
             (Some(NonModal::Dwell), None) => return Err(Error::ValueWordMissing),
             (Some(NonModal::Dwell), Some(p)) if p > MAX_DWELL_S => return Err(Error::BadNumberFormat),
             (Some(NonModal::Dwell), Some(p)) => fx.dwell_ms = Some(libm::round(p * 1000.0) as u32),
+            (Some(NonModal::SetCoordData), _) => {}
             (_, Some(_)) => return Err(Error::UnusedWords),
             _ => {}
         }
         let in_range = |v: f64| if libm::fabs(v) <= MAX_MM { Ok(v) } else { Err(Error::InvalidTarget) };
-        if b.non_modal == Some(NonModal::SetPosition) {
-            if !b.has_axes() {
-                return Err(Error::NoAxisWords);
+        let mut words = [None; N];
+        for (w, a) in words.iter_mut().zip(&b.axes) {
+            *w = a.map(|v| in_range(v * unit)).transpose()?;
+        }
+        if let Some(on) = b.tool_length {
+            // G43.1 takes exactly the tool length axis.
+            let only_z = words.iter().enumerate().all(|(i, w)| w.is_some() == (i == crate::coords::TLO_AXIS));
+            if on && !only_z {
+                return Err(Error::G43DynamicAxisError);
             }
-            let mut set = [None; N];
-            for (s, a) in set.iter_mut().zip(&b.axes) {
-                *s = a.map(|v| in_range(v * unit)).transpose()?;
+            fx.tlo = Some(if on { words.get(crate::coords::TLO_AXIS).copied().flatten().unwrap_or(0.0) } else { 0.0 });
+        }
+        let wcs = off.wcs(m.coord);
+        match nm {
+            Some(NonModal::SetCoordData) => fx.coord_write = Some(set_coord_data(b, &words, pos, off, m.coord)?),
+            Some(NonModal::SetPosition) => {
+                if !b.has_axes() {
+                    return Err(Error::NoAxisWords);
+                }
+                // WPos = MPos − WCS − G92 − TLO, so G92 = MPos − WCS − TLO − WPos.
+                fx.g92 = Some(core::array::from_fn(|i| match words[i] {
+                    Some(w) => pos[i] - wcs[i] - off.tlo_of(i) - w,
+                    None => off.g92[i],
+                }));
             }
-            fx.set_position = Some(set);
-        } else if b.has_axes() || (moves && matches!(m.motion, Motion::CwArc | Motion::CcwArc)) {
-            if m.motion == Motion::Cancel {
-                return Err(Error::AxisWordsExist);
+            Some(NonModal::ResetOffset) => fx.g92 = Some([0.0; N]),
+            Some(NonModal::SetHome(k)) => fx.coord_write = Some((G28 + k as usize, *pos)),
+            Some(NonModal::Absolute) if !matches!(m.motion, Motion::Rapid | Motion::Linear) => {
+                return Err(Error::G53InvalidMotionMode)
             }
-            if feed_motion && m.feed <= 0.0 {
-                return Err(Error::UndefinedFeedRate);
-            }
+            _ => {}
+        }
+        if b.has_axes() && m.motion == Motion::Cancel {
+            return Err(Error::AxisWordsExist);
+        }
+        let uses_axes = b.tool_length.is_some() || matches!(nm, Some(NonModal::SetCoordData | NonModal::SetPosition));
+        if (b.has_axes() || (moves && arc_mode)) && !uses_axes {
             let mut target = *pos;
-            for (t, a) in target.iter_mut().zip(&b.axes) {
-                if let Some(v) = a {
-                    *t = in_range(if m.relative { *t + v * unit } else { v * unit })?;
+            for (i, t) in target.iter_mut().enumerate() {
+                if let Some(w) = words[i] {
+                    *t = in_range(match nm {
+                        Some(NonModal::Absolute) => w,
+                        _ if m.relative => pos[i] + w,
+                        _ => w + wcs[i] + off.g92[i] + off.tlo_of(i),
+                    })?;
                 }
             }
-            match m.motion {
-                Motion::CwArc | Motion::CcwArc => fx.arc = Some(arc(b, &m, pos, target, unit)?),
-                mo => fx.motion = Some((target, mo == Motion::Rapid)),
+            let home = matches!(nm, Some(NonModal::GoHome(_)));
+            if feed_motion && !home && m.feed <= 0.0 {
+                return Err(Error::UndefinedFeedRate);
+            }
+            if arc_mode && !home {
+                fx.arc = Some(arc(b, &m, pos, target, unit)?);
+            } else {
+                fx.motion = Some((target, home || m.motion == Motion::Rapid));
             }
         }
         // I J K R that no arc used (also I J K beside R): Grbl's unused words.
@@ -497,11 +624,20 @@ impl Modal {
         if arc_words > fx.arc.is_some() as u8 {
             return Err(Error::UnusedWords);
         }
+        if let Some(NonModal::GoHome(k)) = nm {
+            // Only the named axes go on to the stored position (all of them without words).
+            let stored = off.stored.get::<N>(G28 + k as usize);
+            fx.home = Some(core::array::from_fn(|i| match (b.has_axes(), words[i]) {
+                (true, None) => pos[i],
+                _ => stored[i],
+            }));
+        }
         if b.stop == Some(Stop::End) {
             m = Modal {
                 motion: Motion::Linear,
                 plane: 17,
                 relative: false,
+                coord: 0,
                 inverse_time: false,
                 spindle_dir: SpindleDir::Off,
                 coolant: 0,
@@ -510,6 +646,40 @@ impl Modal {
         }
         Ok((m, fx))
     }
+}
+
+/// G10 L2/L20 P: the slot it writes and the slot's new value (Grbl's checks and order).
+fn set_coord_data<const N: usize>(
+    b: &Block<N>,
+    words: &[Option<f64>; N],
+    pos: &[f64; N],
+    off: &Offsets<N>,
+    active: u8,
+) -> Result<(usize, [f64; N]), Error> {
+    if !b.has_axes() {
+        return Err(Error::NoAxisWords);
+    }
+    if b.p.is_none() && b.l.is_none() {
+        return Err(Error::ValueWordMissing);
+    }
+    let p = libm::trunc(b.p.unwrap_or(0.0));
+    if p > 6.0 {
+        return Err(Error::UnsupportedCoordSys);
+    }
+    let l20 = match b.l.map(libm::trunc) {
+        Some(v) if v == 20.0 => true,
+        Some(v) if v == 2.0 => false,
+        _ => return Err(Error::UnsupportedCommand),
+    };
+    let slot = if p > 0.0 { p as usize - 1 } else { active as usize };
+    let mut v = off.stored.get::<N>(slot);
+    for (i, x) in v.iter_mut().enumerate() {
+        if let Some(w) = words[i] {
+            // L20: the current position reads `w` in that system (WCS = MPos − G92 − TLO − WPos).
+            *x = if l20 { pos[i] - off.g92[i] - off.tlo_of(i) - w } else { w };
+        }
+    }
+    Ok((slot, v))
 }
 
 /// G2/G3 words to a checked arc, in Grbl's order: axis words (`error:26`), axis words in the

@@ -2,8 +2,11 @@
 //! controller that ties them to the planner.
 
 pub mod controller;
+pub mod coords;
 pub mod gcode;
+pub mod jog;
 pub mod protocol;
 pub mod report;
 pub mod settings;
 pub mod spindle;
+pub mod store;

@@ -24,7 +24,11 @@ pub enum Realtime {
     Resume,
     /// Ctrl-X (0x18): soft reset ([`crate::controller::Controller::soft_reset`]).
     Reset,
-    /// Grbl's extended realtime bytes (0x80..=0xFF: overrides, jog cancel, door): ignored.
+    /// 0x85: cancel the running and queued jogs
+    /// ([`crate::controller::Controller::jog_cancel`]).
+    JogCancel,
+    /// Grbl's other extended realtime bytes (0x80..=0xFF: overrides; 0x84 safety door, which
+    /// does nothing without a door input, as in Grbl built without one).
     Extended(u8),
 }
 
@@ -35,6 +39,7 @@ pub const fn realtime(b: u8) -> Option<Realtime> {
         b'!' => Some(Realtime::Hold),
         b'~' => Some(Realtime::Resume),
         0x18 => Some(Realtime::Reset),
+        0x85 => Some(Realtime::JogCancel),
         0x80..=0xFF => Some(Realtime::Extended(b)),
         _ => None,
     }
@@ -56,6 +61,8 @@ pub enum Error {
     SettingDisabled = 5,
     /// Step pulse shorter than the minimum (1 µs here; Grbl says 3 µs).
     StepPulseMin = 6,
+    /// The persistent store could not be read (Grbl's EEPROM read failure).
+    SettingReadFail = 7,
     /// `$` command that needs the machine idle.
     NotIdle = 8,
     /// G-code locked out in alarm state (`$X` unlocks).
@@ -64,6 +71,12 @@ pub enum Error {
     SoftLimitNeedsHoming = 10,
     /// Line longer than [`LINE_LEN`].
     LineOverflow = 11,
+    /// A `$N`/`$I=` line longer than the store keeps.
+    LineLengthExceeded = 14,
+    /// A jog target beyond the soft limits.
+    TravelExceeded = 15,
+    /// A `$J=` line with a word jogging does not take.
+    InvalidJogCommand = 16,
     /// G/M code or word we do not support.
     UnsupportedCommand = 20,
     /// Two commands of one modal group in a block.
@@ -82,6 +95,10 @@ pub enum Error {
     InvalidLineNumber = 27,
     /// A command misses its value word (G4 without P).
     ValueWordMissing = 28,
+    /// G10 P beyond the six coordinate systems.
+    UnsupportedCoordSys = 29,
+    /// G53 without G0 or G1 in force.
+    G53InvalidMotionMode = 30,
     /// Axis words with no command to use them.
     AxisWordsExist = 31,
     /// G2/G3 without an axis word in the selected plane.
@@ -94,6 +111,8 @@ pub enum Error {
     NoOffsetsInPlane = 35,
     /// Value words no command uses.
     UnusedWords = 36,
+    /// G43.1 without Z, or with another axis.
+    G43DynamicAxisError = 37,
     /// A value beyond its maximum (tool number > 255).
     MaxValueExceeded = 38,
 }
@@ -104,7 +123,7 @@ pub enum Error {
 /// The controller checks [`Out::room`] before it starts a reply, so with a sink that reports
 /// its room no `ok` is ever lost: it takes no line byte unless [`REPLY_ROOM`] bytes are free,
 /// writes long listings (`$$`, `$#`) a line at a time as room appears, and delays a status
-/// report until it fits. The TX ring should hold at least 256 bytes.
+/// report until it fits. The TX ring should hold at least 384 bytes.
 pub trait Out {
     /// Writes as many of `bytes` as fit.
     fn put(&mut self, bytes: &[u8]);
@@ -114,8 +133,10 @@ pub trait Out {
     }
 }
 
-/// Free TX bytes needed before a line byte is taken: the longest single reply (`$I`).
-pub const REPLY_ROOM: usize = 160;
+/// Free TX bytes needed before a line byte is taken: the longest single reply (`$I` with its
+/// build-info string and the step interrupt's self-measurement line, or `$N` with two stored
+/// lines).
+pub const REPLY_ROOM: usize = 320;
 
 impl<const C: usize> Out for heapless::Vec<u8, C> {
     fn put(&mut self, bytes: &[u8]) {

@@ -4,16 +4,18 @@
 //! them (UGS, CNCjs, bCNC): `\r\n` endings, positions with three decimals, feeds and speeds as
 //! integers.
 
+use crate::coords::{Offsets, G28, G30};
 use crate::gcode::{Modal, Motion};
 use crate::spindle::{SpindleDir, FLOOD, MIST};
 use crate::protocol::{put_fixed, put_u32, Out, RX_BUFFER_LEN};
+use crate::queue::Overrides;
 use crate::ramp::Shape;
 use crate::settings::Ramped;
 
 /// What a sender looks for after a reset.
 pub const BANNER: &[u8] = b"\r\nGrbl 1.1h ['$' for help]\r\n";
 /// `$` help.
-pub const HELP: &[u8] = b"[HLP:$$ $# $G $I $N $x=val $X $H $RST=$ ~ ! ? ctrl-x]\r\n";
+pub const HELP: &[u8] = b"[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $SLP $C $X $H ~ ! ? ctrl-x]\r\n";
 /// After a reset in alarm state.
 pub const UNLOCK_HINT: &[u8] = b"[MSG:'$H'|'$X' to unlock]\r\n";
 /// `$X` in alarm state.
@@ -24,9 +26,16 @@ pub const ALARM_RESET: &[u8] = b"ALARM:3\r\n";
 pub const PROGRAM_END: &[u8] = b"[MSG:Pgm End]\r\n";
 /// `$RST=`.
 pub const RESTORED: &[u8] = b"[MSG:Restoring defaults]\r\n";
-/// Longest status report for `n` axes (`<Hold:1|MPos:` + 13 per axis + `|FS:1000000,0>\r\n`).
+/// `$C` on.
+pub const CHECK_ON: &[u8] = b"[MSG:Enabled]\r\n";
+/// `$C` off (a reset follows).
+pub const CHECK_OFF: &[u8] = b"[MSG:Disabled]\r\n";
+/// `$SLP`.
+pub const SLEEPING: &[u8] = b"[MSG:Sleeping]\r\n";
+/// Longest status report for `n` axes: `<Hold:1|WPos:` + 13 per axis + `|Bf:15,128` +
+/// `|FS:1000000,0` + `|WCO:` + 13 per axis + `|Ov:100,100,100>\r\n`.
 pub const fn status_len(n: usize) -> usize {
-    16 + 13 * n + 20
+    64 + 26 * n
 }
 /// Longest `$#` line for `n` axes.
 pub const fn param_len(n: usize) -> usize {
@@ -35,15 +44,52 @@ pub const fn param_len(n: usize) -> usize {
 /// Longest `$$` line.
 pub const SETTING_LEN: usize = 24;
 
-/// `<State|MPos:x,y,z|FS:feed,0>`.
-pub fn status<const N: usize>(out: &mut impl Out, state: &[u8], mpos: &[f64; N], feed: f64) {
+/// One status report's fields.
+#[derive(Clone, Copy, Debug)]
+pub struct Status<'a> {
+    pub state: &'a [u8],
+    /// Machine or work position (per `$10`), one value per axis in use.
+    pub pos: &'a [f64],
+    /// `pos` is the machine position.
+    pub mpos: bool,
+    /// `Bf:` planner blocks free, RX bytes free (when `$10` asks for it).
+    pub bf: Option<(u32, u32)>,
+    /// Current feed, mm/min.
+    pub feed: f64,
+    /// `WCO:` when due.
+    pub wco: Option<&'a [f64]>,
+    /// `Ov:` when due.
+    pub ov: Option<Overrides>,
+}
+
+/// `<State|MPos:x,y,z|Bf:15,128|FS:feed,0|WCO:x,y,z|Ov:100,100,100>`.
+pub fn status(out: &mut impl Out, s: &Status) {
     out.put(b"<");
-    out.put(state);
-    out.put(b"|MPos:");
-    axes(out, mpos);
+    out.put(s.state);
+    out.put(if s.mpos { b"|MPos:" } else { b"|WPos:" });
+    axes(out, s.pos);
+    if let Some((blocks, rx)) = s.bf {
+        out.put(b"|Bf:");
+        put_u32(out, blocks);
+        out.put(b",");
+        put_u32(out, rx);
+    }
     out.put(b"|FS:");
-    put_fixed(out, feed, 0);
-    out.put(b",0>\r\n");
+    put_fixed(out, s.feed, 0);
+    out.put(b",0");
+    if let Some(w) = s.wco {
+        out.put(b"|WCO:");
+        axes(out, w);
+    }
+    if let Some(o) = s.ov {
+        out.put(b"|Ov:");
+        put_u32(out, o.feed as u32);
+        out.put(b",");
+        put_u32(out, o.rapid as u32);
+        out.put(b",");
+        put_u32(out, o.spindle as u32);
+    }
+    out.put(b">\r\n");
 }
 
 fn axes(out: &mut impl Out, v: &[f64]) {
@@ -73,7 +119,9 @@ pub fn modes(out: &mut impl Out, m: &Modal) {
         Motion::CcwArc => b"[GC:G3",
         Motion::Cancel => b"[GC:G80",
     });
-    out.put(b" G54 G");
+    out.put(b" G");
+    put_u32(out, 54 + m.coord as u32);
+    out.put(b" G");
     put_u32(out, m.plane as u32);
     out.put(if m.inches { b" G20" } else { b" G21" });
     out.put(if m.relative { b" G91" } else { b" G90" });
@@ -104,8 +152,11 @@ pub fn modes(out: &mut impl Out, m: &Modal) {
 /// `$I`: version, options (no compile-time options; queue moves; RX bytes) and our limits:
 /// the fastest master rate the timing allows and the ramp the table holds. Moves asking for
 /// more than the ramp's top cruise at the top.
-pub fn build_info(out: &mut impl Out, queue_moves: usize, r: &Ramped) {
-    out.put(b"[VER:1.1h.ddastep:]\r\n[OPT:,");
+pub fn build_info(out: &mut impl Out, info: &[u8], queue_moves: usize, r: &Ramped) {
+    out.put(b"[VER:1.1h.ddastep:");
+    out.put(info);
+    // No compile-time option letters apply: no spindle, coolant, homing, door or line numbers.
+    out.put(b"]\r\n[OPT:,");
     put_u32(out, queue_moves as u32);
     out.put(b",");
     put_u32(out, RX_BUFFER_LEN as u32);
@@ -124,32 +175,58 @@ pub fn build_info(out: &mut impl Out, queue_moves: usize, r: &Ramped) {
     out.put(if r.table_limited { b" (table-limited)]\r\n" } else { b"]\r\n" });
 }
 
-/// Names of the `$#` lines; every offset is zero (no work offsets: G92 moves the machine
-/// position itself).
-const PARAMS: [&[u8]; 10] = [
-    b"[G54:", b"[G55:", b"[G56:", b"[G57:", b"[G58:", b"[G59:", b"[G28:", b"[G30:", b"[G92:", b"[TLO:",
-];
-/// Lines `$#` prints.
-pub const PARAM_LINES: usize = PARAMS.len() + 1;
+/// `$I`'s step-interrupt line: the firmware's own DWT timing of the step path since the last
+/// `$I` (`steptime`): body cycles min/mean/max, average and peak 1 ms load.
+pub fn step_time(out: &mut impl Out, t: &crate::steptime::StepTimeReport) {
+    out.put(b"[MSG:step isr ");
+    put_u32(out, t.min);
+    out.put(b"/");
+    put_fixed(out, t.mean as f64, 1);
+    out.put(b"/");
+    put_u32(out, t.max);
+    out.put(b" cycles min/mean/max, load ");
+    put_fixed(out, t.load as f64 * 100.0, 1);
+    out.put(b" % peak ");
+    put_fixed(out, t.peak_load as f64 * 100.0, 1);
+    out.put(b" %]\r\n");
+}
 
-/// Line `i` of `$#`.
-pub fn param<const N: usize>(out: &mut impl Out, i: usize) {
-    match PARAMS.get(i) {
-        Some(name) => {
-            out.put(name);
-            if i + 1 == PARAMS.len() {
-                put_fixed(out, 0.0, 3);
-            } else {
-                axes(out, &[0.0; N]);
-            }
+/// Lines `$#` prints: G54..G59, G28, G30, G92, TLO, PRB.
+pub const PARAM_LINES: usize = 11;
+
+/// Line `i` of `$#` (machine millimetres; no probe yet, so `[PRB:0,…:0]`).
+pub fn param<const N: usize>(out: &mut impl Out, i: usize, off: &Offsets<N>, axes_used: usize) {
+    let n = axes_used.min(N);
+    let v: [f64; N] = match i {
+        0..=5 => {
+            out.put(b"[G");
+            put_u32(out, 54 + i as u32);
+            out.put(b":");
+            off.wcs(i as u8)
+        }
+        G28 | G30 => {
+            out.put(if i == G28 { b"[G28:" } else { b"[G30:" });
+            off.stored.get(i)
+        }
+        8 => {
+            out.put(b"[G92:");
+            off.g92
+        }
+        9 => {
+            out.put(b"[TLO:");
+            put_fixed(out, off.tlo, 3);
             out.put(b"]\r\n");
+            return;
         }
-        None => {
+        _ => {
             out.put(b"[PRB:");
-            axes(out, &[0.0; N]);
+            axes(out, &[0.0; N][..n]);
             out.put(b":0]\r\n");
+            return;
         }
-    }
+    };
+    axes(out, &v[..n]);
+    out.put(b"]\r\n");
 }
 
 #[cfg(test)]
@@ -167,31 +244,55 @@ mod tests {
 
     #[test]
     fn formats_match_grbl() {
-        assert_eq!(text(|o| status(o, b"Idle", &[0.0; 3], 0.0)), "<Idle|MPos:0.000,0.000,0.000|FS:0,0>\r\n");
-        assert_eq!(text(|o| status(o, b"Run", &[-1.2345, 0.0005, 12.0], 2999.6)), "<Run|MPos:-1.235,0.001,12.000|FS:3000,0>\r\n");
+        let st = Status { state: b"Idle", pos: &[0.0; 3], mpos: true, bf: None, feed: 0.0, wco: None, ov: None };
+        assert_eq!(text(|o| status(o, &st)), "<Idle|MPos:0.000,0.000,0.000|FS:0,0>\r\n");
+        let st = Status { state: b"Run", pos: &[-1.2345, 0.0005, 12.0], feed: 2999.6, ..st };
+        assert_eq!(text(|o| status(o, &st)), "<Run|MPos:-1.235,0.001,12.000|FS:3000,0>\r\n");
+        let st = Status { mpos: false, bf: Some((15, 128)), wco: Some(&[1.0, 2.0, 3.0]), ov: Some(Overrides::NONE), ..st };
+        assert_eq!(
+            text(|o| status(o, &st)),
+            "<Run|WPos:-1.235,0.001,12.000|Bf:15,128|FS:3000,0|WCO:1.000,2.000,3.000|Ov:100,100,100>\r\n"
+        );
         assert_eq!(text(|o| modes(o, &Modal::RESET)), "[GC:G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0]\r\n");
         assert_eq!(text(|o| setting(o, 110, 36000.0, 3)), "$110=36000.000\r\n");
-        assert_eq!(text(|o| param::<3>(o, 9)), "[TLO:0.000]\r\n");
-        assert_eq!(text(|o| param::<3>(o, 10)), "[PRB:0.000,0.000,0.000:0]\r\n");
+        let off = Offsets::<3>::default();
+        assert_eq!(text(|o| param::<3>(o, 0, &off, 3)), "[G54:0.000,0.000,0.000]\r\n");
+        assert_eq!(text(|o| param::<3>(o, 7, &off, 3)), "[G30:0.000,0.000,0.000]\r\n");
+        assert_eq!(text(|o| param::<3>(o, 9, &off, 3)), "[TLO:0.000]\r\n");
+        assert_eq!(text(|o| param::<3>(o, 10, &off, 2)), "[PRB:0.000,0.000:0]\r\n");
         let r = Ramped {
             cfg: RampConfig { v0: 1000, vmax: 60_000, accel: 1_000_000, shape: Shape::Trapezoid },
             max_rate_hz: 166_666,
             table_limited: false,
         };
-        let info = text(|o| build_info(o, 15, &r));
+        let info = text(|o| build_info(o, b"", 15, &r));
         assert_eq!(
             info,
             "[VER:1.1h.ddastep:]\r\n[OPT:,15,128]\r\n[MSG:max step rate 166666 Hz]\r\n\
              [MSG:ramp 1000-60000 Hz 1000000 Hz/s trapezoid]\r\n"
         );
         assert!(info.len() <= crate::protocol::REPLY_ROOM);
+        let t = crate::steptime::StepTimeReport { entries: 9, min: 190, mean: 191.44, max: 1402, load: 0.0812, peak_load: 0.156 };
+        assert_eq!(text(|o| step_time(o, &t)), "[MSG:step isr 190/191.4/1402 cycles min/mean/max, load 8.1 % peak 15.6 %]\r\n");
+        let worst = crate::steptime::StepTimeReport { entries: 1, min: u32::MAX, mean: u32::MAX as f32, max: u32::MAX, load: 1.0, peak_load: 1.0 };
+        let r = Ramped { table_limited: true, ..r };
+        let all = text(|o| {
+            build_info(o, &[b'x'; crate::grbl::store::TEXT_LEN], 15, &r);
+            step_time(o, &worst);
+            o.put(b"ok\r\n");
+        });
+        assert!(all.len() <= crate::protocol::REPLY_ROOM, "{}", all.len());
     }
 
     #[test]
     fn worst_case_lines_fit_their_budgets() {
         let far = [-1_000_000.0; 7];
-        assert!(text(|o| status(o, b"Hold:1", &far, 999_999.0)).len() <= status_len(7));
-        assert!(text(|o| param::<7>(o, 0)).len() <= param_len(7));
+        let ov = Some(Overrides { feed: 200, rapid: 100, spindle: 200 });
+        let st = Status { state: b"Hold:1", pos: &far, mpos: false, bf: Some((16, 128)), feed: 999_999.0, wco: Some(&far), ov };
+        assert!(text(|o| status(o, &st)).len() <= status_len(7));
+        let mut off = Offsets::<7>::default();
+        off.g92 = far;
+        assert!(text(|o| param::<7>(o, 8, &off, 7)).len() <= param_len(7));
         assert!(text(|o| setting(o, 139, 100_000_000.0, 3)).len() <= SETTING_LEN);
     }
 }

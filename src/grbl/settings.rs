@@ -18,7 +18,7 @@ use crate::MAX_AXES;
 /// Bytes of the flash image.
 pub const SETTINGS_LEN: usize = 160;
 const MAGIC: u8 = 0xD5;
-const VERSION: u8 = 2;
+const VERSION: u8 = 3;
 /// Byte offset of the settings after the axis arrays: `$12`, `$30`, `$31`, `$33` (f32, u32),
 /// `$32` (flag byte); CRC last.
 const TAIL: usize = 24 + 4 * 4 * MAX_AXES;
@@ -32,10 +32,14 @@ pub const DIR_SETUP: u16 = 29; // grblHAL's number for the direction-to-step del
 pub const RAMP_START: u16 = 40;
 pub const RAMP_SHAPE: u16 = 41;
 pub const SPINDLE_PWM_HZ: u16 = 33; // grblHAL's number for the spindle PWM frequency
+/// Axes the machine has (3 = XYZ gantry … 7 = X Y Z A B C U): reports, `$#`, `$$` and G-code
+/// follow it.
+pub const AXIS_COUNT: u16 = 42;
+/// Grbl's status report mask: bit 0 MPos (else WPos), bit 1 `Bf:`.
+pub const STATUS_MASK: u16 = 10;
 
 /// Grbl settings we report but do not implement, with the only value they accept.
-const FIXED: [(u16, f32, u8); 11] = [
-    (10, 1.0, 0),    // status report mask: MPos
+const FIXED: [(u16, f32, u8); 10] = [
     (11, 0.010, 3),  // junction deviation: every move stops (no look-ahead)
     (13, 0.0, 0),    // report inches: no
     (20, 0.0, 0),    // soft limits: not implemented
@@ -50,9 +54,9 @@ const FIXED: [(u16, f32, u8); 11] = [
 
 /// Setting numbers below 100 in `$$` order: Grbl's, ours and the [`FIXED`] ones. (A table
 /// rather than an iterator chain over `FIXED`: ~400 bytes less flash.)
-const LOW_IDS: [u16; 26] = [
-    0, 1, 2, 3, 4, 5, 6, 10, 11, 12, 13, 20, 21, 22, 23, 24, 25, 26, 27, DIR_SETUP, 30, 31, 32,
-    SPINDLE_PWM_HZ, RAMP_START, RAMP_SHAPE,
+const LOW_IDS: [u16; 27] = [
+    0, 1, 2, 3, 4, 5, 6, STATUS_MASK, 11, 12, 13, 20, 21, 22, 23, 24, 25, 26, 27, DIR_SETUP, 30,
+    31, 32, SPINDLE_PWM_HZ, RAMP_START, RAMP_SHAPE, AXIS_COUNT,
 ];
 
 /// Persistent settings. Axis arrays are indexed X Y Z A B C U; only the firmware's first N
@@ -98,6 +102,10 @@ pub struct Settings {
     pub accel: [f32; MAX_AXES],
     /// `$130+i` max travel, unit (stored only: no soft limits).
     pub max_travel: [f32; MAX_AXES],
+    /// `$10` status report mask: bit 0 MPos (else WPos), bit 1 buffer state.
+    pub status_mask: u8,
+    /// `$42` axes the machine has, 3..=7.
+    pub axes: u8,
 }
 
 impl Default for Settings {
@@ -138,9 +146,9 @@ impl Ramped {
 }
 
 impl Settings {
-    /// Defaults for the seed paper's bench: 100 steps/mm, 36 000 mm/min (60 kHz) and
-    /// 10 000 mm/s² (10⁶ steps/s², 50 kHz in 49 ms) on every axis; 3 µs pulses and 5 µs
-    /// direction setup (TB6600-safe); trapezoid from 1 kHz.
+    /// Safe defaults for a small gantry, Grbl's own: 250 steps/mm, 500 mm/min, 10 mm/s²,
+    /// 200 mm travel on an XYZ machine; 3 µs pulses and 5 µs direction setup (TB6600-safe);
+    /// trapezoid from 1 kHz; MPos in reports.
     pub const DEFAULT: Settings = Settings {
         pulse_us: 3.0,
         idle_delay_ms: 25,
@@ -157,11 +165,30 @@ impl Settings {
         dir_setup_us: 5.0,
         ramp_start_hz: 1000,
         shape: Shape::Trapezoid,
+        steps_per_mm: [250.0; MAX_AXES],
+        max_rate: [500.0; MAX_AXES],
+        accel: [10.0; MAX_AXES],
+        max_travel: [200.0; MAX_AXES],
+        status_mask: 1,
+        axes: 3,
+    };
+
+    /// The seed paper's bench (the settings before the safe defaults, which the demos and
+    /// the tests that measure rates set explicitly): 100 steps/mm, 36 000 mm/min (60 kHz),
+    /// 10 000 mm/s² (10⁶ steps/s²) on seven axes.
+    pub const BENCH: Settings = Settings {
         steps_per_mm: [100.0; MAX_AXES],
         max_rate: [36_000.0; MAX_AXES],
         accel: [10_000.0; MAX_AXES],
         max_travel: [1000.0; MAX_AXES],
+        axes: MAX_AXES as u8,
+        ..Settings::DEFAULT
     };
+
+    /// Axes in use on a firmware built for `n`.
+    pub fn axis_count(&self, n: usize) -> usize {
+        (self.axes as usize).clamp(1, n.max(1))
+    }
 
     /// Setting number `i` of the `$$` listing for `axes` axes (`None` past the end).
     pub fn id(i: usize, axes: usize) -> Option<u16> {
@@ -196,9 +223,11 @@ impl Settings {
             DIR_SETUP => (self.dir_setup_us as f64, 3),
             RAMP_START => (self.ramp_start_hz as f64, 0),
             RAMP_SHAPE => ((self.shape == Shape::SCurve) as u8 as f64, 0),
+            STATUS_MASK => (self.status_mask as f64, 0),
+            AXIS_COUNT => (self.axes as f64, 0),
             100..=139 => {
                 let (g, i) = ((id - 100) / 10, (id % 10) as usize);
-                if i >= axes.min(MAX_AXES) {
+                if i >= axes.min(self.axes as usize).min(MAX_AXES) {
                     return None;
                 }
                 let arr = [&self.steps_per_mm, &self.max_rate, &self.accel, &self.max_travel];
@@ -299,9 +328,20 @@ impl Settings {
                 };
                 Ok(Change::Profile)
             }
+            STATUS_MASK => {
+                self.status_mask = byte()? & 3;
+                Ok(Change::Shell)
+            }
+            AXIS_COUNT => {
+                if !(3.0..=axes.min(MAX_AXES) as f64).contains(&int) {
+                    return Err(Error::InvalidStatement);
+                }
+                self.axes = int as u8;
+                Ok(Change::Profile)
+            }
             100..=139 => {
                 let (g, i) = ((id - 100) / 10, (id % 10) as usize);
-                if i >= axes.min(MAX_AXES) {
+                if i >= axes.min(self.axes as usize).min(MAX_AXES) {
                     return Err(Error::InvalidStatement);
                 }
                 let (arr, v) = match g {
@@ -328,14 +368,16 @@ impl Settings {
 
     /// True when every field is in the range [`Self::set`] accepts.
     pub fn is_valid(&self) -> bool {
-        let mut probe = *self;
-        let mut ok = true;
-        for id in Self::ids(MAX_AXES) {
-            if let Some((v, _)) = self.get(id, MAX_AXES) {
+        // Every axis is checked, also those beyond the axis count.
+        let full = Settings { axes: MAX_AXES as u8, ..*self };
+        let mut probe = full;
+        let mut ok = (3..=MAX_AXES as u8).contains(&self.axes);
+        for id in Self::ids(MAX_AXES).filter(|&id| id != AXIS_COUNT) {
+            if let Some((v, _)) = full.get(id, MAX_AXES) {
                 ok &= probe.set(id, v, MAX_AXES).is_ok();
             }
         }
-        ok && probe == *self
+        ok && probe == full
     }
 
     /// Step timing in timer ticks.
@@ -404,6 +446,8 @@ impl Settings {
         b[18] = self.dir_invert;
         b[19] = self.enable_invert as u8 | (self.limit_invert as u8) << 1 | (self.probe_invert as u8) << 2;
         b[20] = (self.shape == Shape::SCurve) as u8;
+        b[21] = self.axes;
+        b[22] = self.status_mask;
         // Axis arrays from byte 24, in field order (chunks, not computed indices: no panic path).
         let values = [&self.steps_per_mm, &self.max_rate, &self.accel, &self.max_travel].into_iter().flatten();
         for (w, v) in b[24..].chunks_exact_mut(4).zip(values) {
@@ -454,6 +498,8 @@ impl Settings {
                 1 => Shape::SCurve,
                 _ => return None,
             },
+            axes: b[21],
+            status_mask: b[22],
             ..Settings::DEFAULT
         };
         let values = [&mut s.steps_per_mm, &mut s.max_rate, &mut s.accel, &mut s.max_travel].into_iter().flatten();
@@ -487,7 +533,10 @@ mod tests {
 
     #[test]
     fn low_ids_are_ours_and_every_fixed_one() {
-        let ours = [0, 1, 2, 3, 4, 5, 6, 12, 30, 31, 32, SPINDLE_PWM_HZ, DIR_SETUP, RAMP_START, RAMP_SHAPE];
+        let ours = [
+            0, 1, 2, 3, 4, 5, 6, STATUS_MASK, 12, 30, 31, 32, SPINDLE_PWM_HZ, DIR_SETUP, RAMP_START, RAMP_SHAPE,
+            AXIS_COUNT,
+        ];
         assert_eq!(LOW_IDS.len(), ours.len() + FIXED.len());
         assert!(ours.iter().chain(FIXED.iter().map(|f| &f.0)).all(|id| LOW_IDS.contains(id)));
     }

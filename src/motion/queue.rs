@@ -29,23 +29,6 @@ pub enum State {
     Held = 3,
 }
 
-/// Grbl's override percentages (feed, rapid, spindle; 100 = as programmed).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Overrides {
-    pub feed: u8,
-    pub rapid: u8,
-    pub spindle: u8,
-}
-
-impl Overrides {
-    /// Everything as programmed.
-    pub const NONE: Overrides = Overrides { feed: 100, rapid: 100, spindle: 100 };
-
-    const fn pack(self) -> u32 {
-        self.feed as u32 | (self.rapid as u32) << 8 | (self.spindle as u32) << 16
-    }
-}
-
 /// Why a move cannot be built.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MoveError {
@@ -111,6 +94,24 @@ impl<const N: usize> Move<N> {
     }
 }
 
+/// Override percentages as Grbl reports them in `Ov:`: feed 10–200, rapid 25/50/100,
+/// spindle 10–200.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Overrides {
+    pub feed: u8,
+    pub rapid: u8,
+    pub spindle: u8,
+}
+
+impl Overrides {
+    /// 100 % everywhere (power-up and reset).
+    pub const NONE: Overrides = Overrides { feed: 100, rapid: 100, spindle: 100 };
+
+    const fn pack(self) -> u32 {
+        self.feed as u32 | (self.rapid as u32) << 8 | (self.spindle as u32) << 16
+    }
+}
+
 /// State shared lock-free between the engine (interrupt) and the rest of the firmware.
 ///
 /// Positions are published as a record the engine rewrites only when a move starts or ends:
@@ -131,8 +132,8 @@ pub struct Shared<const N: usize> {
     pub(crate) state: AtomicU8,
     pub(crate) moves_done: AtomicU32,
     pub(crate) period_bits: AtomicU32,
-    /// [`Overrides`], one byte each.
-    overrides: AtomicU32,
+    /// [`Overrides`] packed feed | rapid << 8 | spindle << 16.
+    ovr: AtomicU32,
 }
 
 impl<const N: usize> Default for Shared<N> {
@@ -153,7 +154,7 @@ impl<const N: usize> Shared<N> {
             state: AtomicU8::new(State::Idle as u8),
             moves_done: AtomicU32::new(0),
             period_bits: AtomicU32::new(0),
-            overrides: AtomicU32::new(Overrides::NONE.pack()),
+            ovr: AtomicU32::new(Overrides::NONE.pack()),
         }
     }
 
@@ -164,6 +165,17 @@ impl<const N: usize> Shared<N> {
         } else {
             self.ctl.fetch_and(!1, Relaxed);
         }
+    }
+
+    /// The override percentages in force.
+    pub fn overrides(&self) -> Overrides {
+        let v = self.ovr.load(Relaxed);
+        Overrides { feed: v as u8, rapid: (v >> 8) as u8, spindle: (v >> 16) as u8 }
+    }
+
+    /// Sets the override percentages (the realtime override bytes).
+    pub fn set_overrides(&self, o: Overrides) {
+        self.ovr.store(o.pack(), Relaxed);
     }
 
     /// True while a feed hold is requested.
@@ -197,17 +209,6 @@ impl<const N: usize> Shared<N> {
             0 => 0,
             b => ((crate::TIMER_HZ as u64 * 16) / b as u64) as u32,
         }
-    }
-
-    /// The override percentages in force.
-    pub fn overrides(&self) -> Overrides {
-        let w = self.overrides.load(Relaxed);
-        Overrides { feed: w as u8, rapid: (w >> 8) as u8, spindle: (w >> 16) as u8 }
-    }
-
-    /// Sets the override percentages (realtime commands).
-    pub fn set_overrides(&self, o: Overrides) {
-        self.overrides.store(o.pack(), Relaxed);
     }
 
     /// Position of every axis in steps: the step words handed out so far.

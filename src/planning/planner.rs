@@ -204,7 +204,7 @@ mod tests {
     use crate::ramp::period_of_hz;
 
     fn lim() -> Limits<3> {
-        Limits::new(&Settings::DEFAULT, 60_000)
+        Limits::new(&Settings::BENCH, 60_000)
     }
 
     #[test]

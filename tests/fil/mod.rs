@@ -2,12 +2,26 @@
 #![allow(dead_code)]
 
 use ddastep::board::{DIR_PINS, STEP_PINS};
+use ddastep::settings::Settings;
+use ddastep::store::{Stored, PAGE_LEN};
 use ddastep_bench::emu::{firmware_elf, Board, HZ};
 
-/// A booted board: banner seen.
+/// Flash address of the persistent store's first page (A/B over the last two pages).
+pub const STORE_ADDR: u32 = 0x0800_0000 + 62 * 1024;
+
+/// A booted board with the seed paper's bench settings in flash (`Settings::BENCH`: 100
+/// steps/mm, 36 000 mm/min, 10 000 mm/s², 7 axes): banner seen.
 pub fn boot() -> Board {
+    boot_with(Some(Stored::from(Settings::BENCH)))
+}
+
+/// A booted board with `stored` in flash (`None`: blank flash, the firmware's defaults).
+pub fn boot_with(stored: Option<Stored>) -> Board {
     let elf = firmware_elf().expect("firmware builds");
     let mut b = Board::load(elf).expect("ELF loads");
+    if let Some(s) = stored {
+        b.write_mem(STORE_ADDR, &s.to_bytes()).expect("flash preload");
+    }
     let up = b.run_until(HZ / 2, |b| b.serial_output().contains("Grbl")).expect("runs");
     assert!(up, "no banner: {:?}", b.serial_output());
     b
@@ -83,4 +97,11 @@ pub fn net(steps: &[Step]) -> [i64; 7] {
         n[s.axis] += if s.positive { 1 } else { -1 };
     }
     n
+}
+
+/// What the two store pages hold now (the newest valid image).
+pub fn stored(b: &mut Board) -> Option<Stored> {
+    let a = b.read_mem(STORE_ADDR, PAGE_LEN);
+    let c = b.read_mem(STORE_ADDR + PAGE_LEN as u32, PAGE_LEN);
+    Stored::decode(&a).into_iter().chain(Stored::decode(&c)).max_by_key(|s| s.seq)
 }

@@ -72,7 +72,7 @@ impl<const N: usize> Bench<N> {
     }
 
     pub fn with_defaults() -> Self {
-        Self::new(Settings::DEFAULT)
+        Self::new(Settings::BENCH)
     }
 
     /// The UART sends what is in the TX ring.
@@ -122,6 +122,7 @@ impl<const N: usize> Bench<N> {
                 self.ctl.soft_reset(&mut self.tx);
                 self.drain();
             }
+            Some(Realtime::JogCancel) => self.ctl.jog_cancel(),
             Some(Realtime::Extended(_)) => {}
             None => {
                 let mut waited = 0;

@@ -1,11 +1,13 @@
 //! `cargo sim -- [ARGS]`: run the release firmware on the emulated Blue Pill, stream G-code
-//! over USART1, and print the summary (optionally VCD and JSON). See bench/README.md.
+//! over USART1, and print the summary (optionally VCD and JSON); or, with `--serve`, serve the
+//! board to a real G-code sender in real time (pseudo-terminal, TCP). See bench/README.md.
 
 use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
 use clap::Parser;
 use ddastep_bench::emu::{firmware_elf, gcode_lines, isr_profile, sweep, Board, InputFlip, Port, HZ};
+use ddastep_bench::serve;
 
 #[derive(Parser)]
 #[command(about = "Run the ddastep firmware ELF on an emulated Blue Pill (modeled cycles at 72 MHz)")]
@@ -22,9 +24,19 @@ struct Args {
     /// Write the JSON report.
     #[arg(long)]
     json: Option<PathBuf>,
-    /// Stop after this many simulated seconds.
-    #[arg(long, default_value_t = 60.0)]
-    max_seconds: f64,
+    /// Stop after this many simulated seconds (default 60; with --serve: until Ctrl-C).
+    #[arg(long)]
+    max_seconds: Option<f64>,
+    /// Serve the board to a G-code sender in real time: USART1 on a pseudo-terminal (prints
+    /// `serial: /dev/pts/N`) until Ctrl-C or --max-seconds.
+    #[arg(long, conflicts_with_all = ["gcode", "sweep", "point", "profile"])]
+    serve: bool,
+    /// With --serve: also make a symlink to the pseudo-terminal, e.g. /tmp/ttyBLUEPILL.
+    #[arg(long, requires = "serve", value_name = "PATH")]
+    pty_link: Option<PathBuf>,
+    /// With --serve: also listen on a TCP address, e.g. 127.0.0.1:23000.
+    #[arg(long, requires = "serve", value_name = "ADDR")]
+    tcp: Option<String>,
     /// Input flips, e.g. PA0@0.25=0 (pin PA0 low at 0.25 s simulated).
     #[arg(long)]
     pin: Vec<String>,
@@ -77,6 +89,25 @@ fn main() -> Result<()> {
     if args.sweep {
         return run_sweep(&args, &elf);
     }
+    if args.serve {
+        let opts = serve::Options {
+            elf,
+            pty_link: args.pty_link.clone(),
+            tcp: args.tcp.clone(),
+            max_seconds: args.max_seconds,
+            vcd: args.vcd.clone(),
+            json: args.json.clone(),
+            inputs: args.pin.iter().map(|p| parse_pin(p)).collect::<Result<_>>()?,
+        };
+        let s = serve::run(&opts)?;
+        println!(
+            "served {:.3} s simulated in {:.3} s wall{}",
+            s.simulated_s,
+            s.wall_s,
+            if s.lagged_s > 0.0 { format!(" (the host fell {:.3} s behind real time)", s.lagged_s) } else { String::new() }
+        );
+        return Ok(());
+    }
     if let Some(spec) = &args.point {
         let (axes, hz) = spec.split_once('@').context("expected AXES@HZ")?;
         let p = sweep::run_point(&elf, axes.parse()?, hz.parse()?, 20, 0.95, true);
@@ -103,7 +134,7 @@ fn main() -> Result<()> {
     for p in &args.pin {
         board.schedule_input(parse_pin(p)?);
     }
-    let limit = (args.max_seconds * HZ as f64) as u64;
+    let limit = (args.max_seconds.unwrap_or(60.0) * HZ as f64) as u64;
     let wall = std::time::Instant::now();
     board.run_seconds(0.05)?; // boot
     for line in gcode_lines(&gcode) {
@@ -128,6 +159,10 @@ fn main() -> Result<()> {
     eprintln!();
     let report = board.report();
     println!("{report}");
+    // The firmware's own DWT timing of its step path over the run (what `$I` gives on a board).
+    if let Ok(info) = board.send_line_wait_ok("$I") {
+        info.lines().filter(|l| l.contains("step isr")).for_each(|l| println!("firmware self-report: {l}"));
+    }
     if args.profile {
         print!("{}", isr_profile(&board, 12));
     }

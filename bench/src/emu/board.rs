@@ -15,7 +15,7 @@ use unicorn_engine::RegisterARM;
 
 use super::bus::{Stop, TIM2_IRQ};
 use super::cpu::{self, Cpu, Image};
-use super::exception::{self, ENTRY_CYCLES, RETURN_CYCLES, TAIL_CHAIN_CYCLES};
+use super::exception;
 use super::gpio::PinEdge;
 use super::nvic::IRQ0;
 use super::profile::{self, FnCost};
@@ -181,6 +181,22 @@ impl Board {
         m.usart1.start_rx(now);
     }
 
+    // queue bytes ahead of everything not yet on the wire (Grbl's realtime commands from a
+    // sender: they reach the receiver at the next byte slot, still at line pace)
+    pub fn serial_send_urgent(&mut self, bytes: &[u8]) {
+        let m = self.cpu.get_data_mut();
+        for &b in bytes.iter().rev() {
+            m.usart1.rx_queue.push_front(b);
+        }
+        let now = m.now;
+        m.usart1.start_rx(now);
+    }
+
+    // host bytes queued for USART1 RX and not yet on the wire
+    pub fn serial_pending(&self) -> usize {
+        self.cpu.get_data().usart1.rx_queue.len()
+    }
+
     // everything the firmware sent on USART1 TX
     pub fn serial_output(&self) -> String {
         String::from_utf8_lossy(&self.cpu.get_data().usart1.transcript).into_owned()
@@ -247,6 +263,11 @@ impl Board {
     // every output latch change so far
     pub fn edges(&self) -> &[PinEdge] {
         &self.cpu.get_data().edges
+    }
+
+    // hand over the pin edges recorded so far and forget them (long runs that only count)
+    pub fn take_edges(&mut self) -> Vec<PinEdge> {
+        std::mem::take(&mut self.cpu.get_data_mut().edges)
     }
 
     // keep (default) or drop the pin edge history (long sweeps)
@@ -362,14 +383,16 @@ impl Board {
             self.sleeping = false;
             if let Some(ret) = self.sleep_on_exit.take() {
                 let n = self.cpu.get_data().nvic.preempting(basepri, primask).unwrap_or(0);
-                self.take(n, ret, TAIL_CHAIN_CYCLES);
+                let tail = self.cpu.get_data().exception_cycles().2;
+                self.take(n, ret, tail);
                 return Ok(());
             }
         }
         if self.split.is_none() && self.cpu.get_data().pending {
             if let Some(n) = self.cpu.get_data().nvic.preempting(basepri, primask) {
                 let ret = exception::stack_frame(&mut self.cpu);
-                self.take(n, ret, ENTRY_CYCLES);
+                let entry = self.cpu.get_data().exception_cycles().0;
+                self.take(n, ret, entry);
                 return Ok(());
             }
         }
@@ -456,31 +479,32 @@ impl Board {
         let primask = self.reg(RegisterARM::PRIMASK) != 0;
         let next = self.cpu.get_data().nvic.preempting(basepri, primask);
         // A tail-chain replaces the return: its cost is charged to the next handler's entry.
-        let ret = if next.is_some() { 0 } else { RETURN_CYCLES };
+        let (_, return_cycles, tail) = self.cpu.get_data().exception_cycles();
+        let ret = if next.is_some() { 0 } else { return_cycles };
         if n == IRQ0 + TIM2_IRQ {
             let m = self.cpu.get_data();
             self.stats.isr_done(now + ret, m.insns, m.first_bsrr);
         }
         if let Some(next) = next {
-            self.take(next, exc_return, TAIL_CHAIN_CYCLES);
+            self.take(next, exc_return, tail);
             return;
         }
-        self.profile_return(n);
+        self.profile_return(n, return_cycles);
         let to_thread = exc_return & 8 != 0;
         if to_thread && self.cpu.get_data().nvic.scr & 2 != 0 {
             self.sleeping = true;
             self.sleep_on_exit = Some(exc_return);
-            self.cpu.get_data_mut().now += RETURN_CYCLES;
+            self.cpu.get_data_mut().now += return_cycles;
             return;
         }
         exception::unstack(&mut self.cpu, exc_return);
-        self.cpu.get_data_mut().now += RETURN_CYCLES;
+        self.cpu.get_data_mut().now += return_cycles;
     }
 
     // charge an exception return of exception `n` to the profile (the clock is charged apart)
-    fn profile_return(&mut self, n: u32) {
+    fn profile_return(&mut self, n: u32, cycles: u64) {
         if let Some(h) = &mut self.cpu.get_data_mut().profile {
-            h.add(n, profile::RETURN, RETURN_CYCLES, 0);
+            h.add(n, profile::RETURN, cycles, 0);
         }
     }
 }

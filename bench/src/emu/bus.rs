@@ -2,8 +2,10 @@
 //! from unicorn's callbacks to the peripheral models. For `board.rs`, which owns a
 //! `Unicorn<Machine>`.
 //!
-//! Time is modeled cycles. During a block, `block_start` is the cycle the block began and an
-//! access happens at the end of its instruction: `block_start + prefix[i] + cost[i]`.
+//! Time is modeled cycles. During a block, `now` is the cycle the block began and an access
+//! happens at the end of its instruction: `now + stall + prefix[i] + cost[i]`, where `stall`
+//! holds the bridge stalls of this block's earlier peripheral accesses (`memory.rs`): they
+//! are added to the clock with the block.
 //! Registers with no model keep what was written (so read-modify-write works), read 0 until
 //! then, and are logged once with address and PC.
 
@@ -11,6 +13,7 @@ use std::collections::{BTreeMap, HashMap, HashSet};
 
 use super::cost::{Block, BlockCache};
 use super::gpio::{PinEdge, Port};
+use super::memory::{apb_divider, bridge_cycles, bus_of, Bus, FlashConfig};
 use super::nvic::{Nvic, IRQ0};
 use super::profile::Histogram;
 use super::pwm::Pwm;
@@ -29,8 +32,46 @@ const USART1: u32 = 0x4001_3800;
 const GPIOA: u32 = 0x4001_0800;
 const RCC: u32 = 0x4002_1000;
 const FLASH_IF: u32 = 0x4002_2000;
+const RCC_CFGR: u32 = 0x4002_1004;
 const SCS: u32 = 0xE000_E000;
+const DWT_CTRL: u32 = 0xE000_1000;
 const DWT_CYCCNT: u32 = 0xE000_1004;
+const DEMCR: u32 = 0xE000_EDFC;
+/// DWT_CTRL.NUMCOMP of a Cortex-M3 (4 comparators), read-only.
+const DWT_NUMCOMP_4: u32 = 4 << 28;
+
+/// DWT cycle counter: counts core cycles while DEMCR.TRCENA and DWT_CTRL.CYCCNTENA are set,
+/// holds its value otherwise (ARMv7-M ARM C1.8.8). Sleep is not distinguished: it counts
+/// through WFI like the bench's clock.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Dwt {
+    pub ctrl: u32,
+    running: bool,
+    /// Cycle at which a running counter read 0 (mod 2^32).
+    base: u64,
+    /// Value while stopped.
+    held: u32,
+}
+
+impl Dwt {
+    // CYCCNT at cycle `t`
+    pub fn cyccnt(&self, t: u64) -> u32 {
+        if self.running {
+            t.wrapping_sub(self.base) as u32
+        } else {
+            self.held
+        }
+    }
+
+    // new CTRL / DEMCR (and optionally a CYCCNT write) at cycle `t`
+    fn set(&mut self, t: u64, ctrl: u32, demcr: u32, cyccnt: Option<u32>) {
+        let value = cyccnt.unwrap_or_else(|| self.cyccnt(t));
+        self.ctrl = ctrl;
+        self.running = ctrl & 1 != 0 && demcr & 1 << 24 != 0;
+        self.held = value;
+        self.base = t.wrapping_sub(value as u64);
+    }
+}
 
 /// Why the block hook stopped the CPU.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -69,8 +110,7 @@ pub struct Machine {
     pub regs: HashMap<u32, u32>,
     pub unmodeled: BTreeMap<u32, u32>,
     logged: HashSet<u32>,
-    pub dwt_ctrl: u32,
-    pub dwt_base: u64,
+    pub dwt: Dwt,
     /// Current PC as synced by unicorn's per-instruction counter hook.
     pub pc: u32,
     /// First GPIOB BSRR/BRR store cycle since the last TIM2 entry.
@@ -80,6 +120,12 @@ pub struct Machine {
     pub mmio_stop: Option<u32>,
     /// Per-block cycle histogram while profiling is on.
     pub profile: Option<Histogram>,
+    /// Bridge stall cycles of the current block so far (added to the clock with the block).
+    pub stall: u64,
+    /// Cycle at which the AHB-to-APB bridges finish the last transfer (buffered writes).
+    pub bridge_free: u64,
+    /// FLASH_ACR was written: blocks are re-costed for this from the next block on.
+    pub flash_pending: Option<FlashConfig>,
 }
 
 impl Machine {
@@ -108,13 +154,15 @@ impl Machine {
             regs,
             unmodeled: BTreeMap::new(),
             logged: HashSet::new(),
-            dwt_ctrl: 0,
-            dwt_base: 0,
+            dwt: Dwt::default(),
             pc: 0,
             first_bsrr: None,
             flash_erase: None,
             mmio_stop: None,
             profile: None,
+            stall: 0,
+            bridge_free: 0,
+            flash_pending: None,
         }
     }
 
@@ -125,6 +173,7 @@ impl Machine {
 
     // charge `cycles` and `insns` of block `start` to the clock (and the profile, if on)
     pub fn account(&mut self, start: u32, cycles: u64, insns: u64) {
+        let cycles = cycles + std::mem::take(&mut self.stall);
         self.now += cycles;
         self.insns += insns;
         if let Some(h) = &mut self.profile {
@@ -135,9 +184,40 @@ impl Machine {
     // modeled cycle at which the instruction at `self.pc` completes its access
     pub fn access_cycle(&self) -> u64 {
         match self.block().and_then(|b| b.index_of(self.pc).map(|i| (b, i))) {
-            Some((b, i)) if i < b.insns.len() => self.now + b.prefix[i + 1],
-            _ => self.now,
+            Some((b, i)) if i < b.insns.len() => self.now + self.stall + b.prefix[i + 1],
+            _ => self.now + self.stall,
         }
+    }
+
+    // apply a FLASH_ACR change between blocks
+    pub fn apply_flash_config(&mut self) {
+        if let Some(f) = self.flash_pending.take() {
+            self.blocks.set_flash(f);
+        }
+    }
+
+    // exception entry, return and tail-chain cycles for the current flash configuration
+    pub fn exception_cycles(&self) -> (u64, u64, u64) {
+        let f = self.blocks.flash();
+        (f.entry_cycles(), f.return_cycles(), f.tail_chain_cycles())
+    }
+
+    // APB divider of the bridge in front of `addr` (RCC_CFGR PPRE1/PPRE2), `None` off the APBs
+    fn apb(&self, addr: u32) -> Option<u64> {
+        let cfgr = self.regs.get(&RCC_CFGR).copied().unwrap_or(0);
+        match bus_of(addr) {
+            Bus::Apb1 => Some(apb_divider(cfgr >> 8 & 7)),
+            Bus::Apb2 => Some(apb_divider(cfgr >> 11 & 7)),
+            Bus::Other => None,
+        }
+    }
+
+    // a peripheral transfer issued at cycle `t`: waits for the bridge, returns (start, end)
+    fn bridge(&mut self, addr: u32, t: u64) -> Option<(u64, u64)> {
+        let d = self.apb(addr)?;
+        let start = t.max(self.bridge_free);
+        self.bridge_free = start + bridge_cycles(d);
+        Some((start, self.bridge_free))
     }
 
     // bring peripherals to cycle `t` and refresh the NVIC's interrupt lines
@@ -165,7 +245,15 @@ impl Machine {
 
     // MMIO read of `size` bytes at `addr`
     pub fn read(&mut self, addr: u32, size: usize) -> u32 {
-        let t = self.access_cycle();
+        let issued = self.access_cycle();
+        // A read through a bridge stalls the core until the data is back.
+        let t = match self.bridge(addr, issued) {
+            Some((_, end)) => {
+                self.stall += end - issued;
+                end
+            }
+            None => issued,
+        };
         self.sync(t);
         let word = addr & !3;
         let shift = (addr & 3) * 8;
@@ -178,7 +266,8 @@ impl Machine {
                 self.ports[p].read((word - GPIOA) % 0x400)
             }
             0xE000_E010..=0xE000_E01F => self.systick.read(word - 0xE000_E010, t),
-            DWT_CYCCNT => (t - self.dwt_base) as u32,
+            DWT_CTRL => self.dwt.ctrl | DWT_NUMCOMP_4,
+            DWT_CYCCNT => self.dwt.cyccnt(t),
             SCS..=0xE000_EFFF if self.nvic.read(word - SCS).is_some() => self.nvic.read(word - SCS).unwrap(),
             _ => self.plain_read(word),
         };
@@ -189,7 +278,15 @@ impl Machine {
 
     // MMIO write of `size` bytes at `addr`
     pub fn write(&mut self, addr: u32, size: usize, value: u32) {
-        let t = self.access_cycle();
+        let issued = self.access_cycle();
+        // A write waits only for a bridge still busy; the write buffer takes it, it lands later.
+        let (t, lands) = match self.bridge(addr, issued) {
+            Some((start, end)) => {
+                self.stall += start - issued;
+                (start, end)
+            }
+            None => (issued, issued),
+        };
         self.sync(t);
         let word = addr & !3;
         let shift = (addr & 3) * 8;
@@ -205,15 +302,21 @@ impl Machine {
                 self.tim1.write(word - TIM1, merged, t)
             }
             USART1..=0x4001_3BFF => self.usart1.write(word - USART1, v, t),
-            GPIOA..=0x4001_1BFF => self.gpio_write(word, v, mask, t),
+            GPIOA..=0x4001_1BFF => self.gpio_write(word, v, mask, lands),
             0xE000_E010..=0xE000_E01F => self.systick.write(word - 0xE000_E010, v, t),
-            0xE000_1000 => {
-                if v & 1 != 0 && self.dwt_ctrl & 1 == 0 {
-                    self.dwt_base = t;
-                }
-                self.dwt_ctrl = v;
+            DWT_CTRL => {
+                let demcr = self.regs.get(&DEMCR).copied().unwrap_or(0);
+                self.dwt.set(t, (self.dwt.ctrl & !mask) | v, demcr, None);
             }
-            DWT_CYCCNT => self.dwt_base = t.wrapping_sub(v as u64),
+            DWT_CYCCNT => {
+                let demcr = self.regs.get(&DEMCR).copied().unwrap_or(0);
+                self.dwt.set(t, self.dwt.ctrl, demcr, Some(v));
+            }
+            DEMCR => {
+                let demcr = (self.regs.get(&DEMCR).copied().unwrap_or(0) & !mask) | v;
+                self.regs.insert(DEMCR, demcr);
+                self.dwt.set(t, self.dwt.ctrl, demcr, None);
+            }
             SCS..=0xE000_EFFF if self.nvic.read(word - SCS).is_some() || word == SCS + 0xF00 => {
                 let merged = match word - SCS {
                     0x400..=0x4EF | 0xD18..=0xD23 => (self.nvic.read(word - SCS).unwrap() & !mask) | v,
@@ -257,6 +360,7 @@ impl Machine {
             }
             0x4002_1004 => (v & !0xC) | (v & 3) << 2, // CFGR.SWS = SW
             0x4002_200C => 0,                          // FLASH_SR: never busy
+            FLASH_IF => (v & !0x20) | (v & 0x10) << 1, // ACR.PRFTBS = PRFTBE
             _ => {
                 self.log_unmodeled(word);
                 v
@@ -267,6 +371,9 @@ impl Machine {
     fn plain_write(&mut self, word: u32, v: u32, mask: u32) {
         let old = self.regs.get(&word).copied().unwrap_or(0);
         self.regs.insert(word, (old & !mask) | v);
+        if word == FLASH_IF {
+            self.flash_pending = Some(FlashConfig::from_acr((old & !mask) | v));
+        }
         if word == 0x4002_2010 && v & (1 << 6) != 0 && v & (1 << 1) != 0 {
             self.flash_erase = self.regs.get(&0x4002_2014).copied(); // CR.STRT with PER: AR page
         }

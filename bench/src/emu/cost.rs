@@ -2,8 +2,10 @@
 //! costs, so the block hook only adds a prefix sum. For the run loop in `board.rs`.
 //!
 //! Costs follow the Cortex-M3 TRM (r1p1, table 18-1 "Cortex-M3 instruction set summary"),
-//! with the STM32F103 flash at 72 MHz (2 wait states, RM0008 §3.3.3) added where the core
-//! refills its pipeline from flash or reads a literal from flash:
+//! with the STM32F103's memory timing from `memory.rs` added: flash wait states as FLASH_ACR
+//! sets them (W; 2 at 72 MHz), the line schedule of the prefetch buffer (stalls when code
+//! outruns 8 bytes per line read), and the refill after a taken branch (a line read in flash,
+//! 2 cycles in SRAM). Peripheral bridge stalls are dynamic: `bus.rs` adds them per access.
 //!
 //! | class                                   | modeled cycles                    |
 //! |-----------------------------------------|-----------------------------------|
@@ -12,21 +14,17 @@
 //! | UMULL/SMULL, UMLAL/SMLAL                | 4, 5 (TRM: 3–5, 4–7)              |
 //! | UDIV/SDIV                               | 7 (TRM: 2–12, data dependent)     |
 //! | LDR/STR single                          | 2, or 1 right after a load/store  |
-//! | LDR literal (from flash)                | 2 + 2 wait states                 |
+//! | LDR literal (from flash)                | 2 + W                             |
 //! | LDRD/STRD, LDM/STM/PUSH/POP             | 1 + N                             |
-//! | taken branch, write to PC               | 1 + P, P = 1, + 2 if target in flash |
-//! | TBB/TBH                                 | 2 + P (+ 2 for the table read)     |
-//! | ISB                                     | 1 + P (pipeline refill, + 2 in flash) |
+//! | taken branch, write to PC               | 1 + P, P = 1 + W in flash, 2 in SRAM |
+//! | TBB/TBH                                 | 2 + W (table read) + P            |
+//! | ISB                                     | 1 + P                             |
 //! | not-taken conditional branch            | 1                                 |
+//! | any instruction in flash                | + fetch stall of the line schedule |
 
 use std::collections::HashMap;
 
-/// First address past the flash/boot alias (code below runs from flash).
-const FLASH_END: u32 = 0x2000_0000;
-/// Flash wait states at 72 MHz (RM0008 §3.3.3, FLASH_ACR LATENCY = 2).
-pub const FLASH_WAIT_STATES: u64 = 2;
-/// Pipeline refill without wait states (TRM "P", lower bound).
-const REFILL: u64 = 1;
+use super::memory::{fetch_stalls, FlashConfig, CODE_END};
 
 /// How an instruction ends a block.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -53,6 +51,8 @@ pub struct Insn {
 #[derive(Clone, Debug)]
 pub struct Block {
     pub start: u32,
+    /// Flash configuration the costs were computed for.
+    pub flash: FlashConfig,
     pub end: u32,
     pub insns: Vec<Insn>,
     /// `prefix[k]` = cycles of the first `k` instructions (no branch penalty).
@@ -65,7 +65,7 @@ impl Block {
         let base = self.prefix[self.insns.len()];
         match self.insns.last() {
             Some(last) if last.flow == Flow::Branch || (last.flow == Flow::CondBranch && next != self.end) => {
-                base + refill(next)
+                base + self.flash.refill(next)
             }
             _ => base,
         }
@@ -85,22 +85,32 @@ impl Block {
     }
 }
 
-// modeled pipeline refill for a branch to `target`
-pub fn refill(target: u32) -> u64 {
-    if target < FLASH_END {
-        REFILL + FLASH_WAIT_STATES
-    } else {
-        REFILL
+/// Decoded blocks by start address, for one flash configuration.
+pub struct BlockCache {
+    blocks: HashMap<u32, Block>,
+    flash: FlashConfig,
+}
+
+impl Default for BlockCache {
+    fn default() -> Self {
+        Self { blocks: HashMap::new(), flash: FlashConfig::RESET }
     }
 }
 
-/// Decoded blocks by start address.
-#[derive(Default)]
-pub struct BlockCache {
-    blocks: HashMap<u32, Block>,
-}
-
 impl BlockCache {
+    // the flash configuration blocks are costed for
+    pub fn flash(&self) -> FlashConfig {
+        self.flash
+    }
+
+    // cost blocks for `flash` from now on (drops the blocks costed for another configuration)
+    pub fn set_flash(&mut self, flash: FlashConfig) {
+        if flash != self.flash {
+            self.flash = flash;
+            self.blocks.clear();
+        }
+    }
+
     // is the block at `start` of `size` bytes decoded?
     pub fn contains(&self, start: u32, size: u32) -> bool {
         self.blocks.get(&start).is_some_and(|b| b.end == start + size)
@@ -108,7 +118,7 @@ impl BlockCache {
 
     // decode and keep the block at `start` whose bytes are `code`
     pub fn insert(&mut self, start: u32, code: &[u8]) {
-        self.blocks.insert(start, decode_block(start, code));
+        self.blocks.insert(start, decode_block(start, code, self.flash));
     }
 
     // the cached block at `start`
@@ -117,11 +127,12 @@ impl BlockCache {
     }
 }
 
-// decode the Thumb-2 instructions in `code` (which starts at `start`)
-pub fn decode_block(start: u32, code: &[u8]) -> Block {
+// decode the Thumb-2 instructions in `code` (which starts at `start`), costed for `flash`
+pub fn decode_block(start: u32, code: &[u8], flash: FlashConfig) -> Block {
     let mut insns = Vec::new();
-    let mut prefix = vec![0];
+    let mut sizes = Vec::new();
     let mut off = 0usize;
+    let w = flash.data_read_extra(start < CODE_END);
     let mut prev_mem = false;
     let mut it_left = 0u32;
     while off + 2 <= code.len() {
@@ -129,7 +140,7 @@ pub fn decode_block(start: u32, code: &[u8]) -> Block {
         let wide = hw1 >> 11 >= 0b11101;
         let hw2 = if wide && off + 4 <= code.len() { u16::from_le_bytes([code[off + 2], code[off + 3]]) } else { 0 };
         let addr = start + off as u32;
-        let mut d = if wide { decode32(hw1, hw2, addr) } else { decode16(hw1) };
+        let mut d = if wide { decode32(hw1, hw2, addr, &flash, w) } else { decode16(hw1, w) };
         if it_left > 0 {
             it_left -= 1;
             if d.flow == Flow::Branch {
@@ -143,10 +154,18 @@ pub fn decode_block(start: u32, code: &[u8]) -> Block {
         let cost = if d.single_mem && prev_mem { d.cost - 1 } else { d.cost };
         prev_mem = d.single_mem;
         insns.push(Insn { addr, cost, flow: d.flow, wfi: hw1 == 0xBF30 });
-        prefix.push(prefix.last().unwrap() + cost);
-        off += if wide { 4 } else { 2 };
+        let size = if wide { 4 } else { 2 };
+        sizes.push((addr, size, cost));
+        off += size as usize;
     }
-    Block { start, end: start + off as u32, insns, prefix }
+    // Fetch stalls count as part of the instruction that waited.
+    let stalls = fetch_stalls(&flash, &sizes);
+    let mut prefix = vec![0];
+    for (i, s) in insns.iter_mut().zip(stalls) {
+        i.cost += s;
+        prefix.push(prefix.last().unwrap() + i.cost);
+    }
+    Block { start, flash, end: start + off as u32, insns, prefix }
 }
 
 struct Decoded {
@@ -168,7 +187,7 @@ fn branch(cost: u64, flow: Flow) -> Decoded {
 }
 
 // 16-bit Thumb instruction
-fn decode16(hw: u16) -> Decoded {
+fn decode16(hw: u16, w: u64) -> Decoded {
     match hw >> 10 {
         0b010001 => {
             // ADD/CMP/MOV high registers, BX/BLX.
@@ -180,7 +199,7 @@ fn decode16(hw: u16) -> Decoded {
                 alu()
             }
         }
-        0b010010 | 0b010011 => mem(2 + FLASH_WAIT_STATES), // LDR literal
+        0b010010 | 0b010011 => mem(2 + w), // LDR literal
         _ => match hw >> 12 {
             0b0101..=0b1001 => mem(2),
             0b1011 => misc16(hw),
@@ -208,7 +227,7 @@ fn misc16(hw: u16) -> Decoded {
 }
 
 // 32-bit Thumb-2 instruction
-fn decode32(hw1: u16, hw2: u16, addr: u32) -> Decoded {
+fn decode32(hw1: u16, hw2: u16, addr: u32, flash: &FlashConfig, w: u64) -> Decoded {
     match hw1 >> 11 {
         0b11101 if hw1 & 0x0600 == 0 => {
             if hw1 & 0x0040 == 0 {
@@ -218,7 +237,7 @@ fn decode32(hw1: u16, hw2: u16, addr: u32) -> Decoded {
                 let flow = if load && hw2 & 0x8000 != 0 { Flow::Branch } else { Flow::Next };
                 branch(1 + regs, flow)
             } else if hw1 & 0xFFF0 == 0xE8D0 && hw2 & 0xFFE0 == 0xF000 {
-                branch(2 + FLASH_WAIT_STATES, Flow::Branch) // TBB/TBH
+                branch(2 + w, Flow::Branch) // TBB/TBH
             } else if hw1 & 0x0120 != 0 || hw1 & 0x0080 != 0 {
                 branch(3, Flow::Next) // LDRD/STRD
             } else {
@@ -232,7 +251,7 @@ fn decode32(hw1: u16, hw2: u16, addr: u32) -> Decoded {
                 branch(1, Flow::CondBranch) // B<c>.W
             } else if hw1 == 0xF3BF && hw2 & 0xFFF0 == 0x8F60 {
                 // ISB: 1 + B, B at least a pipeline refill (TRM table 18-1).
-                Decoded { cost: 1 + refill(addr + 4), flow: Flow::Next, single_mem: false }
+                Decoded { cost: 1 + flash.refill(addr + 4), flow: Flow::Next, single_mem: false }
             } else {
                 alu() // MSR, MRS, hints, DSB/DMB (1 + B, B ≥ 0)
             }
@@ -245,7 +264,7 @@ fn decode32(hw1: u16, hw2: u16, addr: u32) -> Decoded {
                 if load && rt == 15 {
                     branch(2, Flow::Branch)
                 } else if rn == 15 {
-                    mem(2 + FLASH_WAIT_STATES)
+                    mem(2 + w)
                 } else {
                     mem(2)
                 }
@@ -268,11 +287,13 @@ fn decode32(hw1: u16, hw2: u16, addr: u32) -> Decoded {
 mod tests {
     use super::*;
 
+    const WS2: FlashConfig = FlashConfig::from_acr(0x12);
+
     #[test]
     fn costs_of_a_small_block() {
         // movs r0,#1; ldr r3,[pc,#8]; str r0,[r3]; str r0,[r3,#4]; bx lr
         let code = [0x01, 0x20, 0x02, 0x4b, 0x18, 0x60, 0x58, 0x60, 0x70, 0x47];
-        let b = decode_block(0x0800_0000, &code);
+        let b = decode_block(0x0800_0000, &code, WS2);
         let costs: Vec<u64> = b.insns.iter().map(|i| i.cost).collect();
         assert_eq!(costs, vec![1, 4, 1, 1, 1]);
         assert_eq!(b.insns[4].flow, Flow::Branch);
@@ -282,7 +303,20 @@ mod tests {
     #[test]
     fn isb_refills_the_pipeline() {
         // isb sy; nop
-        let b = decode_block(0x0800_0000, &[0xBF, 0xF3, 0x6F, 0x8F, 0x00, 0xBF]);
+        let b = decode_block(0x0800_0000, &[0xBF, 0xF3, 0x6F, 0x8F, 0x00, 0xBF], WS2);
         assert_eq!(b.insns.iter().map(|i| i.cost).collect::<Vec<_>>(), vec![4, 1]);
+    }
+
+    #[test]
+    fn branch_refill_follows_flash_latency_and_sram() {
+        // subs r0,#4; bhi .-2
+        let code = [0x04, 0x38, 0xFD, 0xD8];
+        let ram = decode_block(0x2000_0000, &code, WS2);
+        assert_eq!(ram.cost_to(0x2000_0000), 4, "SRAM: 1 + (1 + P = 2)");
+        let flash = decode_block(0x0800_0000, &code, WS2);
+        assert_eq!(flash.cost_to(0x0800_0000), 5, "flash, 2 wait states: 1 + (1 + 3)");
+        let fast = decode_block(0x0800_0000, &code, FlashConfig::RESET);
+        assert_eq!(fast.cost_to(0x0800_0000), 3, "flash, 0 wait states: 1 + (1 + 1)");
+        assert_eq!(fast.cost_to(0x0800_0004), 2, "not taken");
     }
 }

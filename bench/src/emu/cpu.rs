@@ -170,6 +170,13 @@ fn segment_paddr(elf: &[u8], vaddr: u64) -> Option<u64> {
 // block hook: account the previous block, then stop before this one if an event is due
 fn on_block(uc: &mut Unicorn<Machine>, addr: u64, size: u32) {
     let addr = addr as u32;
+    let m = uc.get_data_mut();
+    if let Some(prev) = m.cur.take() {
+        let b = m.blocks.at(prev).expect("current block is cached");
+        let (cycles, n) = (b.cost_to(addr), b.insns.len() as u64);
+        m.account(prev, cycles, n);
+    }
+    m.apply_flash_config();
     if !uc.get_data().blocks.contains(addr, size) {
         let mut code = vec![0u8; size as usize];
         let _ = uc.mem_read(addr as u64, &mut code);
@@ -181,11 +188,6 @@ fn on_block(uc: &mut Unicorn<Machine>, addr: u64, size: u32) {
         (0, false)
     };
     let m = uc.get_data_mut();
-    if let Some(prev) = m.cur {
-        let b = m.blocks.at(prev).expect("current block is cached");
-        let (cycles, n) = (b.cost_to(addr), b.insns.len() as u64);
-        m.account(prev, cycles, n);
-    }
     m.cur = Some(addr);
     if m.armed == Some((addr, m.now)) {
         m.armed = None;

@@ -4,18 +4,13 @@
 //! (flags and IT state from the stacked xPSR). Unicorn itself stays in
 //! "thread mode" (IPSR 0) all the time; the bench keeps IPSR in `Nvic::stack`. For `board.rs`.
 //!
-//! Modeled costs (Cortex-M3 TRM §5.5, zero wait states, plus 2 flash wait states for the
-//! vector/first-instruction or return-address fetch): entry 12 + 2, return 10 + 2,
-//! tail-chain 6 + 2.
+//! Modeled costs (Cortex-M3 TRM §5.5, zero wait states, plus the flash wait states W of
+//! FLASH_ACR for the vector/first-instruction or return-address fetch; `memory.rs`):
+//! entry 12 + W, return 10 + W, tail-chain 6 + W (W = 2 at 72 MHz).
 
 use unicorn_engine::RegisterARM;
 
-use super::cost::FLASH_WAIT_STATES;
 use super::cpu::Cpu;
-
-pub const ENTRY_CYCLES: u64 = 12 + FLASH_WAIT_STATES;
-pub const RETURN_CYCLES: u64 = 10 + FLASH_WAIT_STATES;
-pub const TAIL_CHAIN_CYCLES: u64 = 6 + FLASH_WAIT_STATES;
 
 /// xPSR Thumb bit and IT/ICI bits (ARMv7-M ARM B1.4.2).
 const EPSR_T: u32 = 1 << 24;

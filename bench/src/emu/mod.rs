@@ -21,6 +21,7 @@ mod cpu;
 mod exception;
 mod firmware;
 mod gpio;
+pub mod memory;
 pub mod nvic;
 pub mod profile;
 pub mod pwm;

@@ -20,6 +20,7 @@ pub struct IsrEntry {
 pub struct IsrStats {
     pub entries: u64,
     pub cycles_sum: u64,
+    pub cycles_min: Option<u64>,
     pub cycles_max: u64,
     pub insns_sum: u64,
     pub insns_max: u64,
@@ -59,6 +60,7 @@ impl Stats {
         s.entries += 1;
         s.cycles_sum += cycles;
         s.cycles_max = s.cycles_max.max(cycles);
+        s.cycles_min = Some(s.cycles_min.map_or(cycles, |m| m.min(cycles)));
         s.insns_sum += n;
         s.insns_max = s.insns_max.max(n);
         if let (Some(u), Some(b)) = (e.update, first_bsrr) {

@@ -217,8 +217,10 @@ pub struct Sweep {
 
 // the settings lines every point sends (after reset)
 pub fn settings_lines() -> Vec<String> {
-    let mut v = vec![format!("$0={PULSE_US}"), "$41=0".to_string(), "$40=1000".to_string()];
+    // All seven axes ($42), at the sweep's steps/mm (the defaults are a 3-axis gantry's).
+    let mut v = vec![format!("$0={PULSE_US}"), "$41=0".to_string(), "$40=1000".to_string(), "$42=7".to_string()];
     for i in 0..7 {
+        v.push(format!("$10{i}={STEPS_PER_MM}"));
         v.push(format!("$11{i}={MAX_RATE_MM_MIN}"));
         v.push(format!("$12{i}={ACCEL_MM_S2}"));
     }

@@ -1,18 +1,22 @@
-//! Grbl's `$` system commands: help, `$$`, `$#`, `$G`, `$I`, `$N`, `$X`, `$H`, `$RST=`, and
-//! `$N=value` settings. Long listings are written a line at a time as TX room appears.
+//! Grbl's `$` system commands: help, `$$`, `$#`, `$G`, `$I`, `$I=`, `$N`, `$Nn=`, `$C`, `$X`,
+//! `$H`, `$J=`, `$SLP`, `$RST=$/#/*`, and `$N=value` settings. Long listings are written a line
+//! at a time as TX room appears.
 
 use super::{Controller, Job, Listing};
+use crate::coords::Coords;
 use crate::gcode;
 use crate::planner::Limits;
 use crate::protocol::{Error, Out};
 use crate::report::{self, PARAM_LINES, SETTING_LEN};
 use crate::settings::{Change, Settings};
+use crate::store::{Text, STARTUP_LINES};
 
 impl<const N: usize> Controller<'_, N> {
     /// A `$` line (without the `$`).
     pub(super) fn system(&mut self, cmd: &[u8], out: &mut impl Out) -> Result<(), Error> {
-        let idle = self.drained();
-        let need_idle = |idle: bool| if idle { Ok(()) } else { Err(Error::NotIdle) };
+        // Grbl: `$$`, `$#`, `$I`, `$N`, `$RST`, settings need Idle or Alarm (not Check).
+        let idle = self.drained() && !self.check && !self.jogging();
+        let need_idle = |ok: bool| if ok { Ok(()) } else { Err(Error::NotIdle) };
         match cmd {
             b"" => out.put(report::HELP),
             b"G" => report::modes(out, &self.modal),
@@ -22,8 +26,18 @@ impl<const N: usize> Controller<'_, N> {
             }
             b"X" => {}
             b"H" => return Err(Error::SettingDisabled),
+            b"C" if self.check => {
+                // Leaving check mode resets, as in Grbl: state and position as before `$C`.
+                out.put(report::CHECK_OFF);
+                self.start(Job { reset: true, ..Job::NONE }, out);
+            }
+            b"C" => {
+                need_idle(idle && !self.alarm)?;
+                self.check = true;
+                out.put(report::CHECK_ON);
+            }
             b"$" => {
-                need_idle(idle)?;
+                need_idle(idle || self.check)?;
                 self.start(Job { listing: Some(Listing::Settings(0)), ..Job::NONE }, out);
             }
             b"#" => {
@@ -32,23 +46,57 @@ impl<const N: usize> Controller<'_, N> {
             }
             b"I" => {
                 need_idle(idle)?;
-                report::build_info(out, self.feeder.capacity(), &self.ramped);
+                report::build_info(out, self.stored.build_info.as_bytes(), self.feeder.capacity(), &self.ramped);
+                if let Some(t) = crate::steptime::STEP_TIME.take() {
+                    report::step_time(out, &t);
+                }
+            }
+            [b'I', b'=', text @ ..] => {
+                need_idle(idle)?;
+                self.stored.build_info = Text::new(text).ok_or(Error::LineLengthExceeded)?;
+                self.save_later(out);
             }
             b"N" => {
                 need_idle(idle)?;
-                out.put(b"$N0=\r\n$N1=\r\n");
+                for (i, t) in self.stored.startup.iter().enumerate() {
+                    out.put(b"$N");
+                    crate::protocol::put_u32(out, i as u32);
+                    out.put(b"=");
+                    out.put(t.as_bytes());
+                    out.put(b"\r\n");
+                }
+            }
+            [b'N', rest @ ..] => self.store_startup(rest, idle && !self.alarm, out)?,
+            b"SLP" => {
+                need_idle(idle)?;
+                out.put(report::SLEEPING);
+                self.sleep = true;
+                self.drivers_on = false;
             }
             b"RST=$" | b"RST=*" | b"RST=#" => {
                 need_idle(idle)?;
                 out.put(report::RESTORED);
+                if cmd != b"RST=$" {
+                    self.stored.coords = Coords::ZERO;
+                }
+                if cmd == b"RST=*" {
+                    self.stored.startup = [Text::EMPTY; STARTUP_LINES];
+                    self.stored.build_info = Text::EMPTY;
+                }
                 if cmd != b"RST=#" {
+                    let pins = (self.settings.step_invert, self.settings.dir_invert);
                     self.settings = Settings::DEFAULT;
-                    self.settings_changed(Change::Pins, out);
+                    if pins != (self.settings.step_invert, self.settings.dir_invert) {
+                        self.restart = true;
+                    }
                     self.settings_changed(Change::Profile, out);
                 }
+                self.save_later(out);
+                if let Some(j) = &mut self.job {
+                    j.reset = true;
+                }
             }
-            // Jogging ($J=) is not implemented yet.
-            [b'J', b'=', ..] => return Err(Error::UnsupportedCommand),
+            [b'J', b'=', text @ ..] => self.jog_line(text, out)?,
             [b'0'..=b'9', ..] => {
                 let mut i = 0;
                 let id = gcode::parse_number(cmd, &mut i)?;
@@ -69,16 +117,39 @@ impl<const N: usize> Controller<'_, N> {
         Ok(())
     }
 
+    /// `$Nn=line`: the line runs (as Grbl checks it, by executing it) and is stored if valid.
+    fn store_startup(&mut self, rest: &[u8], idle: bool, out: &mut impl Out) -> Result<(), Error> {
+        let mut i = 0;
+        let n = gcode::parse_number(rest, &mut i)?;
+        if rest.get(i) != Some(&b'=') {
+            return Err(Error::InvalidStatement);
+        }
+        let line = &rest[i + 1..];
+        if !idle {
+            return Err(Error::NotIdle);
+        }
+        let slot = libm::trunc(n);
+        if !(0.0..STARTUP_LINES as f64).contains(&slot) {
+            return Err(Error::InvalidStatement);
+        }
+        let text = Text::new(line).ok_or(Error::LineLengthExceeded)?;
+        self.gcode(line, out)?;
+        self.stored.startup[slot as usize] = text;
+        self.save_later(out);
+        Ok(())
+    }
+
     /// Follows a settings change through (only ever called while idle); the line's `ok` waits
     /// for the poll that asks for the flash write.
     fn settings_changed(&mut self, change: Change, out: &mut impl Out) {
         if change != Change::None {
-            self.start(Job { save: true, ..Job::NONE }, out);
+            self.save_later(out);
         }
         match change {
             Change::None | Change::Shell => {}
             Change::Pins => self.restart = true,
             Change::Profile => {
+                self.axes = self.settings.axis_count(N);
                 self.limits = Limits::new(&self.settings, self.ramped.cfg.vmax);
                 self.apply_profile();
                 self.planner.sync(self.shared.positions(), &self.limits);
@@ -91,11 +162,11 @@ impl<const N: usize> Controller<'_, N> {
         loop {
             match l {
                 Listing::Settings(i) => {
-                    let id = Settings::id(i as usize, N)?;
+                    let id = Settings::id(i as usize, self.axes)?;
                     if out.room() < SETTING_LEN + 4 {
                         return Some(l);
                     }
-                    let (v, d) = self.settings.get(id, N).unwrap_or((0.0, 0));
+                    let (v, d) = self.settings.get(id, self.axes).unwrap_or((0.0, 0));
                     report::setting(out, id, v, d);
                     l = Listing::Settings(i + 1);
                 }
@@ -106,7 +177,7 @@ impl<const N: usize> Controller<'_, N> {
                     if out.room() < report::param_len(N) + 4 {
                         return Some(l);
                     }
-                    report::param::<N>(out, i as usize);
+                    report::param::<N>(out, i as usize, &self.offsets, self.axes);
                     l = Listing::Params(i + 1);
                 }
             }

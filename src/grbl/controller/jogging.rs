@@ -1,0 +1,71 @@
+//! `$J=` lines and jog cancel (0x85, or `!` while jogging), as in Grbl 1.1: the cancel
+//! decelerates with the engine's feed hold, then drops the running and queued jog moves, and
+//! the planner takes the engine's exact position.
+
+use super::{Controller, Job, Jogging};
+use crate::jog;
+use crate::protocol::{Error, Out};
+use crate::queue::State;
+
+impl<const N: usize> Controller<'_, N> {
+    /// 0x85 arrived: cancel jogging (nothing happens unless jog moves are queued or running).
+    pub fn jog_cancel(&mut self) {
+        if self.jog == Jogging::On {
+            self.jog = Jogging::Cancel;
+        }
+    }
+
+    /// True while jog moves are queued, running or being cancelled.
+    pub fn jogging(&self) -> bool {
+        self.jog != Jogging::Off
+    }
+
+    /// `$J=…` (the text after `=`): only when idle or already jogging.
+    pub(super) fn jog_line(&mut self, text: &[u8], out: &mut impl Out) -> Result<(), Error> {
+        let idle = self.drained() && !self.shared.hold_requested();
+        if self.alarm || self.check || !(idle || self.jog == Jogging::On) {
+            return Err(Error::NotIdle);
+        }
+        let j = jog::plan(text, &self.modal, self.planner.position_mm(), &self.offsets)?;
+        if j.target[self.axes..] != self.planner.position_mm()[self.axes..] {
+            return Err(Error::UnsupportedCommand);
+        }
+        let mut planner = self.planner;
+        let mv = planner.line(&j.target, Some(j.feed), &self.limits)?;
+        self.planner = planner;
+        self.start(Job { mv, jog: true, ..Job::NONE }, out);
+        Ok(())
+    }
+
+    /// Follows a jog through: a feed hold while jogging cancels it (Grbl), a cancel waits for
+    /// the hold to complete, then flushes the queue and re-syncs the planner.
+    pub(super) fn jog_poll(&mut self, out: &mut impl Out) {
+        match self.jog {
+            Jogging::Off => {}
+            Jogging::On if self.shared.hold_requested() => self.jog = Jogging::Cancel,
+            Jogging::On => {
+                let queued = self.job.is_some_and(|j| j.jog && j.mv.is_some());
+                if self.drained() && !queued {
+                    self.jog = Jogging::Off;
+                }
+            }
+            Jogging::Cancel => {
+                self.shared.set_hold(true);
+                if matches!(self.shared.state(), State::Run | State::Holding) {
+                    return;
+                }
+                // Stopped (held, or not started): drop the rest; the position is the pulses made.
+                self.feeder.abort();
+                self.shared.set_hold(false);
+                if self.job.is_some_and(|j| j.jog) {
+                    // A jog line waiting for queue room is one of the queued jogs: flushed too.
+                    self.job = None;
+                    crate::protocol::put_ok(out);
+                }
+                self.pushed = self.shared.moves_done();
+                self.planner.sync(self.shared.positions(), &self.limits);
+                self.jog = Jogging::Off;
+            }
+        }
+    }
+}

@@ -1,0 +1,119 @@
+//! Work coordinates: G54–G59, G28/G30 positions (persistent), the G92 offset and the tool
+//! length offset (volatile, cleared by a reset as in Grbl 1.1).
+//!
+//! Who uses it: the G-code interpreter (targets, G10, G92, G28/G30, G43.1), reports (`$#`,
+//! `WCO:`) and the persistent store (`crate::store`).
+//!
+//! Everything is in machine millimetres. Grbl's relation holds on every axis:
+//! `WPos = MPos − WCS[selected] − G92 − TLO` (TLO on Z only), and `WCO` is the sum of the three.
+//! Stored values are `f32` (as Grbl's EEPROM floats); the controller keeps the stored copy, so
+//! what is reported is what a power cycle brings back.
+
+use crate::MAX_AXES;
+
+/// Stored vectors: G54..G59, then G28 and G30.
+pub const SLOTS: usize = 8;
+/// Index of the G28 position.
+pub const G28: usize = 6;
+/// Index of the G30 position.
+pub const G30: usize = 7;
+/// The axis the tool length offset applies to (Z).
+pub const TLO_AXIS: usize = 2;
+/// Bytes of the stored image.
+pub const COORDS_LEN: usize = SLOTS * MAX_AXES * 4;
+
+/// The persistent part: work coordinate systems and the two predefined positions.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Coords {
+    pub slots: [[f32; MAX_AXES]; SLOTS],
+}
+
+impl Default for Coords {
+    fn default() -> Self {
+        Self::ZERO
+    }
+}
+
+impl Coords {
+    pub const ZERO: Coords = Coords { slots: [[0.0; MAX_AXES]; SLOTS] };
+
+    /// Slot `i` for `N` axes, as `f64`.
+    pub fn get<const N: usize>(&self, i: usize) -> [f64; N] {
+        let s = self.slots.get(i).copied().unwrap_or([0.0; MAX_AXES]);
+        core::array::from_fn(|a| s.get(a).copied().unwrap_or(0.0) as f64)
+    }
+
+    /// Stores slot `i` (axes beyond `N` keep their value).
+    pub fn set<const N: usize>(&mut self, i: usize, v: &[f64; N]) {
+        if let Some(s) = self.slots.get_mut(i) {
+            for (d, x) in s.iter_mut().zip(v) {
+                *d = *x as f32;
+            }
+        }
+    }
+
+    /// Little-endian image.
+    pub fn to_bytes(&self) -> [u8; COORDS_LEN] {
+        let mut b = [0u8; COORDS_LEN];
+        for (w, v) in b.chunks_exact_mut(4).zip(self.slots.iter().flatten()) {
+            w.copy_from_slice(&v.to_le_bytes());
+        }
+        b
+    }
+
+    /// From an image; `None` if a value is not a finite number.
+    pub fn from_bytes(b: &[u8]) -> Option<Coords> {
+        let mut c = Coords::ZERO;
+        let b = b.get(..COORDS_LEN)?;
+        for (w, v) in b.chunks_exact(4).zip(c.slots.iter_mut().flatten()) {
+            *v = f32::from_le_bytes([w[0], w[1], w[2], w[3]]);
+            if !v.is_finite() {
+                return None;
+            }
+        }
+        Some(c)
+    }
+}
+
+/// Every offset in force for `N` axes: the stored systems plus G92 and the tool length offset.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Offsets<const N: usize> {
+    pub stored: Coords,
+    /// G92 offset, mm (not persistent).
+    pub g92: [f64; N],
+    /// G43.1 tool length offset on Z, mm (not persistent).
+    pub tlo: f64,
+}
+
+impl<const N: usize> Default for Offsets<N> {
+    fn default() -> Self {
+        Self::new(Coords::ZERO)
+    }
+}
+
+impl<const N: usize> Offsets<N> {
+    /// The stored systems with no G92 and no tool length offset (after a reset).
+    pub const fn new(stored: Coords) -> Self {
+        Offsets { stored, g92: [0.0; N], tlo: 0.0 }
+    }
+
+    /// Work coordinate system `sel` (0 = G54).
+    pub fn wcs(&self, sel: u8) -> [f64; N] {
+        self.stored.get(sel as usize)
+    }
+
+    /// The tool length offset's share of axis `i`.
+    pub fn tlo_of(&self, i: usize) -> f64 {
+        if i == TLO_AXIS {
+            self.tlo
+        } else {
+            0.0
+        }
+    }
+
+    /// Work coordinate offset with system `sel`: WCS + G92 + TLO.
+    pub fn wco(&self, sel: u8) -> [f64; N] {
+        let w = self.wcs(sel);
+        core::array::from_fn(|i| w[i] + self.g92[i] + self.tlo_of(i))
+    }
+}

@@ -1,0 +1,140 @@
+//! What survives a power cut: settings, coordinate systems, `$N` startup lines and the `$I`
+//! build-info string, kept as one image in *two* flash pages (A/B).
+//!
+//! Who uses it: the firmware shell (load at boot, save after [`crate::controller::Actions::save`])
+//! and the controller (which owns the [`Stored`] copy and bumps its sequence number).
+//!
+//! Invariant: a save never touches the page holding the newest valid image. It erases the
+//! other page (blank, corrupt or older), programs the new image there and reads it back; the
+//! image carries a sequence number and a CRC-32. A power cut at any moment therefore leaves
+//! either the new image complete (it wins: higher sequence) or the previous one untouched —
+//! coordinates are never lost when settings change, and settings never when coordinates do.
+//! Each page sees every second write, halving flash wear per page.
+
+use crate::coords::{Coords, COORDS_LEN};
+use crate::settings::{crc32, Settings, SETTINGS_LEN};
+
+/// Bytes a stored text line can hold (Grbl keeps 80 with its terminator).
+pub const TEXT_LEN: usize = 79;
+/// `$N0`, `$N1`.
+pub const STARTUP_LINES: usize = 2;
+const MAGIC: [u8; 4] = *b"DDS2";
+const SETTINGS_AT: usize = 8;
+const COORDS_AT: usize = SETTINGS_AT + SETTINGS_LEN;
+const TEXT_AT: usize = COORDS_AT + COORDS_LEN;
+const TEXTS: usize = STARTUP_LINES + 1;
+/// Bytes of the image (a multiple of 4, within one 1 KiB page).
+pub const IMAGE_LEN: usize = TEXT_AT + TEXTS * (TEXT_LEN + 1) + 4;
+/// Flash page size.
+pub const PAGE_LEN: usize = 1024;
+const _: () = assert!(IMAGE_LEN <= PAGE_LEN && IMAGE_LEN % 4 == 0);
+
+/// A short stored text (a startup line or the build info), upper case as lines arrive.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Text {
+    len: u8,
+    buf: [u8; TEXT_LEN],
+}
+
+impl Default for Text {
+    fn default() -> Self {
+        Self::EMPTY
+    }
+}
+
+impl Text {
+    pub const EMPTY: Text = Text { len: 0, buf: [0; TEXT_LEN] };
+
+    /// `None` when longer than [`TEXT_LEN`].
+    pub fn new(s: &[u8]) -> Option<Text> {
+        let mut t = Text::EMPTY;
+        t.buf.get_mut(..s.len())?.copy_from_slice(s);
+        t.len = s.len() as u8;
+        Some(t)
+    }
+
+    pub fn as_bytes(&self) -> &[u8] {
+        &self.buf[..(self.len as usize).min(TEXT_LEN)]
+    }
+}
+
+/// Everything persistent.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Stored {
+    /// Sequence number of the image (the newer of two valid pages wins).
+    pub seq: u32,
+    pub settings: Settings,
+    pub coords: Coords,
+    pub startup: [Text; STARTUP_LINES],
+    pub build_info: Text,
+}
+
+impl From<Settings> for Stored {
+    fn from(settings: Settings) -> Self {
+        Stored { settings, ..Stored::DEFAULT }
+    }
+}
+
+impl Default for Stored {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+impl Stored {
+    pub const DEFAULT: Stored = Stored {
+        seq: 0,
+        settings: Settings::DEFAULT,
+        coords: Coords::ZERO,
+        startup: [Text::EMPTY; STARTUP_LINES],
+        build_info: Text::EMPTY,
+    };
+
+    /// The flash image.
+    pub fn to_bytes(&self) -> [u8; IMAGE_LEN] {
+        let mut b = [0u8; IMAGE_LEN];
+        b[..4].copy_from_slice(&MAGIC);
+        b[4..8].copy_from_slice(&self.seq.to_le_bytes());
+        b[SETTINGS_AT..COORDS_AT].copy_from_slice(&self.settings.to_bytes());
+        b[COORDS_AT..TEXT_AT].copy_from_slice(&self.coords.to_bytes());
+        let texts = self.startup.iter().chain(core::iter::once(&self.build_info));
+        for (w, t) in b[TEXT_AT..].chunks_exact_mut(TEXT_LEN + 1).zip(texts) {
+            w[0] = t.len;
+            w[1..].copy_from_slice(&t.buf);
+        }
+        let crc = crc32(&b[..IMAGE_LEN - 4]);
+        b[IMAGE_LEN - 4..].copy_from_slice(&crc.to_le_bytes());
+        b
+    }
+
+    /// An image read from flash, or `None` (blank, torn by a power cut, other format).
+    pub fn decode(b: &[u8]) -> Option<Stored> {
+        let b = b.get(..IMAGE_LEN)?;
+        let crc = u32::from_le_bytes(b[IMAGE_LEN - 4..].try_into().ok()?);
+        if b[..4] != MAGIC || crc32(&b[..IMAGE_LEN - 4]) != crc {
+            return None;
+        }
+        let mut s = Stored {
+            seq: u32::from_le_bytes(b[4..8].try_into().ok()?),
+            settings: Settings::decode(&b[SETTINGS_AT..COORDS_AT])?,
+            coords: Coords::from_bytes(&b[COORDS_AT..TEXT_AT])?,
+            ..Stored::DEFAULT
+        };
+        let texts = s.startup.iter_mut().chain(core::iter::once(&mut s.build_info));
+        for (w, t) in b[TEXT_AT..].chunks_exact(TEXT_LEN + 1).zip(texts) {
+            *t = Text::new(w.get(1..1 + w[0] as usize)?)?;
+        }
+        Some(s)
+    }
+
+    /// The newest valid image of two pages, and the index of the page to write next (the
+    /// other one). Nothing valid: the defaults, and page 0.
+    pub fn load(pages: [&[u8]; 2]) -> (Stored, usize) {
+        match pages.map(Stored::decode) {
+            [Some(a), Some(b)] if (b.seq.wrapping_sub(a.seq) as i32) > 0 => (b, 0),
+            [Some(a), _] => (a, 1),
+            [None, Some(b)] => (b, 0),
+            [None, None] => (Stored::DEFAULT, 0),
+        }
+    }
+}

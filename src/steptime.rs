@@ -1,0 +1,211 @@
+//! Step-path self-measurement: the step interrupt times its own body with the DWT cycle
+//! counter and `$I` reports min / mean / max cycles per entry and the load, so a user with a
+//! real Blue Pill gets the silicon figure to hold against the virtual bench's modeled one.
+//!
+//! Three writers, each the only writer of its fields, and no locks:
+//! - the step interrupt ([`StepTime::record`], highest priority): entry count and busy cycles
+//!   (both wrapping), and the min / max since the last report;
+//! - the 1 ms tick ([`StepTime::tick_ms`]): 64-bit totals and the busiest millisecond, under a
+//!   sequence count (odd while it writes) so a reader never sees half an update;
+//! - the report ([`StepTime::take`], from `idle`): its previous totals, and it restarts min,
+//!   max and peak with atomic swaps (LDREX/STREX: a preempting writer makes it retry).
+//!
+//! Cost on the step path: two CYCCNT loads and a subtraction, then two load-add-stores and two
+//! compare-and-store (about 12 instructions, ~20 cycles; `bench/README.md` gives the modeled
+//! figure). The body measured runs from the first CYCCNT read to the second: exception entry
+//! and return (12 + 10 cycles + flash refills on a Cortex-M3) and the few instructions before
+//! the first read and after the second are outside it.
+
+use core::sync::atomic::{AtomicU32, Ordering::Relaxed};
+
+/// The firmware's step-path timing (the step interrupt records, `$I` reports).
+pub static STEP_TIME: StepTime = StepTime::new();
+
+/// Cycle statistics of the step interrupt's body.
+pub struct StepTime {
+    count: AtomicU32,
+    busy: AtomicU32,
+    min: AtomicU32,
+    max: AtomicU32,
+    seq: AtomicU32,
+    ms: AtomicU32,
+    seen_count: AtomicU32,
+    seen_busy: AtomicU32,
+    total_count: [AtomicU32; 2],
+    total_busy: [AtomicU32; 2],
+    peak_ms: AtomicU32,
+    read_ms: AtomicU32,
+    read_count: [AtomicU32; 2],
+    read_busy: [AtomicU32; 2],
+}
+
+/// What one report covers: the step interrupt since the previous report.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepTimeReport {
+    pub entries: u64,
+    pub min: u32,
+    pub mean: f32,
+    pub max: u32,
+    /// Busy cycles / elapsed cycles over the window.
+    pub load: f32,
+    /// Busiest whole millisecond of the window.
+    pub peak_load: f32,
+}
+
+const CYCLES_PER_MS: u32 = crate::TIMER_HZ / 1000;
+
+impl Default for StepTime {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl StepTime {
+    pub const fn new() -> Self {
+        const Z: AtomicU32 = AtomicU32::new(0);
+        Self {
+            count: Z,
+            busy: Z,
+            min: AtomicU32::new(u32::MAX),
+            max: Z,
+            seq: Z,
+            ms: Z,
+            seen_count: Z,
+            seen_busy: Z,
+            total_count: [Z, Z],
+            total_busy: [Z, Z],
+            peak_ms: Z,
+            read_ms: Z,
+            read_count: [Z, Z],
+            read_busy: [Z, Z],
+        }
+    }
+
+    /// One step-interrupt body took `cycles` (step interrupt only: plain loads and stores).
+    #[inline(always)]
+    pub fn record(&self, cycles: u32) {
+        self.count.store(self.count.load(Relaxed).wrapping_add(1), Relaxed);
+        self.busy.store(self.busy.load(Relaxed).wrapping_add(cycles), Relaxed);
+        if cycles > self.max.load(Relaxed) {
+            self.max.store(cycles, Relaxed);
+        }
+        if cycles < self.min.load(Relaxed) {
+            self.min.store(cycles, Relaxed);
+        }
+    }
+
+    /// Every millisecond (one context only): extend the counters to 64 bits, track the peak.
+    pub fn tick_ms(&self) {
+        // Count first: an entry that lands between the two loads is counted next time, and
+        // its cycles can at most show in this millisecond's busy total.
+        let count = self.count.load(Relaxed);
+        let busy = self.busy.load(Relaxed);
+        let d_count = count.wrapping_sub(self.seen_count.load(Relaxed));
+        let d_busy = busy.wrapping_sub(self.seen_busy.load(Relaxed));
+        self.seen_count.store(count, Relaxed);
+        self.seen_busy.store(busy, Relaxed);
+        if d_busy > self.peak_ms.load(Relaxed) {
+            self.peak_ms.store(d_busy, Relaxed);
+        }
+        self.seq.store(self.seq.load(Relaxed).wrapping_add(1), Relaxed);
+        core::sync::atomic::compiler_fence(core::sync::atomic::Ordering::SeqCst);
+        add64(&self.total_count, d_count);
+        add64(&self.total_busy, d_busy);
+        self.ms.store(self.ms.load(Relaxed).wrapping_add(1), Relaxed);
+        core::sync::atomic::compiler_fence(core::sync::atomic::Ordering::SeqCst);
+        self.seq.store(self.seq.load(Relaxed).wrapping_add(1), Relaxed);
+    }
+
+    /// The figures since the previous call (one caller only), `None` if no entry was timed.
+    pub fn take(&self) -> Option<StepTimeReport> {
+        let (ms, count, busy) = loop {
+            let s = self.seq.load(Relaxed);
+            core::sync::atomic::compiler_fence(core::sync::atomic::Ordering::SeqCst);
+            let v = (self.ms.load(Relaxed), load64(&self.total_count), load64(&self.total_busy));
+            core::sync::atomic::compiler_fence(core::sync::atomic::Ordering::SeqCst);
+            if s % 2 == 0 && self.seq.load(Relaxed) == s {
+                break v;
+            }
+        };
+        if count == load64(&self.read_count) {
+            return None;
+        }
+        let d_ms = ms.wrapping_sub(self.read_ms.swap(ms, Relaxed));
+        let d_count = count - swap64(&self.read_count, count);
+        let d_busy = busy - swap64(&self.read_busy, busy);
+        let min = self.min.swap(u32::MAX, Relaxed);
+        let max = self.max.swap(0, Relaxed);
+        let peak = self.peak_ms.swap(0, Relaxed);
+        let elapsed = (d_ms.max(1) as u64 * CYCLES_PER_MS as u64) as f32;
+        Some(StepTimeReport {
+            entries: d_count,
+            min,
+            mean: d_busy as f32 / d_count as f32,
+            max,
+            load: d_busy as f32 / elapsed,
+            peak_load: peak as f32 / CYCLES_PER_MS as f32,
+        })
+    }
+}
+
+// add `d` to the 64-bit number held as [low, high] (single writer)
+fn add64(v: &[AtomicU32; 2], d: u32) {
+    let (lo, carry) = v[0].load(Relaxed).overflowing_add(d);
+    v[0].store(lo, Relaxed);
+    if carry {
+        v[1].store(v[1].load(Relaxed).wrapping_add(1), Relaxed);
+    }
+}
+
+fn load64(v: &[AtomicU32; 2]) -> u64 {
+    (v[1].load(Relaxed) as u64) << 32 | v[0].load(Relaxed) as u64
+}
+
+// store `x` (single writer), return the previous value
+fn swap64(v: &[AtomicU32; 2], x: u64) -> u64 {
+    let old = load64(v);
+    v[0].store(x as u32, Relaxed);
+    v[1].store((x >> 32) as u32, Relaxed);
+    old
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_window_reports_its_entries_and_restarts() {
+        let t = StepTime::new();
+        assert_eq!(t.take(), None);
+        for c in [200, 250, 300] {
+            t.record(c);
+        }
+        t.tick_ms();
+        t.record(400);
+        t.tick_ms();
+        let r = t.take().unwrap();
+        assert_eq!((r.entries, r.min, r.max), (4, 200, 400));
+        assert_eq!(r.mean, 287.5);
+        assert_eq!(r.load, 1150.0 / 144_000.0);
+        assert_eq!(r.peak_load, 750.0 / 72_000.0);
+        // The next window starts empty; entries not yet seen by a tick wait for it.
+        t.record(100);
+        assert_eq!(t.take(), None);
+        t.record(120);
+        t.tick_ms();
+        let r = t.take().unwrap();
+        assert_eq!((r.entries, r.min, r.max, r.mean), (2, 100, 120, 110.0));
+        assert_eq!(t.take(), None);
+    }
+
+    #[test]
+    fn counters_wrap_and_totals_extend() {
+        let t = StepTime::new();
+        t.busy.store(u32::MAX - 10, Relaxed);
+        t.seen_busy.store(u32::MAX - 10, Relaxed);
+        t.record(100);
+        t.tick_ms();
+        let r = t.take().unwrap();
+        assert_eq!((r.entries, r.mean), (1, 100.0));
+    }
+}
