@@ -15,6 +15,20 @@ pub const ENABLE_PIN: u8 = 8;
 /// GPIOA pins of the limit-switch inputs, X Y Z A B C U (pull-up, switch to ground).
 /// PA6/PA7 stay free for the TIM3 encoder, PA9/PA10 are USART1, PA11/PA12 USB, PA13/PA14 SWD.
 pub const LIMIT_PINS: [u8; MAX_AXES] = [0, 1, 2, 3, 4, 5, 8];
+/// GPIOA pin of the spindle/laser PWM: TIM1 channel 1. It is also U's limit input, so it gives
+/// way to the spindle (the limit input of a wired U axis would need another pin).
+pub const SPINDLE_PWM_PIN: u8 = 8;
+/// GPIOA pin of the spindle enable (high = on); free once JTAG is off.
+pub const SPINDLE_ENABLE_PIN: u8 = 15;
+/// GPIOA pin of the spindle direction (high = M4); C's limit input.
+pub const SPINDLE_DIR_PIN: u8 = 5;
+/// GPIOA pin of flood coolant (M8, high = on); B's limit input.
+pub const COOLANT_FLOOD_PIN: u8 = 4;
+/// GPIOA pin of mist coolant (M7, high = on); A's limit input.
+pub const COOLANT_MIST_PIN: u8 = 3;
+/// GPIOA pins that stay limit inputs with the spindle and coolant outputs in use (X Y Z).
+pub const LIMIT_INPUTS: u32 = 1 << LIMIT_PINS[0] | 1 << LIMIT_PINS[1] | 1 << LIMIT_PINS[2];
+
 /// GPIOC pin of the on-board LED (active low).
 pub const LED_PIN: u8 = 13;
 

@@ -130,7 +130,7 @@ proptest! {
         let seg = arc.segments(tol);
         let ends = check_chords(&arc, start, seg, tol);
         // Step counts: the chords as planned moves add up to the whole arc's steps.
-        let lim = Limits::<3>::new(&Settings::DEFAULT, 60_000);
+        let lim = Limits::<3>::new(&Settings::BENCH, 60_000);
         let mut p = Planner::<3>::new();
         p.set_position(&start.map(Some), &lim).unwrap();
         let mut sum = [0i64; 3];
@@ -141,7 +141,7 @@ proptest! {
                 }
             }
         }
-        let spm = |k: usize| Settings::DEFAULT.steps_per_mm[k] as f64;
+        let spm = |k: usize| Settings::BENCH.steps_per_mm[k] as f64;
         let want: [i64; 3] = std::array::from_fn(|k| to_steps(target[k], spm(k)).unwrap() - to_steps(start[k], spm(k)).unwrap());
         prop_assert_eq!(sum, want);
         prop_assert_eq!(p.position_mm(), &target);

@@ -3,6 +3,7 @@
 
 mod fil;
 
+use ddastep_bench::emu::HZ;
 use fil::*;
 
 /// The job: (line, what the ideal path travels on X, Y, Z in mm for that line).
@@ -54,4 +55,51 @@ fn cam_job_with_arcs_runs_without_error_and_ends_exactly() {
     }
     assert_eq!(b.report().overruns, 0);
     assert!(b.fault().is_none());
+}
+
+#[test]
+fn laser_m4_pwm_duty_follows_the_step_rate_through_a_ramp() {
+    let mut b = boot();
+    // Laser mode; a slow ramp (10^4 steps/s², 1 kHz to 5 kHz in 0.4 s) so the ramp is long
+    // against the 1 ms poll and the 1 ms PWM period.
+    for line in ["$32=1", "$120=100", "$121=100", "$122=100", "M8", "G1 F3000 M4 S1000", "G1 X30"] {
+        ok(&mut b, line);
+    }
+    wait_idle(&mut b, 5.0);
+    let x: Vec<u64> = steps(&b).iter().filter(|s| s.axis == 0).map(|s| s.cycle).collect();
+    assert_eq!(x.len(), 3000);
+    let pwm = b.pwm_changes().to_vec();
+    assert!(pwm.iter().all(|c| (c.hz - 1000.0).abs() < 0.1), "1 kHz PWM");
+    let ms = HZ / 1000;
+    let (first, last) = (x[0], *x.last().unwrap());
+    let (mut checked, mut ramp, mut worst) = (0, 0, 0.0f64);
+    for c in pwm.iter().filter(|c| c.cycle > first + 3 * ms && c.cycle + 3 * ms < last) {
+        // The X step rate over the last four step periods before the change (the poll reads
+        // the engine's rate, the compare register takes it at the next PWM period).
+        let k = x.partition_point(|&t| t <= c.cycle);
+        if k < 5 {
+            continue;
+        }
+        let k = k - 1;
+        let rate = 4.0 * HZ as f64 / (x[k] - x[k - 4]) as f64;
+        let want = (rate / 5000.0).min(1.0);
+        assert!((c.duty - want).abs() <= 0.02, "at {} ms: duty {:.3}, rate {rate:.0} Hz", c.cycle / ms, c.duty);
+        worst = worst.max((c.duty - want).abs());
+        checked += 1;
+        if c.duty > 0.3 && c.duty < 0.9 {
+            ramp += 1;
+        }
+    }
+    eprintln!("{checked} duty changes while moving, largest difference from rate/cruise {worst:.4}");
+    // Every millisecond of the ramps is a change of duty.
+    assert!(ramp > 500, "{ramp} duty steps on the ramps ({checked} checked)");
+    assert_eq!(b.pwm_changes().last().unwrap().duty, 0.0, "laser off once stopped");
+    let sp = b.report().spindle;
+    assert!((sp.max_duty - 1.0).abs() < 1e-9, "full power at cruise: {sp:?}");
+    assert_eq!(sp.pin_rises, [1, 1, 1, 0], "spindle enable, M4 direction, flood; no mist");
+    ok(&mut b, "M5 M9");
+    b.run_seconds(0.01).unwrap();
+    for (pin, name) in ddastep_bench::emu::TOOL_PINS {
+        assert!(!b.output(ddastep_bench::emu::Port::A, pin), "{name} off after M5 M9");
+    }
 }

@@ -43,11 +43,11 @@ fn set_follows_grbl_rules() {
 fn ids_cover_every_gettable_setting_once() {
     let s = Settings::DEFAULT;
     let ids: heapless::Vec<u16, 64> = Settings::ids(3).collect();
-    assert_eq!(ids.len(), 7 + 13 + 7 + 12); // ours: $10, $12, $29, $33, $40, $41, $42 (+$30-$32 real)
+    assert_eq!(ids.len(), 7 + 14 + 6 + 12); // ours: $29, $33, $40, $41, $42 and $10's mask
     assert!(ids.windows(2).all(|w| w[0] < w[1]), "{ids:?}");
     assert!(ids.iter().all(|&id| s.get(id, 3).is_some()));
     assert_eq!(s.get(133, 3), None);
-    assert_eq!(Settings::ids(7).count(), 7 + 13 + 7 + 28);
+    assert_eq!(Settings::ids(7).count(), 7 + 14 + 6 + 28);
 }
 
 #[test]

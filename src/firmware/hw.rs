@@ -1,8 +1,11 @@
-//! Hardware setup: clocks, pins, TIM2 as the step timer, USART1, SysTick.
+//! Hardware setup: clocks, pins, TIM2 as the step timer, TIM1 as the spindle PWM, USART1,
+//! SysTick.
 
 use cortex_m::peripheral::syst::SystClkSource;
 use ddastep::board;
 use ddastep::engine::IDLE_TICKS;
+use ddastep::settings::Settings;
+use ddastep::spindle::{PwmTiming, SpindleOut};
 use ddastep::store::{Stored, IMAGE_LEN, PAGE_LEN};
 use stm32f1xx_hal::flash;
 use stm32f1xx_hal::pac;
@@ -89,6 +92,39 @@ pub fn set_pulse_ticks(ticks: u32) {
     tim2().ccr1().write(|w| unsafe { w.bits((ticks + ddastep::timing::STORE_LATENCY_TICKS).min(0xFFFF)) });
 }
 
+/// TIM1's registers (written only by `idle` after init).
+#[inline(always)]
+fn tim1() -> &'static pac::tim1::RegisterBlock {
+    // SAFETY: only `idle` (one context) writes TIM1 after init; no interrupt uses it.
+    unsafe { &*pac::TIM1::ptr() }
+}
+
+/// TIM1 CR1: counter enable, ARR preload.
+const TIM1_CR1_CEN: u32 = 1 << 0;
+const TIM1_CR1_ARPE: u32 = 1 << 7;
+
+/// New spindle PWM frequency: prescaler and period, taken at the next update event.
+pub fn set_pwm_timing(t: PwmTiming) {
+    tim1().psc().write(|w| unsafe { w.bits(t.psc as u32) });
+    tim1().arr().write(|w| unsafe { w.bits(t.arr as u32) });
+}
+
+/// Spindle PWM compare value (preloaded: one whole period at a time) and the spindle and
+/// coolant pins (one atomic BSRR store).
+pub fn set_spindle(o: SpindleOut) {
+    tim1().ccr1().write(|w| unsafe { w.bits(o.ccr as u32) });
+    let pins = [
+        (board::SPINDLE_ENABLE_PIN, o.enable),
+        (board::SPINDLE_DIR_PIN, o.ccw),
+        (board::COOLANT_FLOOD_PIN, o.flood),
+        (board::COOLANT_MIST_PIN, o.mist),
+    ];
+    let word = pins.iter().fold(0u32, |w, &(p, on)| w | if on { 1 << p } else { 1 << (p + 16) });
+    // SAFETY: BSRR stores are atomic; only `idle` drives these GPIOA pins.
+    let gpioa = unsafe { &*pac::GPIOA::ptr() };
+    gpioa.bsrr().write(|w| unsafe { w.bits(word) });
+}
+
 /// PC13 LED (active low): on for 100 ms of every second.
 pub fn heartbeat(now_ms: u32) {
     let on = now_ms % 1000 < 100;
@@ -125,6 +161,7 @@ impl Board {
         rx.listen();
 
         setup_tim2(&mut rcc);
+        setup_tim1(&mut rcc);
 
         // SysTick at 1 kHz from the 72 MHz core clock.
         syst.set_clock_source(SystClkSource::Core);
@@ -150,15 +187,14 @@ fn setup_pins() {
     // PB0,1,3..7 dir (PB2 = BOOT1 stays an input), PB8 EN, PB9..15 step.
     b.crl().write(|w| unsafe { w.bits(0x3333_3433) });
     b.crh().write(|w| unsafe { w.bits(0x3333_3333) });
-    // Limits PA0..PA5, PA8 pulled up; PA6/PA7 (encoder, later) floating; PA9/PA10 as the HAL
-    // left them; PA11..PA15 untouched (USB, SWD).
-    let mut pull = 0u32;
-    for p in board::LIMIT_PINS {
-        pull |= 1 << p;
-    }
-    a.bsrr().write(|w| unsafe { w.bits(pull) });
-    a.crl().write(|w| unsafe { w.bits(0x4488_8888) });
-    a.crh().modify(|r, w| unsafe { w.bits((r.bits() & !0xF) | 0x8) });
+    // Limits PA0..PA2 pulled up; PA3/PA4/PA5 mist, flood, spindle direction (outputs, low);
+    // PA6/PA7 (encoder, later) floating; PA8 TIM1_CH1 (alternate function push-pull 50 MHz,
+    // 0xB); PA9/PA10 as the HAL left them; PA11..PA14 untouched (USB, SWD); PA15 spindle
+    // enable (output, low).
+    let tool = 1 << board::SPINDLE_ENABLE_PIN | 1 << board::SPINDLE_DIR_PIN | 1 << board::COOLANT_FLOOD_PIN | 1 << board::COOLANT_MIST_PIN;
+    a.bsrr().write(|w| unsafe { w.bits(board::LIMIT_INPUTS | tool << 16) });
+    a.crl().write(|w| unsafe { w.bits(0x4422_2888) });
+    a.crh().modify(|r, w| unsafe { w.bits((r.bits() & !0xF000_000F) | 0x2000_000B) });
     // PC13 LED (active low): off.
     c.bsrr().write(|w| unsafe { w.bits(1 << board::LED_PIN) });
     c.crh().modify(|r, w| unsafe { w.bits((r.bits() & !(0xF << 20)) | 0x2 << 20) });
@@ -180,6 +216,25 @@ fn setup_tim2(rcc: &mut stm32f1xx_hal::rcc::Rcc) {
     t.dier().write(|w| unsafe { w.bits(SR_UIF | SR_CC1IF) });
     // ARPE | URS; counting starts in `start_step_timer`.
     t.cr1().write(|w| unsafe { w.bits((1 << 7) | (1 << 2)) });
+}
+
+/// TIM1 as the spindle PWM on PA8: PWM mode 1 on channel 1 with CCR1 preloaded, main output
+/// on, duty 0, at the default frequency (the first poll sets `$33`'s).
+fn setup_tim1(rcc: &mut stm32f1xx_hal::rcc::Rcc) {
+    use stm32f1xx_hal::rcc::{Enable, Reset};
+    pac::TIM1::enable(rcc);
+    pac::TIM1::reset(rcc);
+    set_pwm_timing(PwmTiming::new(Settings::DEFAULT.spindle_pwm_hz));
+    let t = tim1();
+    t.ccr1().write(|w| unsafe { w.bits(0) });
+    // CCMR1: OC1M = 110 (PWM mode 1), OC1PE (preload).
+    t.ccmr1_output().write(|w| unsafe { w.bits(0b110 << 4 | 1 << 3) });
+    // CCER: CC1E (channel 1 output on, active high).
+    t.ccer().write(|w| unsafe { w.bits(1) });
+    // BDTR: MOE (an advanced timer's outputs stay off without it).
+    t.bdtr().write(|w| unsafe { w.bits(1 << 15) });
+    t.egr().write(|w| w.ug().set_bit());
+    t.cr1().write(|w| unsafe { w.bits(TIM1_CR1_ARPE | TIM1_CR1_CEN) });
 }
 
 /// Starts TIM2 counting: the last thing `init` does, so the first update event does not wait

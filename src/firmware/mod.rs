@@ -191,6 +191,10 @@ mod app {
             if let Some(ticks) = act.pulse_ticks {
                 hw::set_pulse_ticks(ticks);
             }
+            if let Some(t) = act.pwm {
+                hw::set_pwm_timing(t);
+            }
+            hw::set_spindle(act.spindle);
             if act.save || act.restart {
                 hw::save_store(cx.local.flash, &ctl.image());
             }

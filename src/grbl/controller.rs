@@ -22,8 +22,8 @@ mod status;
 mod system;
 mod tool;
 
-use crate::coords::Offsets;
 use crate::arc::Segments;
+use crate::coords::Offsets;
 use crate::gcode::{self, Modal, Stop};
 use crate::inverse_time;
 use crate::planner::{Limits, Planned, Planner};
@@ -107,7 +107,7 @@ struct Job<const N: usize> {
     rate: Rate,
     /// M3/M4/M5, S, M7/M8/M9 to apply once the queue has run out (before the motion).
     tool: Option<(SpindleDir, f64, u8)>,
-    /// Laser mode: the power the block's moves carry.
+    /// Laser mode: the power the block's moves carry (none for jogs).
     power: Power,
     drivers_off: bool,
     pause: bool,
@@ -539,23 +539,28 @@ impl<'a, const N: usize> Controller<'a, N> {
                 self.save = true;
                 job.save = false;
             }
-            loop {
-                for slot in [&mut job.mv, &mut job.mv2] {
-                    if let Some(pl) = *slot {
-                        if !self.push(pl, job.jog, job.power) {
-                            break 'run false;
-                        }
-                        *slot = None;
+            for slot in [&mut job.mv, &mut job.mv2] {
+                if let Some(pl) = *slot {
+                    if !self.push(pl, job.jog, job.power) {
+                        break 'run false;
                     }
+                    *slot = None;
                 }
-                // The next chord of an arc. `Arc::check_range` made planning infallible; were it
-                // not, the chord would merge into the next one (the position stays exact).
-                let Some(seg) = job.arc.as_mut() else { break };
-                match seg.next() {
-                    Some(p) => {
-                        job.mv = plan(&mut self.planner, &p, job.rate, &self.limits, &self.ramped.cfg).unwrap_or(None)
+            }
+            // Arc chords, one planned move at a time. `Arc::check_range` made planning
+            // infallible; were it not, the chord would merge into the next (the position stays
+            // exact).
+            while let Some(seg) = job.arc.as_mut() {
+                let Some(p) = seg.next() else {
+                    job.arc = None;
+                    break;
+                };
+                job.mv = plan(&mut self.planner, &p, job.rate, &self.limits, &self.ramped.cfg).unwrap_or(None);
+                if let Some(pl) = job.mv {
+                    if !self.push(pl, false, job.power) {
+                        break 'run false;
                     }
-                    None => job.arc = None,
+                    job.mv = None;
                 }
             }
             if job.drivers_off || job.pause || job.end {
@@ -607,7 +612,7 @@ impl<'a, const N: usize> Controller<'a, N> {
         let rate = if modal.inverse_time { Rate::Minutes(1.0 / modal.feed) } else { Rate::Feed(modal.feed) };
         let cfg = self.ramped.cfg;
         let mv = match fx.motion {
-            Some((target, rapid)) => plan(&mut planner, &target, if rapid { Rate::Rapid } else { rate }, &self.limits, &cfg)?,
+            Some((t, rapid)) => plan(&mut planner, &t, if rapid { Rate::Rapid } else { rate }, &self.limits, &cfg)?,
             None => None,
         };
         let mv2 = match fx.home {
@@ -648,6 +653,10 @@ impl<'a, const N: usize> Controller<'a, N> {
         self.planner = planner;
         self.offsets = offsets;
         if self.check {
+            if let Some(a) = fx.arc {
+                // Check mode: only the position follows the arc.
+                self.planner.line(a.target(), None, &self.limits)?;
+            }
             if fx.stop == Some(Stop::End) {
                 out.put(report::PROGRAM_END);
             }
@@ -688,7 +697,7 @@ fn plan<const N: usize>(
     rate: Rate,
     lim: &Limits<N>,
     cfg: &RampConfig,
-) -> Result<Option<Planned<N>>, crate::protocol::Error> {
+) -> Result<Option<Planned<N>>, Error> {
     let feed = match rate {
         Rate::Rapid => return planner.line(target, None, lim),
         Rate::Feed(f) => f,

@@ -1,4 +1,4 @@
-//! G-code: numbers, blocks and the modal state, for Grbl 1.1's lines, arcs and feed modes.
+//! G-code: numbers, blocks and the modal state, for Grbl 1.1's lines, arcs, offsets and feed modes.
 //!
 //! Who uses it: the controller, on each line from [`crate::protocol::LineBuf`] (upper case, no
 //! whitespace, no comments).
@@ -9,8 +9,8 @@
 //! Numbers are read exactly: up to 15 significant digits as an integer, divided once by a power
 //! of ten, which is the nearest `f64` to the decimal (as `str::parse` gives).
 
-use crate::coords::{Offsets, G28};
 use crate::arc::{Arc, Center};
+use crate::coords::{Offsets, G28};
 use crate::protocol::Error;
 use crate::spindle::{SpindleDir, FLOOD, MIST};
 use crate::AXIS_NAMES;
@@ -315,7 +315,7 @@ fn g_word<const N: usize>(b: &mut Block<N>, v: f64) -> Result<(), Error> {
         }
         40 => CUTTER,
         61 => PATH,
-        // Probing and anything else.
+        // Probing.
         _ => return Err(Error::UnsupportedCommand),
     };
     if mantissa != 0 {
@@ -426,10 +426,10 @@ pub struct Effects<const N: usize> {
     /// G0/G1 (or G28/G30's intermediate point): machine target of every axis, and whether it
     /// is a rapid.
     pub motion: Option<([f64; N], bool)>,
+    /// G2/G3, checked (machine mm).
+    pub arc: Option<Arc<N>>,
     /// G28/G30: the rapid to the stored position that follows.
     pub home: Option<[f64; N]>,
-    /// G2/G3, checked.
-    pub arc: Option<Arc<N>>,
     pub stop: Option<Stop>,
 }
 
@@ -505,10 +505,12 @@ impl Modal {
         m.tlo = b.tool_length.unwrap_or(m.tlo);
         let unit = if m.inches { 25.4 } else { 1.0 };
         m.inverse_time = b.inverse_time.unwrap_or(m.inverse_time);
-        let feed_motion = matches!(m.motion, Motion::Linear | Motion::CwArc | Motion::CcwArc);
-        // A motion command: axis words not taken by G92, or an explicit G0-G3.
-        let moves = b.non_modal != Some(NonModal::SetPosition)
-            && (b.has_axes() || b.motion.is_some_and(|mo| mo != Motion::Cancel));
+        let arc_mode = matches!(m.motion, Motion::CwArc | Motion::CcwArc);
+        let feed_motion = arc_mode || m.motion == Motion::Linear;
+        // A motion command: axis words no non-modal command takes, or an explicit G0-G3.
+        let axis_nonmodal = b.tool_length.is_some()
+            || matches!(b.non_modal, Some(NonModal::SetCoordData | NonModal::SetPosition | NonModal::GoHome(_)));
+        let moves = !axis_nonmodal && (b.has_axes() || b.motion.is_some_and(|mo| mo != Motion::Cancel));
         if m.inverse_time {
             // G93 (Grbl): every motion line carries its own F; nothing carries over.
             if feed_motion && moves && b.f.is_none() {
@@ -543,8 +545,8 @@ impl Modal {
             g92: None,
             tlo: None,
             motion: None,
-            home: None,
             arc: None,
+            home: None,
             stop: b.stop,
         };
         let nm = b.non_modal;
@@ -591,13 +593,7 @@ impl Modal {
             return Err(Error::AxisWordsExist);
         }
         let uses_axes = b.tool_length.is_some() || matches!(nm, Some(NonModal::SetCoordData | NonModal::SetPosition));
-        let home = matches!(nm, Some(NonModal::GoHome(_)));
-        let arc_motion = matches!(m.motion, Motion::CwArc | Motion::CcwArc);
-        // A G2/G3 block without axis words is a motion too (its error comes from `arc`).
-        if !uses_axes && (b.has_axes() || (moves && arc_motion && !home)) {
-            if feed_motion && !home && m.feed <= 0.0 {
-                return Err(Error::UndefinedFeedRate);
-            }
+        if (b.has_axes() || (moves && arc_mode)) && !uses_axes {
             let mut target = *pos;
             for (i, t) in target.iter_mut().enumerate() {
                 if let Some(w) = words[i] {
@@ -608,9 +604,14 @@ impl Modal {
                     })?;
                 }
             }
-            match m.motion {
-                Motion::CwArc | Motion::CcwArc if !home => fx.arc = Some(arc(b, &m, pos, target, unit)?),
-                mo => fx.motion = Some((target, home || mo == Motion::Rapid)),
+            let home = matches!(nm, Some(NonModal::GoHome(_)));
+            if feed_motion && !home && m.feed <= 0.0 {
+                return Err(Error::UndefinedFeedRate);
+            }
+            if arc_mode && !home {
+                fx.arc = Some(arc(b, &m, pos, target, unit)?);
+            } else {
+                fx.motion = Some((target, home || m.motion == Motion::Rapid));
             }
         }
         // I J K R that no arc used (also I J K beside R): Grbl's unused words.

@@ -8,5 +8,5 @@ pub mod jog;
 pub mod protocol;
 pub mod report;
 pub mod settings;
-pub mod store;
 pub mod spindle;
+pub mod store;

@@ -18,7 +18,7 @@ use crate::MAX_AXES;
 /// Bytes of the flash image.
 pub const SETTINGS_LEN: usize = 160;
 const MAGIC: u8 = 0xD5;
-const VERSION: u8 = 2;
+const VERSION: u8 = 3;
 /// Byte offset of the settings after the axis arrays: `$12`, `$30`, `$31`, `$33` (f32, u32),
 /// `$32` (flag byte); CRC last.
 const TAIL: usize = 24 + 4 * 4 * MAX_AXES;
@@ -533,7 +533,10 @@ mod tests {
 
     #[test]
     fn low_ids_are_ours_and_every_fixed_one() {
-        let ours = [0, 1, 2, 3, 4, 5, 6, STATUS_MASK, 12, 30, 31, 32, SPINDLE_PWM_HZ, DIR_SETUP, RAMP_START, RAMP_SHAPE, AXIS_COUNT];
+        let ours = [
+            0, 1, 2, 3, 4, 5, 6, STATUS_MASK, 12, 30, 31, 32, SPINDLE_PWM_HZ, DIR_SETUP, RAMP_START, RAMP_SHAPE,
+            AXIS_COUNT,
+        ];
         assert_eq!(LOW_IDS.len(), ours.len() + FIXED.len());
         assert!(ours.iter().chain(FIXED.iter().map(|f| &f.0)).all(|id| LOW_IDS.contains(id)));
     }

@@ -29,7 +29,8 @@ pub enum State {
     Held = 3,
 }
 
-/// Grbl's override percentages (feed, rapid, spindle; 100 = as programmed).
+/// Grbl's override percentages (feed, rapid, spindle; 100 = as programmed), as `Ov:` reports
+/// them: feed 10–200, rapid 25/50/100, spindle 10–200.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Overrides {
     pub feed: u8,
@@ -38,7 +39,7 @@ pub struct Overrides {
 }
 
 impl Overrides {
-    /// Everything as programmed.
+    /// Everything as programmed (power-up and reset).
     pub const NONE: Overrides = Overrides { feed: 100, rapid: 100, spindle: 100 };
 
     const fn pack(self) -> u32 {

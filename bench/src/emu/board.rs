@@ -255,6 +255,11 @@ impl Board {
         self.cpu.get_data().ports[port as usize].odr & 1 << pin != 0
     }
 
+    // every change of TIM1's PWM output (spindle/laser on PA8) so far
+    pub fn pwm_changes(&self) -> &[super::pwm::PwmChange] {
+        &self.cpu.get_data().tim1.changes
+    }
+
     // every output latch change so far
     pub fn edges(&self) -> &[PinEdge] {
         &self.cpu.get_data().edges

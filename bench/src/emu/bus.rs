@@ -16,6 +16,7 @@ use super::gpio::{PinEdge, Port};
 use super::memory::{apb_divider, bridge_cycles, bus_of, Bus, FlashConfig};
 use super::nvic::{Nvic, IRQ0};
 use super::profile::Histogram;
+use super::pwm::Pwm;
 use super::systick::SysTick;
 use super::timer::Timer;
 use super::usart::Usart;
@@ -26,6 +27,7 @@ pub const TIM2_IRQ: u32 = 28;
 pub const USART1_IRQ: u32 = 37;
 
 const TIM2: u32 = 0x4000_0000;
+const TIM1: u32 = 0x4001_2C00;
 const USART1: u32 = 0x4001_3800;
 const GPIOA: u32 = 0x4001_0800;
 const RCC: u32 = 0x4002_1000;
@@ -97,6 +99,8 @@ pub struct Machine {
     pub blocks: BlockCache,
     pub nvic: Nvic,
     pub tim2: Timer,
+    /// TIM1: the spindle/laser PWM.
+    pub tim1: Pwm,
     pub usart1: Usart,
     pub systick: SysTick,
     pub ports: Vec<Port>,
@@ -141,6 +145,7 @@ impl Machine {
             blocks: BlockCache::default(),
             nvic: Nvic::default(),
             tim2: Timer::new(),
+            tim1: Pwm::default(),
             usart1: Usart::default(),
             systick: SysTick::default(),
             ports: vec![Port::new(); 5],
@@ -218,6 +223,7 @@ impl Machine {
     // bring peripherals to cycle `t` and refresh the NVIC's interrupt lines
     pub fn sync(&mut self, t: u64) {
         self.tim2.advance(t);
+        self.tim1.advance(t);
         self.usart1.advance(t);
         let wraps = self.systick.advance(t);
         if wraps > 0 {
@@ -253,6 +259,7 @@ impl Machine {
         let shift = (addr & 3) * 8;
         let v = match word {
             TIM2..=0x4000_03FF => self.tim2.read(word - TIM2, t),
+            TIM1..=0x4001_2FFF => self.tim1.read(word - TIM1),
             USART1..=0x4001_3BFF => self.usart1.read(word - USART1, t),
             GPIOA..=0x4001_1BFF => {
                 let p = ((word - GPIOA) / 0x400) as usize;
@@ -289,6 +296,10 @@ impl Machine {
             TIM2..=0x4000_03FF => {
                 let v = if word == TIM2 + 0x10 { v | !mask } else { v };
                 self.tim2.write(word - TIM2, v, t)
+            }
+            TIM1..=0x4001_2FFF => {
+                let merged = (self.tim1.read(word - TIM1) & !mask) | v;
+                self.tim1.write(word - TIM1, merged, t)
             }
             USART1..=0x4001_3BFF => self.usart1.write(word - USART1, v, t),
             GPIOA..=0x4001_1BFF => self.gpio_write(word, v, mask, lands),

@@ -2,7 +2,8 @@
 //! the bench's pin edges) and a VCD of the step, dir and enable pins. For the CLI and tests.
 //!
 //! Pin map (firmware contract): step X..U = PB9..PB15, dir X..U = PB0, PB1, PB3, PB4, PB5,
-//! PB6, PB7, enable = PB8. VCD time is modeled cycles × 1000/72 ns, rounded to 1 ns.
+//! PB6, PB7, enable = PB8; spindle PWM = PA8 (TIM1 CH1, recorded as a duty cycle), spindle
+//! enable = PA15, spindle direction = PA5, flood = PA4, mist = PA3. VCD time is modeled cycles × 1000/72 ns, rounded to 1 ns.
 
 use std::io::Write;
 use std::path::Path;
@@ -24,6 +25,8 @@ pub const STEP_PINS: [u8; 7] = [9, 10, 11, 12, 13, 14, 15];
 pub const DIR_PINS: [u8; 7] = [0, 1, 3, 4, 5, 6, 7];
 /// GPIOB shared enable pin.
 pub const EN_PIN: u8 = 8;
+/// GPIOA pins of the spindle and coolant outputs, with their VCD names.
+pub const TOOL_PINS: [(u8, &str); 4] = [(15, "SPINDLE_EN"), (5, "SPINDLE_DIR"), (4, "FLOOD"), (3, "MIST")];
 /// Dir pin low = positive motion (Grbl's convention with `$3=0`; a `$3` mask would flip axes,
 /// which the report does not follow).
 pub const DIR_LOW_IS_POSITIVE: bool = true;
@@ -86,6 +89,20 @@ pub struct Report {
     pub serial: String,
     pub usart_rx_overruns: u64,
     pub unmodeled_registers: Vec<String>,
+    pub spindle: SpindleReport,
+}
+
+/// The spindle/laser PWM (TIM1 on PA8) and the tool pins.
+#[derive(Clone, Debug, Serialize)]
+pub struct SpindleReport {
+    /// Changes of the PWM duty or frequency.
+    pub pwm_changes: usize,
+    pub max_duty: f64,
+    pub final_duty: f64,
+    /// PWM frequency at the last change (0 if it never ran).
+    pub pwm_hz: f64,
+    /// Rising edges of SPINDLE_EN, SPINDLE_DIR, FLOOD, MIST.
+    pub pin_rises: [u64; 4],
 }
 
 // picoseconds of a modeled cycle count
@@ -144,6 +161,20 @@ impl Board {
             serial: String::from_utf8_lossy(u).into_owned(),
             usart_rx_overruns: self.usart_rx_overruns(),
             unmodeled_registers: self.unmodeled().iter().map(|(a, pc)| format!("{a:#010x} (pc {pc:#010x})")).collect(),
+            spindle: self.spindle_report(),
+        }
+    }
+
+    // the spindle/laser PWM and tool pins so far
+    pub fn spindle_report(&self) -> SpindleReport {
+        let pwm = self.pwm_changes();
+        let rises = TOOL_PINS.map(|(pin, _)| self.edges().iter().filter(|e| e.port == 0 && e.pin == pin && e.level).count() as u64);
+        SpindleReport {
+            pwm_changes: pwm.len(),
+            max_duty: pwm.iter().map(|c| c.duty).fold(0.0, f64::max),
+            final_duty: pwm.last().map_or(0.0, |c| c.duty),
+            pwm_hz: pwm.last().map_or(0.0, |c| c.hz),
+            pin_rises: rises,
         }
     }
 
@@ -164,7 +195,7 @@ impl Board {
         }
     }
 
-    // write a VCD of the step/dir/enable pins
+    // write a VCD of the step/dir/enable pins, the tool pins and the spindle PWM duty
     pub fn write_vcd(&self, path: impl AsRef<Path>) -> Result<()> {
         let file = std::io::BufWriter::new(std::fs::File::create(path)?);
         let mut w = vcd::Writer::new(file);
@@ -176,21 +207,41 @@ impl Board {
             ids.insert(DIR_PINS[i], w.add_wire(1, &format!("{name}_DIR"))?);
         }
         ids.insert(EN_PIN, w.add_wire(1, "EN")?);
+        let mut tool = std::collections::HashMap::new();
+        for (pin, name) in TOOL_PINS {
+            tool.insert(pin, w.add_wire(1, name)?);
+        }
+        let duty = w.add_var(vcd::VarType::Real, 64, "SPINDLE_PWM_DUTY", None)?;
         w.upscope()?;
         w.enddefinitions()?;
         w.timestamp(0)?;
-        for id in ids.values() {
+        for id in ids.values().chain(tool.values()) {
             w.change_scalar(*id, vcd::Value::V0)?;
         }
+        w.change_real(duty, 0.0)?;
+        // Pin edges and duty changes in time order (both lists are sorted).
+        let pins = self.edges().iter().filter_map(|e| {
+            let id = match e.port {
+                1 => ids.get(&e.pin),
+                0 => tool.get(&e.pin),
+                _ => None,
+            }?;
+            Some((e.cycle, *id, Some(e.level), 0.0))
+        });
+        let pwm = self.pwm_changes().iter().map(|c| (c.cycle, duty, None, c.duty));
+        let mut events: Vec<_> = pins.chain(pwm).collect();
+        events.sort_by_key(|e| e.0);
         let mut last = 0;
-        for e in self.edges().iter().filter(|e| e.port == 1) {
-            let Some(id) = ids.get(&e.pin) else { continue };
-            let t = (e.cycle * 1000 + HZ / 2_000_000) / (HZ / 1_000_000);
+        for (cycle, id, level, value) in events {
+            let t = (cycle * 1000 + HZ / 2_000_000) / (HZ / 1_000_000);
             if t != last {
                 w.timestamp(t)?;
                 last = t;
             }
-            w.change_scalar(*id, if e.level { vcd::Value::V1 } else { vcd::Value::V0 })?;
+            match level {
+                Some(l) => w.change_scalar(id, if l { vcd::Value::V1 } else { vcd::Value::V0 })?,
+                None => w.change_real(id, value)?,
+            }
         }
         w.timestamp((self.cycles() * 1000) / (HZ / 1_000_000))?;
         w.writer().flush()?;
@@ -217,6 +268,10 @@ impl std::fmt::Display for Report {
         }
         writeln!(f, "peak CPU load (1 ms windows after boot, modeled): {:.1} % ({:.1} % with boot)", self.cpu_load_peak * 100.0, self.cpu_load_peak_with_boot * 100.0)?;
         writeln!(f, "timer overruns: {}", self.overruns)?;
+        let sp = &self.spindle;
+        if sp.pwm_changes > 0 || sp.pin_rises.iter().any(|&n| n > 0) {
+            writeln!(f, "spindle PWM (TIM1, PA8): {} changes, max duty {:.1} %, final {:.1} % at {:.0} Hz; rises EN/DIR/FLOOD/MIST {:?}", sp.pwm_changes, sp.max_duty * 100.0, sp.final_duty * 100.0, sp.pwm_hz, sp.pin_rises)?;
+        }
         if !self.unmodeled_registers.is_empty() {
             writeln!(f, "unmodeled registers: {}", self.unmodeled_registers.join(", "))?;
         }
