@@ -156,3 +156,46 @@ fn cncjs_like_session_with_work_offsets() {
     assert_eq!(st.coords.get::<3>(1)[2], (z as f64 / 100.0) as f32 as f64, "stored as f32, like Grbl's EEPROM floats");
     assert!(b.fault().is_none());
 }
+
+/// Boots a fresh board whose store pages hold `pages` (a power cycle keeps flash).
+fn boot_from_flash(pages: &[u8]) -> Board {
+    let elf = ddastep_bench::emu::firmware_elf().expect("firmware builds");
+    let mut b = Board::load(elf).expect("ELF loads");
+    b.write_mem(STORE_ADDR, pages).expect("flash");
+    let up = b.run_until(ddastep_bench::emu::HZ / 2, |b| b.serial_output().contains("Grbl")).expect("runs");
+    assert!(up);
+    b.run_seconds(0.02).unwrap();
+    b
+}
+
+#[test]
+fn power_cut_during_a_coordinate_save_keeps_the_old_or_the_new_image() {
+    let mut b = boot();
+    b.run_seconds(0.02).unwrap();
+    ok(&mut b, "$110=1234");
+    ok(&mut b, "G10 L2 P1 X3");
+    // Snapshot both store pages every 200 modeled cycles while the next save runs.
+    let mark = b.serial_output().len();
+    b.serial_send(b"G10 L2 P1 X7 Y-2\n");
+    let mut snaps: Vec<Vec<u8>> = Vec::new();
+    while !b.serial_output()[mark..].contains("ok") {
+        b.run_until(200, |_| false).unwrap();
+        let s = b.read_mem(STORE_ADDR, 2 * ddastep::store::PAGE_LEN);
+        if snaps.last() != Some(&s) {
+            snaps.push(s);
+        }
+        assert!(b.seconds() < 5.0, "no ok");
+    }
+    assert!(snaps.len() > 10, "the save was seen in progress ({} states)", snaps.len());
+    let mut seen = [false; 2];
+    for s in snaps.iter().step_by((snaps.len() / 12).max(1)).chain(snaps.last()) {
+        // A power cut here: the next boot has the previous image or the new one, never less.
+        let mut c = boot_from_flash(s);
+        let params = reply(&mut c, "$#");
+        let new = params.starts_with("[G54:7.000,-2.000,0.000,");
+        assert!(new || params.starts_with("[G54:3.000,0.000,0.000,"), "{params}");
+        seen[new as usize] = true;
+        assert!(reply(&mut c, "$$").contains("$110=1234.000"), "settings kept");
+    }
+    assert_eq!(seen, [true, true]);
+}

@@ -17,7 +17,7 @@ fn check_mode_parses_without_motion_and_leaving_it_resets() {
     for line in ["G21 G91", "G1 X10 F100", "G4 P100", "G10 L20 P1 X0", "M0", "G0 Y5"] {
         assert_eq!(b.line(line), "ok\r\n", "{line}");
     }
-    assert_eq!(b.line("G38.2 Z-1"), "error:20\r\n", "errors as usual");
+    assert_eq!(b.line("G64"), "error:20\r\n", "errors as usual");
     assert_eq!(b.line("M2"), "[MSG:Pgm End]\r\nok\r\n");
     b.run_ms(20);
     assert_eq!(b.shared.positions(), [0, 0, 0], "nothing moved");
@@ -56,7 +56,7 @@ fn startup_lines_are_checked_stored_listed_and_run_after_reset() {
     b.take();
     assert_eq!(b.line("$N"), "$N0=\r\n$N1=\r\nok\r\n");
     assert_eq!(b.line("$N0=G20 G91"), "ok\r\n");
-    assert_eq!(b.line("$N1=G38.2 Z-1"), "error:20\r\n");
+    assert_eq!(b.line("$N1=G64"), "error:20\r\n");
     assert_eq!(b.line("$N1=G54 F100"), "ok\r\n");
     assert_eq!(b.line(&format!("$N1={}", "X1".repeat(40))), "error:14\r\n");
     assert_eq!(b.line("$N"), "$N0=G20G91\r\n$N1=G54F100\r\nok\r\n");

@@ -376,6 +376,12 @@ impl Machine {
         }
         if word == 0x4002_2010 && v & (1 << 6) != 0 && v & (1 << 1) != 0 {
             self.flash_erase = self.regs.get(&0x4002_2014).copied(); // CR.STRT with PER: AR page
+            // The erase completes at once here, and hardware clears STRT when BSY falls
+            // (RM0008 §3.3.1): a stale STRT would make the next erase's "set PER" (written
+            // before its AR) erase the previous page again.
+            if let Some(cr) = self.regs.get_mut(&0x4002_2010) {
+                *cr &= !(1 << 6);
+            }
         }
         // FLASH_KEYR: the second key of the unlock sequence clears CR.LOCK (RM0008 §3.3.1),
         // so a program/erase after the HAL re-locked the controller works as on silicon.
