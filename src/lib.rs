@@ -21,9 +21,9 @@ pub mod motion;
 pub mod planning;
 pub mod steptime;
 
-pub use grbl::{controller, coords, gcode, jog, protocol, report, settings, store};
+pub use grbl::{controller, coords, gcode, jog, protocol, report, settings, spindle, store};
 pub use motion::{engine, interp, queue, ramp, sim, timing};
-pub use planning::planner;
+pub use planning::{arc, inverse_time, planner};
 
 /// Timer clock of TIM2 (APB1 at 36 MHz, doubled for timers): one timer tick is 1/72 µs.
 pub const TIMER_HZ: u32 = 72_000_000;

@@ -73,7 +73,7 @@ fn errors_in_a_stream_answer_their_own_line() {
     let mut b = Bench::<3>::new(Settings::BENCH);
     b.take();
     let lines: Vec<String> =
-        ["G91 G0 X1", "G1 X1", "G0 X1", "X--1", "Y2", "M3", "G1 Z1 F100"].iter().map(|s| s.to_string()).collect();
+        ["G91 G0 X1", "G1 X1", "G0 X1", "X--1", "Y2", "M6", "G1 Z1 F100"].iter().map(|s| s.to_string()).collect();
     let replies = stream(&mut b, &lines);
     assert_eq!(replies, ["ok", "error:22", "ok", "error:2", "ok", "error:20", "ok"]);
     b.run_to_idle(10_000);

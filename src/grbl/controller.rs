@@ -20,15 +20,19 @@
 mod jogging;
 mod status;
 mod system;
+mod tool;
 
 use crate::coords::Offsets;
+use crate::arc::Segments;
 use crate::gcode::{self, Modal, Stop};
+use crate::inverse_time;
 use crate::planner::{Limits, Planned, Planner};
 use crate::protocol::{put_error, put_ok, Error, LineBuf, LineEvent, Out, LINE_LEN, REPLY_ROOM, RX_BUFFER_LEN};
 use crate::queue::{Feeder, Overrides, Shared, State};
-use crate::ramp::RampSlot;
+use crate::ramp::{RampConfig, RampSlot};
 use crate::report;
 use crate::settings::{Ramped, Settings};
+use crate::spindle::{Power, PwmTiming, SpindleDir, SpindleOut};
 use crate::store::{Stored, IMAGE_LEN, STARTUP_LINES};
 
 /// Time from enabling the drivers to the first step, in poll milliseconds (2 ≥ 1 ms real).
@@ -53,6 +57,10 @@ pub struct Actions {
     /// `$2`/`$3` (or `$RST`) changed the pin map, which the engine takes at boot: save, then
     /// reset the MCU.
     pub restart: bool,
+    /// Spindle/laser PWM compare value and the spindle and coolant pins, every poll.
+    pub spindle: SpindleOut,
+    /// New spindle PWM timing for TIM1 (at the first poll and after `$33` changes).
+    pub pwm: Option<PwmTiming>,
 }
 
 /// A long reply written a line at a time as TX room appears.
@@ -72,6 +80,17 @@ enum Jogging {
     Cancel,
 }
 
+/// How fast a straight move (or an arc's chord) runs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Rate {
+    /// G0: the axes' max rates.
+    Rapid,
+    /// G94: path feed, mm/min.
+    Feed(f64),
+    /// G93: the move's time, minutes.
+    Minutes(f64),
+}
+
 /// One accepted line still being carried out; each stage is cleared when done.
 #[derive(Clone, Copy, Debug)]
 struct Job<const N: usize> {
@@ -83,13 +102,18 @@ struct Job<const N: usize> {
     mv2: Option<Planned<N>>,
     /// The moves are a jog.
     jog: bool,
+    /// G2/G3: chord ends still to plan, at `rate` each.
+    arc: Option<Segments<N>>,
+    rate: Rate,
+    /// M3/M4/M5, S, M7/M8/M9 to apply once the queue has run out (before the motion).
+    tool: Option<(SpindleDir, f64, u8)>,
+    /// Laser mode: the power the block's moves carry.
+    power: Power,
     drivers_off: bool,
     pause: bool,
     end: bool,
     /// Write the persistent image (once the machine is idle) before the `ok`.
     save: bool,
-    /// `$C` off, `$RST`: a soft reset follows the `ok`.
-    reset: bool,
 }
 
 impl<const N: usize> Job<N> {
@@ -100,11 +124,14 @@ impl<const N: usize> Job<N> {
         mv: None,
         mv2: None,
         jog: false,
+        arc: None,
+        rate: Rate::Rapid,
+        tool: None,
+        power: Power { speed: 0.0, dynamic: false, cruise_hz: 0.0 },
         drivers_off: false,
         pause: false,
         end: false,
         save: false,
-        reset: false,
     };
 }
 
@@ -146,6 +173,14 @@ pub struct Controller<'a, const N: usize> {
     ovr_count: u8,
     ov_seen: Overrides,
     rx_free: u32,
+    /// Laser power of each move in the queue (laser mode), indexed like `feed_ring`.
+    power_ring: [Power; FEED_RING],
+    /// Spindle direction and speed, and coolant, in force.
+    tool: (SpindleDir, f64, u8),
+    /// `$33` last handed to the shell (0: none yet).
+    pwm_hz: u32,
+    /// `$C` off, `$RST`: a soft reset follows the line's `ok`.
+    reset_after: bool,
 }
 
 impl<'a, const N: usize> Controller<'a, N> {
@@ -194,6 +229,10 @@ impl<'a, const N: usize> Controller<'a, N> {
             ovr_count: 0,
             ov_seen: Overrides::NONE,
             rx_free: RX_BUFFER_LEN as u32,
+            power_ring: [Power::default(); FEED_RING],
+            tool: (SpindleDir::Off, 0.0, 0),
+            pwm_hz: 0,
+            reset_after: false,
         };
         c.startup_next = c.next_startup(0);
         c.apply_profile();
@@ -251,10 +290,10 @@ impl<'a, const N: usize> Controller<'a, N> {
         *self.planner.position_steps()
     }
 
-    /// True while a line (or a startup line) is being carried out, or asleep: [`Self::byte`]
-    /// takes nothing until it is done.
+    /// True while a line (or a startup line) is being carried out: [`Self::byte`] takes
+    /// nothing until it is done (nor while asleep).
     pub fn busy(&self) -> bool {
-        self.job.is_some() || self.startup_next < STARTUP_LINES || self.sleep
+        self.job.is_some() || self.startup_next < STARTUP_LINES
     }
 
     /// Free bytes in the shell's RX ring, for `Bf:` in status reports (at most the announced
@@ -275,7 +314,7 @@ impl<'a, const N: usize> Controller<'a, N> {
     /// [`REPLY_ROOM`] TX bytes are free): keep the byte and offer it again after a `poll`.
     #[must_use]
     pub fn byte(&mut self, b: u8, out: &mut impl Out) -> bool {
-        if self.busy() || out.room() < REPLY_ROOM {
+        if self.busy() || self.sleep || out.room() < REPLY_ROOM {
             return false;
         }
         match self.lines.push(b) {
@@ -287,12 +326,13 @@ impl<'a, const N: usize> Controller<'a, N> {
                 let r = match line.first() {
                     _ if n == 0 => Ok(()),
                     Some(b'$') => self.system(&line[1..n], out),
-                    _ if self.alarm => Err(Error::AlarmLock),
+                    // G-code is locked out in alarm, and while jogging (Grbl's error:9).
+                    _ if self.alarm || self.jogging() => Err(Error::AlarmLock),
                     _ => self.gcode(&line[..n], out),
                 };
                 match r {
                     Err(e) => put_error(out, e),
-                    Ok(()) if self.job.is_none() => put_ok(out),
+                    Ok(()) if self.job.is_none() => self.ok(out),
                     Ok(()) => {}
                 }
             }
@@ -345,14 +385,8 @@ impl<'a, const N: usize> Controller<'a, N> {
         }
         self.jog_poll(out);
         self.drive_enable();
-        if self.job.is_some() && out.room() >= POLL_REPLY_ROOM {
-            let reset = self.job.is_some_and(|j| j.reset);
-            if self.advance(true, out) {
-                put_ok(out);
-                if reset {
-                    self.soft_reset(out);
-                }
-            }
+        if self.job.is_some() && out.room() >= POLL_REPLY_ROOM && self.advance(true, out) {
+            self.ok(out);
         }
         self.run_startup(out);
         if self.status_wanted && out.room() >= report::status_len(N) {
@@ -360,12 +394,26 @@ impl<'a, const N: usize> Controller<'a, N> {
             self.status(out);
         }
         let pulse = core::mem::take(&mut self.pulse_changed).then(|| self.settings.timing().pulse_ticks);
+        let pwm = (self.pwm_hz != self.settings.spindle_pwm_hz).then(|| {
+            self.pwm_hz = self.settings.spindle_pwm_hz;
+            PwmTiming::new(self.pwm_hz)
+        });
         Actions {
+            spindle: self.spindle_out(),
+            pwm,
             enable: self.drivers_on,
             enable_pin_high: self.drivers_on == self.settings.enable_invert,
             pulse_ticks: pulse,
             save: core::mem::take(&mut self.save),
             restart: core::mem::take(&mut self.restart),
+        }
+    }
+
+    /// A line's `ok`, and the reset `$C`/`$RST` asked to follow it.
+    fn ok(&mut self, out: &mut impl Out) {
+        put_ok(out);
+        if core::mem::take(&mut self.reset_after) {
+            self.soft_reset(out);
         }
     }
 
@@ -414,7 +462,7 @@ impl<'a, const N: usize> Controller<'a, N> {
             return;
         }
         self.enabled_at.get_or_insert(self.now);
-        let waiting = self.job.is_some_and(|j| j.mv.is_some() || j.mv2.is_some());
+        let waiting = self.job.is_some_and(|j| j.mv.is_some() || j.mv2.is_some() || j.arc.is_some());
         let keep = (self.m17 || self.settings.idle_delay_ms == 255) && !self.sleep;
         if keep || waiting || !self.drained() {
             self.idle_since = None;
@@ -433,7 +481,7 @@ impl<'a, const N: usize> Controller<'a, N> {
     }
 
     /// Pushes one planned move; false while it does not fit (or the drivers are settling).
-    fn push(&mut self, pl: Planned<N>, jog: bool) -> bool {
+    fn push(&mut self, pl: Planned<N>, jog: bool, power: Power) -> bool {
         if !self.drivers_ready() {
             self.drivers_on = true;
             return false;
@@ -442,6 +490,8 @@ impl<'a, const N: usize> Controller<'a, N> {
             return false;
         }
         self.feed_ring[self.pushed as usize % FEED_RING] = pl.mm_per_step;
+        let cruise_hz = crate::ramp::hz_of_period(pl.mv.cruise()) as f32;
+        self.power_ring[self.pushed as usize % FEED_RING] = Power { cruise_hz, ..power };
         self.pushed = self.pushed.wrapping_add(1);
         self.idle_since = None;
         if jog {
@@ -459,6 +509,14 @@ impl<'a, const N: usize> Controller<'a, N> {
                 if job.listing.is_some() {
                     break 'run false;
                 }
+            }
+            if let Some(t) = job.tool {
+                // Grbl stops for a spindle or coolant change (laser mode: see `tool_sync`).
+                if !self.drained() {
+                    break 'run false;
+                }
+                self.tool = t;
+                job.tool = None;
             }
             if let Some(ms) = job.dwell_ms {
                 // The dwell starts at a poll (its clock) once the queue has run out.
@@ -481,12 +539,23 @@ impl<'a, const N: usize> Controller<'a, N> {
                 self.save = true;
                 job.save = false;
             }
-            for slot in [&mut job.mv, &mut job.mv2] {
-                if let Some(pl) = *slot {
-                    if !self.push(pl, job.jog) {
-                        break 'run false;
+            loop {
+                for slot in [&mut job.mv, &mut job.mv2] {
+                    if let Some(pl) = *slot {
+                        if !self.push(pl, job.jog, job.power) {
+                            break 'run false;
+                        }
+                        *slot = None;
                     }
-                    *slot = None;
+                }
+                // The next chord of an arc. `Arc::check_range` made planning infallible; were it
+                // not, the chord would merge into the next one (the position stays exact).
+                let Some(seg) = job.arc.as_mut() else { break };
+                match seg.next() {
+                    Some(p) => {
+                        job.mv = plan(&mut self.planner, &p, job.rate, &self.limits, &self.ramped.cfg).unwrap_or(None)
+                    }
+                    None => job.arc = None,
                 }
             }
             if job.drivers_off || job.pause || job.end {
@@ -534,12 +603,30 @@ impl<'a, const N: usize> Controller<'a, N> {
         let (modal, fx) = self.modal.interpret_with(&block, self.planner.position_mm(), &self.offsets)?;
         let mut planner = self.planner;
         let mut offsets = self.offsets;
-        let mut plan = |target: Option<[f64; N]>, feed: Option<f64>| match target {
-            Some(t) => planner.line(&t, feed, &self.limits),
-            None => Ok(None),
+        // G93: F is 1/minutes (checked positive where a motion needs it).
+        let rate = if modal.inverse_time { Rate::Minutes(1.0 / modal.feed) } else { Rate::Feed(modal.feed) };
+        let cfg = self.ramped.cfg;
+        let mv = match fx.motion {
+            Some((target, rapid)) => plan(&mut planner, &target, if rapid { Rate::Rapid } else { rate }, &self.limits, &cfg)?,
+            None => None,
         };
-        let mv = plan(fx.motion.map(|m| m.0), fx.motion.and_then(|(_, rapid)| (!rapid).then_some(modal.feed)))?;
-        let mv2 = plan(fx.home, None)?;
+        let mv2 = match fx.home {
+            Some(t) => planner.line(&t, None, &self.limits)?,
+            None => None,
+        };
+        let (arc, rate) = match fx.arc {
+            Some(a) => {
+                a.check_range(&self.limits.steps_per_mm)?;
+                let seg = a.segments(self.settings.arc_tolerance as f64);
+                // G93 over an arc: its time shared by the (equal) chords.
+                let per = match rate {
+                    Rate::Minutes(t) => Rate::Minutes(t / seg.chords() as f64),
+                    r => r,
+                };
+                (Some(seg), per)
+            }
+            None => (None, Rate::Rapid),
+        };
         let mut store = false;
         if let Some((slot, v)) = fx.coord_write {
             offsets.stored.set(slot, &v);
@@ -552,6 +639,8 @@ impl<'a, const N: usize> Controller<'a, N> {
             offsets.tlo = t;
         }
         // Commit: nothing below can fail.
+        let moves = mv.is_some() || mv2.is_some() || arc.is_some();
+        let (tool, power) = self.tool_sync(&modal, moves, fx.motion.is_some_and(|m| m.1));
         if offsets.wco(modal.coord) != self.offsets.wco(self.modal.coord) {
             self.wco_count = 0;
         }
@@ -575,6 +664,10 @@ impl<'a, const N: usize> Controller<'a, N> {
             dwell_ms: fx.dwell_ms,
             mv,
             mv2,
+            arc,
+            rate,
+            tool,
+            power,
             drivers_off: fx.drivers == Some(false),
             pause: fx.stop == Some(Stop::Pause),
             end: fx.stop == Some(Stop::End),
@@ -584,4 +677,30 @@ impl<'a, const N: usize> Controller<'a, N> {
         self.start(job, out);
         Ok(())
     }
+}
+
+/// Plans one straight move at `rate`. G93: the move's master steps decide the cruise rate that
+/// makes it last its time on the ramp `cfg` ([`inverse_time::cruise_hz`]), given to the planner
+/// as the equivalent feed, so its axis-rate clamps apply as to any feed.
+fn plan<const N: usize>(
+    planner: &mut Planner<N>,
+    target: &[f64; N],
+    rate: Rate,
+    lim: &Limits<N>,
+    cfg: &RampConfig,
+) -> Result<Option<Planned<N>>, crate::protocol::Error> {
+    let feed = match rate {
+        Rate::Rapid => return planner.line(target, None, lim),
+        Rate::Feed(f) => f,
+        Rate::Minutes(t) => {
+            // At 1 mm/min no axis limit binds: the planner's rate is exactly master / (len·60).
+            let mut dry = *planner;
+            let Some(probe) = dry.line(target, Some(1.0), lim)? else {
+                return planner.line(target, Some(1.0), lim);
+            };
+            let master = probe.mv.steps().iter().map(|s| s.unsigned_abs()).max().unwrap_or(0);
+            inverse_time::cruise_hz(master as u64, t * 60.0, cfg) / probe.wanted_hz
+        }
+    };
+    planner.line(target, Some(feed), lim)
 }

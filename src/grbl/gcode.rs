@@ -1,4 +1,4 @@
-//! G-code: numbers, blocks and the modal state, for Grbl 1.1's straight-line subset.
+//! G-code: numbers, blocks and the modal state, for Grbl 1.1's lines, arcs and feed modes.
 //!
 //! Who uses it: the controller, on each line from [`crate::protocol::LineBuf`] (upper case, no
 //! whitespace, no comments).
@@ -10,7 +10,9 @@
 //! of ten, which is the nearest `f64` to the decimal (as `str::parse` gives).
 
 use crate::coords::{Offsets, G28};
+use crate::arc::{Arc, Center};
 use crate::protocol::Error;
+use crate::spindle::{SpindleDir, FLOOD, MIST};
 use crate::AXIS_NAMES;
 
 /// Largest axis target accepted, mm (beyond it: `error:33`).
@@ -79,6 +81,10 @@ pub enum Motion {
     Rapid,
     /// G1: at the feed rate.
     Linear,
+    /// G2: clockwise arc.
+    CwArc,
+    /// G3: counter-clockwise arc.
+    CcwArc,
     /// G80: no motion mode (axis words are an error).
     Cancel,
 }
@@ -149,7 +155,16 @@ pub struct Block<const N: usize> {
     pub coord: Option<u8>,
     /// G43.1 (`true`) / G49 (`false`).
     pub tool_length: Option<bool>,
+    /// G93 (`true`) / G94.
+    pub inverse_time: Option<bool>,
+    /// M3 / M4 / M5.
+    pub spindle: Option<SpindleDir>,
+    /// M7 / M8 / M9 (the code).
+    pub coolant: Option<u8>,
     pub axes: [Option<f64>; N],
+    /// I J K arc offsets.
+    pub ijk: [Option<f64>; 3],
+    pub r: Option<f64>,
     pub f: Option<f64>,
     pub l: Option<f64>,
     pub p: Option<f64>,
@@ -171,7 +186,12 @@ impl<const N: usize> Block<N> {
         drivers: None,
         coord: None,
         tool_length: None,
+        inverse_time: None,
+        spindle: None,
+        coolant: None,
         axes: [None; N],
+        ijk: [None; 3],
+        r: None,
         f: None,
         l: None,
         p: None,
@@ -241,13 +261,15 @@ fn g_word<const N: usize>(b: &mut Block<N>, v: f64) -> Result<(), Error> {
     use group::*;
     let (code, mut mantissa) = split_code(v)?;
     let g = match code {
-        0 | 1 | 80 => {
+        0..=3 | 80 => {
             if code != 80 {
                 b.axis_command()?;
             }
             b.motion = Some(match code {
                 0 => Motion::Rapid,
                 1 => Motion::Linear,
+                2 => Motion::CwArc,
+                3 => Motion::CcwArc,
                 _ => Motion::Cancel,
             });
             MOTION
@@ -287,10 +309,13 @@ fn g_word<const N: usize>(b: &mut Block<N>, v: f64) -> Result<(), Error> {
             mantissa = 0;
             ARC_DISTANCE
         }
-        94 => FEED_MODE,
+        93 | 94 => {
+            b.inverse_time = Some(code == 93);
+            FEED_MODE
+        }
         40 => CUTTER,
         61 => PATH,
-        // Arcs, probing, inverse time.
+        // Probing and anything else.
         _ => return Err(Error::UnsupportedCommand),
     };
     if mantissa != 0 {
@@ -337,13 +362,23 @@ fn m_word<const N: usize>(b: &mut Block<N>, v: f64) -> Result<(), Error> {
             });
             STOP
         }
-        5 => SPINDLE,
-        9 => COOLANT,
+        3..=5 => {
+            b.spindle = Some(match code {
+                3 => SpindleDir::Cw,
+                4 => SpindleDir::Ccw,
+                _ => SpindleDir::Off,
+            });
+            SPINDLE
+        }
+        7..=9 => {
+            b.coolant = Some(code as u8);
+            COOLANT
+        }
         17 | 18 | 84 => {
             b.drivers = Some(code == 17);
             DRIVERS
         }
-        // Spindle/coolant on, tool change and the rest: nothing here could do them.
+        // Tool change and the rest: nothing here could do them.
         _ => return Err(Error::UnsupportedCommand),
     };
     b.claim(g)
@@ -357,6 +392,8 @@ fn value_word<const N: usize>(b: &mut Block<N>, letter: u8, v: f64) -> Result<()
         b'P' => &mut b.p,
         b'S' => &mut b.s,
         b'T' => &mut b.t,
+        b'I' | b'J' | b'K' => &mut b.ijk[(letter - b'I') as usize],
+        b'R' => &mut b.r,
         _ => match AXIS_NAMES[..N].iter().position(|&a| a as u8 == letter) {
             Some(i) => &mut b.axes[i],
             None => return Err(Error::UnsupportedCommand),
@@ -391,6 +428,8 @@ pub struct Effects<const N: usize> {
     pub motion: Option<([f64; N], bool)>,
     /// G28/G30: the rapid to the stored position that follows.
     pub home: Option<[f64; N]>,
+    /// G2/G3, checked.
+    pub arc: Option<Arc<N>>,
     pub stop: Option<Stop>,
 }
 
@@ -405,9 +444,16 @@ pub struct Modal {
     pub coord: u8,
     /// G43.1 in force (else G49).
     pub tlo: bool,
-    /// Feed rate, mm/min (0: none yet).
+    /// G93: F is the inverse of each move's time in minutes, given on every motion line.
+    pub inverse_time: bool,
+    /// Feed rate, mm/min, or 1/min under G93 (0: none yet).
     pub feed: f64,
+    /// S.
     pub spindle: f64,
+    /// M3 / M4 / M5.
+    pub spindle_dir: SpindleDir,
+    /// M7 / M8 bits ([`MIST`], [`FLOOD`]); M9 clears both.
+    pub coolant: u8,
     pub tool: u32,
 }
 
@@ -426,8 +472,11 @@ impl Modal {
         inches: false,
         coord: 0,
         tlo: false,
+        inverse_time: false,
         feed: 0.0,
         spindle: 0.0,
+        spindle_dir: SpindleDir::Off,
+        coolant: 0,
         tool: 0,
     };
 
@@ -455,12 +504,32 @@ impl Modal {
         m.coord = b.coord.unwrap_or(m.coord);
         m.tlo = b.tool_length.unwrap_or(m.tlo);
         let unit = if m.inches { 25.4 } else { 1.0 };
-        if let Some(f) = b.f {
+        m.inverse_time = b.inverse_time.unwrap_or(m.inverse_time);
+        let feed_motion = matches!(m.motion, Motion::Linear | Motion::CwArc | Motion::CcwArc);
+        // A motion command: axis words not taken by G92, or an explicit G0-G3.
+        let moves = b.non_modal != Some(NonModal::SetPosition)
+            && (b.has_axes() || b.motion.is_some_and(|mo| mo != Motion::Cancel));
+        if m.inverse_time {
+            // G93 (Grbl): every motion line carries its own F; nothing carries over.
+            if feed_motion && moves && b.f.is_none() {
+                return Err(Error::UndefinedFeedRate);
+            }
+            m.feed = b.f.unwrap_or(0.0);
+        } else if let Some(f) = b.f {
             m.feed = f * unit;
+        } else if self.inverse_time {
+            m.feed = 0.0; // G93 to G94 without F: no feed rate (Grbl)
         }
         if let Some(s) = b.s {
             m.spindle = s;
         }
+        m.spindle_dir = b.spindle.unwrap_or(m.spindle_dir);
+        m.coolant = match b.coolant {
+            Some(7) => m.coolant | MIST,
+            Some(8) => m.coolant | FLOOD,
+            Some(_) => 0,
+            None => m.coolant,
+        };
         if let Some(t) = b.t {
             if t > 255.0 {
                 return Err(Error::MaxValueExceeded);
@@ -475,6 +544,7 @@ impl Modal {
             tlo: None,
             motion: None,
             home: None,
+            arc: None,
             stop: b.stop,
         };
         let nm = b.non_modal;
@@ -502,18 +572,13 @@ impl Modal {
             }
             fx.tlo = Some(if on { words.get(crate::coords::TLO_AXIS).copied().flatten().unwrap_or(0.0) } else { 0.0 });
         }
-        let wcs = off.wcs(m.coord);
         match nm {
             Some(NonModal::SetCoordData) => fx.coord_write = Some(set_coord_data(b, &words, pos, off, m.coord)?),
             Some(NonModal::SetPosition) => {
                 if !b.has_axes() {
                     return Err(Error::NoAxisWords);
                 }
-                // WPos = MPos − WCS − G92 − TLO, so G92 = MPos − WCS − TLO − WPos.
-                fx.g92 = Some(core::array::from_fn(|i| match words[i] {
-                    Some(w) => pos[i] - wcs[i] - off.tlo_of(i) - w,
-                    None => off.g92[i],
-                }));
+                fx.g92 = Some(off.g92_for(m.coord, pos, &words));
             }
             Some(NonModal::ResetOffset) => fx.g92 = Some([0.0; N]),
             Some(NonModal::SetHome(k)) => fx.coord_write = Some((G28 + k as usize, *pos)),
@@ -526,34 +591,47 @@ impl Modal {
             return Err(Error::AxisWordsExist);
         }
         let uses_axes = b.tool_length.is_some() || matches!(nm, Some(NonModal::SetCoordData | NonModal::SetPosition));
-        if b.has_axes() && !uses_axes {
+        let home = matches!(nm, Some(NonModal::GoHome(_)));
+        let arc_motion = matches!(m.motion, Motion::CwArc | Motion::CcwArc);
+        // A G2/G3 block without axis words is a motion too (its error comes from `arc`).
+        if !uses_axes && (b.has_axes() || (moves && arc_motion && !home)) {
+            if feed_motion && !home && m.feed <= 0.0 {
+                return Err(Error::UndefinedFeedRate);
+            }
             let mut target = *pos;
             for (i, t) in target.iter_mut().enumerate() {
                 if let Some(w) = words[i] {
                     *t = in_range(match nm {
                         Some(NonModal::Absolute) => w,
                         _ if m.relative => pos[i] + w,
-                        _ => w + wcs[i] + off.g92[i] + off.tlo_of(i),
+                        _ => off.to_machine(m.coord, i, w),
                     })?;
                 }
             }
-            let rapid = match (nm, m.motion) {
-                (Some(NonModal::GoHome(_)), _) | (_, Motion::Rapid) => true,
-                (_, Motion::Linear) if m.feed <= 0.0 => return Err(Error::UndefinedFeedRate),
-                _ => false,
-            };
-            fx.motion = Some((target, rapid));
+            match m.motion {
+                Motion::CwArc | Motion::CcwArc if !home => fx.arc = Some(arc(b, &m, pos, target, unit)?),
+                mo => fx.motion = Some((target, home || mo == Motion::Rapid)),
+            }
+        }
+        // I J K R that no arc used (also I J K beside R): Grbl's unused words.
+        let arc_words = b.ijk.iter().any(Option::is_some) as u8 + b.r.is_some() as u8;
+        if arc_words > fx.arc.is_some() as u8 {
+            return Err(Error::UnusedWords);
         }
         if let Some(NonModal::GoHome(k)) = nm {
-            // Only the named axes go on to the stored position (all of them without words).
-            let stored = off.stored.get::<N>(G28 + k as usize);
-            fx.home = Some(core::array::from_fn(|i| match (b.has_axes(), words[i]) {
-                (true, None) => pos[i],
-                _ => stored[i],
-            }));
+            fx.home = Some(off.home(k, pos, &words));
         }
         if b.stop == Some(Stop::End) {
-            m = Modal { motion: Motion::Linear, plane: 17, relative: false, coord: 0, ..m };
+            m = Modal {
+                motion: Motion::Linear,
+                plane: 17,
+                relative: false,
+                coord: 0,
+                inverse_time: false,
+                spindle_dir: SpindleDir::Off,
+                coolant: 0,
+                ..m
+            };
         }
         Ok((m, fx))
     }
@@ -578,17 +656,27 @@ fn set_coord_data<const N: usize>(
         return Err(Error::UnsupportedCoordSys);
     }
     let l20 = match b.l.map(libm::trunc) {
-        Some(v) if v == 20.0 => true,
-        Some(v) if v == 2.0 => false,
+        Some(20.0) => true,
+        Some(2.0) => false,
         _ => return Err(Error::UnsupportedCommand),
     };
     let slot = if p > 0.0 { p as usize - 1 } else { active as usize };
-    let mut v = off.stored.get::<N>(slot);
-    for (i, x) in v.iter_mut().enumerate() {
-        if let Some(w) = words[i] {
-            // L20: the current position reads `w` in that system (WCS = MPos − G92 − TLO − WPos).
-            *x = if l20 { pos[i] - off.g92[i] - off.tlo_of(i) - w } else { w };
-        }
+    Ok((slot, off.g10(slot, l20, pos, words)))
+}
+
+/// G2/G3 words to a checked arc, in Grbl's order: axis words (`error:26`), axis words in the
+/// plane (`error:32`), then the geometry ([`Arc::new`]).
+fn arc<const N: usize>(b: &Block<N>, m: &Modal, pos: &[f64; N], target: [f64; N], unit: f64) -> Result<Arc<N>, Error> {
+    if !b.has_axes() {
+        return Err(Error::NoAxisWords);
     }
-    Ok((slot, v))
+    let (p, q) = crate::arc::plane_axes(m.plane);
+    if b.axes.get(p).copied().flatten().is_none() && b.axes.get(q).copied().flatten().is_none() {
+        return Err(Error::NoAxisWordsInPlane);
+    }
+    let center = match b.r {
+        Some(r) => Center::Radius(r * unit),
+        None => Center::Offsets(b.ijk.map(|o| o.map(|v| v * unit))),
+    };
+    Arc::new(m.plane, *pos, target, m.motion == Motion::CwArc, center)
 }

@@ -9,3 +9,4 @@ pub mod protocol;
 pub mod report;
 pub mod settings;
 pub mod store;
+pub mod spindle;

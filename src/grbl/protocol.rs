@@ -101,8 +101,14 @@ pub enum Error {
     G53InvalidMotionMode = 30,
     /// Axis words with no command to use them.
     AxisWordsExist = 31,
+    /// G2/G3 without an axis word in the selected plane.
+    NoAxisWordsInPlane = 32,
     /// Target out of range (beyond ±1e6 mm or ±(2^31 - 1) steps).
     InvalidTarget = 33,
+    /// G2/G3 R form: the radius is shorter than half the chord.
+    ArcRadiusError = 34,
+    /// G2/G3 IJK form without an offset in the selected plane.
+    NoOffsetsInPlane = 35,
     /// Value words no command uses.
     UnusedWords = 36,
     /// G43.1 without Z, or with another axis.

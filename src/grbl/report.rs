@@ -6,6 +6,7 @@
 
 use crate::coords::{Offsets, G28, G30};
 use crate::gcode::{Modal, Motion};
+use crate::spindle::{SpindleDir, FLOOD, MIST};
 use crate::protocol::{put_fixed, put_u32, Out, RX_BUFFER_LEN};
 use crate::queue::Overrides;
 use crate::ramp::Shape;
@@ -114,6 +115,8 @@ pub fn modes(out: &mut impl Out, m: &Modal) {
     out.put(match m.motion {
         Motion::Rapid => b"[GC:G0",
         Motion::Linear => b"[GC:G1",
+        Motion::CwArc => b"[GC:G2",
+        Motion::CcwArc => b"[GC:G3",
         Motion::Cancel => b"[GC:G80",
     });
     out.put(b" G");
@@ -122,7 +125,22 @@ pub fn modes(out: &mut impl Out, m: &Modal) {
     put_u32(out, m.plane as u32);
     out.put(if m.inches { b" G20" } else { b" G21" });
     out.put(if m.relative { b" G91" } else { b" G90" });
-    out.put(b" G94 M5 M9 T");
+    out.put(if m.inverse_time { b" G93" } else { b" G94" });
+    out.put(match m.spindle_dir {
+        SpindleDir::Off => b" M5",
+        SpindleDir::Cw => b" M3",
+        SpindleDir::Ccw => b" M4",
+    });
+    if m.coolant == 0 {
+        out.put(b" M9");
+    }
+    if m.coolant & MIST != 0 {
+        out.put(b" M7");
+    }
+    if m.coolant & FLOOD != 0 {
+        out.put(b" M8");
+    }
+    out.put(b" T");
     put_u32(out, m.tool);
     out.put(b" F");
     put_fixed(out, m.feed, 0);

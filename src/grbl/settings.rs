@@ -16,9 +16,12 @@ use crate::timing::{ns_to_ticks, Timing};
 use crate::MAX_AXES;
 
 /// Bytes of the flash image.
-pub const SETTINGS_LEN: usize = 140;
+pub const SETTINGS_LEN: usize = 160;
 const MAGIC: u8 = 0xD5;
 const VERSION: u8 = 2;
+/// Byte offset of the settings after the axis arrays: `$12`, `$30`, `$31`, `$33` (f32, u32),
+/// `$32` (flag byte); CRC last.
+const TAIL: usize = 24 + 4 * 4 * MAX_AXES;
 /// Absolute floor of the step period (ticks; 144 = 500 kHz, the engine's design limit). The
 /// binding limits are the pulse rule and the step handler's measured cost, both applied by
 /// `Timing::min_period_for`.
@@ -33,11 +36,11 @@ pub const RAMP_SHAPE: u16 = 41;
 pub const AXIS_COUNT: u16 = 42;
 /// Grbl's status report mask: bit 0 MPos (else WPos), bit 1 `Bf:`.
 pub const STATUS_MASK: u16 = 10;
+pub const SPINDLE_PWM_HZ: u16 = 33; // grblHAL's number for the spindle PWM frequency
 
 /// Grbl settings we report but do not implement, with the only value they accept.
-const FIXED: [(u16, f32, u8); 14] = [
+const FIXED: [(u16, f32, u8); 10] = [
     (11, 0.010, 3),  // junction deviation: every move stops (no look-ahead)
-    (12, 0.002, 3),  // arc tolerance: no arcs
     (13, 0.0, 0),    // report inches: no
     (20, 0.0, 0),    // soft limits: not implemented
     (21, 0.0, 0),    // hard limits: not implemented
@@ -47,16 +50,13 @@ const FIXED: [(u16, f32, u8); 14] = [
     (25, 500.0, 3),  // homing seek
     (26, 250.0, 0),  // homing debounce
     (27, 1.0, 3),    // homing pull-off
-    (30, 1000.0, 0), // spindle max: no spindle
-    (31, 0.0, 0),    // spindle min
-    (32, 0.0, 0),    // laser mode
 ];
 
 /// Setting numbers below 100 in `$$` order: Grbl's, ours and the [`FIXED`] ones. (A table
 /// rather than an iterator chain over `FIXED`: ~400 bytes less flash.)
-const LOW_IDS: [u16; 26] = [
+const LOW_IDS: [u16; 27] = [
     0, 1, 2, 3, 4, 5, 6, STATUS_MASK, 11, 12, 13, 20, 21, 22, 23, 24, 25, 26, 27, DIR_SETUP, 30,
-    31, 32, RAMP_START, RAMP_SHAPE, AXIS_COUNT,
+    31, 32, SPINDLE_PWM_HZ, RAMP_START, RAMP_SHAPE, AXIS_COUNT,
 ];
 
 /// Persistent settings. Axis arrays are indexed X Y Z A B C U; only the firmware's first N
@@ -78,6 +78,16 @@ pub struct Settings {
     pub limit_invert: bool,
     /// `$6` probe pin invert (stored only).
     pub probe_invert: bool,
+    /// `$12` arc tolerance: largest distance of a chord from its arc, mm.
+    pub arc_tolerance: f32,
+    /// `$30` spindle speed at full PWM duty (rpm, or laser power units).
+    pub spindle_max: f32,
+    /// `$31` spindle speed at the lowest non-zero duty.
+    pub spindle_min: f32,
+    /// `$32` laser mode: S changes do not stop motion, M4 scales power with speed.
+    pub laser_mode: bool,
+    /// `$33` spindle PWM frequency, Hz.
+    pub spindle_pwm_hz: u32,
     /// `$29` direction setup before the next step edge, µs (0..=1000).
     pub dir_setup_us: f32,
     /// `$40` ramp start rate v0, master steps/s.
@@ -147,6 +157,11 @@ impl Settings {
         enable_invert: false,
         limit_invert: false,
         probe_invert: false,
+        arc_tolerance: 0.002,
+        spindle_max: 1000.0,
+        spindle_min: 0.0,
+        laser_mode: false,
+        spindle_pwm_hz: 1000,
         dir_setup_us: 5.0,
         ramp_start_hz: 1000,
         shape: Shape::Trapezoid,
@@ -200,6 +215,11 @@ impl Settings {
             4 => (self.enable_invert as u8 as f64, 0),
             5 => (self.limit_invert as u8 as f64, 0),
             6 => (self.probe_invert as u8 as f64, 0),
+            12 => (self.arc_tolerance as f64, 3),
+            30 => (self.spindle_max as f64, 0),
+            31 => (self.spindle_min as f64, 0),
+            32 => (self.laser_mode as u8 as f64, 0),
+            SPINDLE_PWM_HZ => (self.spindle_pwm_hz as f64, 0),
             DIR_SETUP => (self.dir_setup_us as f64, 3),
             RAMP_START => (self.ramp_start_hz as f64, 0),
             RAMP_SHAPE => ((self.shape == Shape::SCurve) as u8 as f64, 0),
@@ -270,6 +290,25 @@ impl Settings {
             }
             6 => {
                 self.probe_invert = int != 0.0;
+                Ok(Change::Shell)
+            }
+            12 => {
+                // Grbl takes any positive value; below 0.1 µm a chord is far below a step.
+                self.arc_tolerance = range(1e-4, 1000.0)?;
+                Ok(Change::Shell)
+            }
+            30 | 31 => {
+                let v = range(0.0, 1e6)?;
+                *(if id == 30 { &mut self.spindle_max } else { &mut self.spindle_min }) = v;
+                Ok(Change::Shell)
+            }
+            32 => {
+                self.laser_mode = int != 0.0;
+                Ok(Change::Shell)
+            }
+            SPINDLE_PWM_HZ => {
+                range(1.0, 100_000.0)?;
+                self.spindle_pwm_hz = value as u32;
                 Ok(Change::Shell)
             }
             DIR_SETUP => {
@@ -414,6 +453,11 @@ impl Settings {
         for (w, v) in b[24..].chunks_exact_mut(4).zip(values) {
             w.copy_from_slice(&v.to_le_bytes());
         }
+        b[TAIL..TAIL + 4].copy_from_slice(&self.arc_tolerance.to_le_bytes());
+        b[TAIL + 4..TAIL + 8].copy_from_slice(&self.spindle_max.to_le_bytes());
+        b[TAIL + 8..TAIL + 12].copy_from_slice(&self.spindle_min.to_le_bytes());
+        b[TAIL + 12..TAIL + 16].copy_from_slice(&self.spindle_pwm_hz.to_le_bytes());
+        b[TAIL + 16] = self.laser_mode as u8;
         let crc = crc32(&b[..SETTINGS_LEN - 4]);
         b[SETTINGS_LEN - 4..].copy_from_slice(&crc.to_le_bytes());
         b
@@ -434,6 +478,15 @@ impl Settings {
             pulse_us: f32::from_le_bytes(word(4)),
             dir_setup_us: f32::from_le_bytes(word(8)),
             ramp_start_hz: u32::from_le_bytes(word(12)),
+            arc_tolerance: f32::from_le_bytes(word(TAIL)),
+            spindle_max: f32::from_le_bytes(word(TAIL + 4)),
+            spindle_min: f32::from_le_bytes(word(TAIL + 8)),
+            spindle_pwm_hz: u32::from_le_bytes(word(TAIL + 12)),
+            laser_mode: match b[TAIL + 16] {
+                0 => false,
+                1 => true,
+                _ => return None,
+            },
             idle_delay_ms: b[16],
             step_invert: b[17],
             dir_invert: b[18],
@@ -480,7 +533,7 @@ mod tests {
 
     #[test]
     fn low_ids_are_ours_and_every_fixed_one() {
-        let ours = [0, 1, 2, 3, 4, 5, 6, STATUS_MASK, DIR_SETUP, RAMP_START, RAMP_SHAPE, AXIS_COUNT];
+        let ours = [0, 1, 2, 3, 4, 5, 6, STATUS_MASK, 12, 30, 31, 32, SPINDLE_PWM_HZ, DIR_SETUP, RAMP_START, RAMP_SHAPE, AXIS_COUNT];
         assert_eq!(LOW_IDS.len(), ours.len() + FIXED.len());
         assert!(ours.iter().chain(FIXED.iter().map(|f| &f.0)).all(|id| LOW_IDS.contains(id)));
     }

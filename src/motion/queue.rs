@@ -13,7 +13,7 @@ use core::sync::atomic::{fence, AtomicI32, AtomicU32, AtomicU8, Ordering::{Acqui
 use heapless::spsc::Producer;
 
 use crate::interp::master_axis;
-use crate::ramp::{period_of_hz, Period, MAX_RATE_HZ, MIN_RATE_HZ};
+use crate::ramp::{period_of_millihz, Period, MAX_RATE_HZ, MIN_RATE_HZ};
 
 /// What the engine is doing, as published in [`Shared::state`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -27,6 +27,23 @@ pub enum State {
     Holding = 2,
     /// Feed hold complete: stopped mid-move (or between moves).
     Held = 3,
+}
+
+/// Grbl's override percentages (feed, rapid, spindle; 100 = as programmed).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Overrides {
+    pub feed: u8,
+    pub rapid: u8,
+    pub spindle: u8,
+}
+
+impl Overrides {
+    /// Everything as programmed.
+    pub const NONE: Overrides = Overrides { feed: 100, rapid: 100, spindle: 100 };
+
+    const fn pack(self) -> u32 {
+        self.feed as u32 | (self.rapid as u32) << 8 | (self.spindle as u32) << 16
+    }
 }
 
 /// Why a move cannot be built.
@@ -53,7 +70,13 @@ pub struct Move<const N: usize> {
 impl<const N: usize> Move<N> {
     /// A move of `steps` (signed, per axis) whose master axis cruises at `cruise_hz` steps/s.
     pub fn new(steps: [i64; N], cruise_hz: u32) -> Result<Self, MoveError> {
-        if !(MIN_RATE_HZ..=MAX_RATE_HZ).contains(&cruise_hz) {
+        Self::new_millihz(steps, cruise_hz as u64 * 1000)
+    }
+
+    /// The same with the cruise rate in milli-steps per second (G93 times need more than whole
+    /// steps/s at low rates).
+    pub fn new_millihz(steps: [i64; N], cruise_millihz: u64) -> Result<Self, MoveError> {
+        if !(MIN_RATE_HZ as u64 * 1000..=MAX_RATE_HZ as u64 * 1000).contains(&cruise_millihz) {
             return Err(MoveError::RateOutOfRange);
         }
         let mut s = [0i32; N];
@@ -69,7 +92,7 @@ impl<const N: usize> Move<N> {
         if counts[master] == 0 {
             return Err(MoveError::ZeroLength);
         }
-        Ok(Move { steps: s, master: master as u8, cruise: period_of_hz(cruise_hz), epoch: 0 })
+        Ok(Move { steps: s, master: master as u8, cruise: period_of_millihz(cruise_millihz), epoch: 0 })
     }
 
     /// Signed steps per axis.
@@ -85,24 +108,6 @@ impl<const N: usize> Move<N> {
     /// Master cruise period.
     pub fn cruise(&self) -> Period {
         self.cruise
-    }
-}
-
-/// Override percentages as Grbl reports them in `Ov:`: feed 10–200, rapid 25/50/100,
-/// spindle 10–200.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Overrides {
-    pub feed: u8,
-    pub rapid: u8,
-    pub spindle: u8,
-}
-
-impl Overrides {
-    /// 100 % everywhere (power-up and reset).
-    pub const NONE: Overrides = Overrides { feed: 100, rapid: 100, spindle: 100 };
-
-    const fn pack(self) -> u32 {
-        self.feed as u32 | (self.rapid as u32) << 8 | (self.spindle as u32) << 16
     }
 }
 

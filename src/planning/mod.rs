@@ -2,3 +2,6 @@
 //! choice, rate limits clamped to what the engine can hold).
 
 pub mod planner;
+pub mod arc;
+pub mod inverse_time;
+pub mod trig;

@@ -10,7 +10,7 @@
 //! Rates: a G1 takes `length / F` (length over all moving axes, from the rounded steps); a G0
 //! takes as long as its slowest axis at `$110+i`; no axis may exceed its `$110+i`, so the whole
 //! move slows down when one would. The master's cruise rate is its steps over that time,
-//! rounded to whole steps/s and clamped to `1 ..= vmax_hz` (the ramp table's top, itself at most
+//! rounded to milli-steps/s and clamped to `1 ..= vmax_hz` (the ramp table's top, itself at most
 //! the timing's fastest rate; both are printed by `$I`). Every move starts and ends at rest (no
 //! look-ahead).
 
@@ -137,8 +137,8 @@ impl<const N: usize> Planner<N> {
         let slaves = delta.iter().filter(|d| **d != 0).count() as u32 - 1;
         let top = lim.vmax_hz.min(lim.timing.max_rate_for(slaves));
         // max/min, not f64::clamp: its panic message would link float formatting into the firmware.
-        let cruise = libm::round(wanted_hz).max(1.0).min(top as f64) as u32;
-        let mv = Move::new(delta, cruise).map_err(|_| Error::InvalidTarget)?;
+        let cruise_millihz = libm::round(wanted_hz.max(1.0).min(top as f64) * 1000.0) as u64;
+        let mv = Move::new_millihz(delta, cruise_millihz).map_err(|_| Error::InvalidTarget)?;
         self.mm = *target;
         self.steps = to;
         Ok(Some(Planned { mv, mm_per_step: (len / master_steps as f64) as f32, wanted_hz }))
@@ -149,7 +149,7 @@ impl<const N: usize> Planner<N> {
 /// (libm's needs a 256-byte table and 64-bit multiplies). Digit by digit: the 54-bit truncated
 /// root of the significand, then rounded half up; a tie cannot happen, since a 54-bit odd
 /// significand squared never fits in 53 bits. Negative inputs give NaN, like libm.
-fn sqrt(x: f64) -> f64 {
+pub(crate) fn sqrt(x: f64) -> f64 {
     let bits = x.to_bits();
     if bits > 1 << 63 {
         return f64::NAN;

@@ -1,0 +1,61 @@
+//! G93 inverse-time feed: the master cruise rate that makes a move last a given time, in
+//! closed form (no iteration, unlike seed 002's search for the frequency).
+//!
+//! Who uses it: the controller, for each G93 line or arc chord, before planning it as a feed
+//! move.
+//!
+//! A move of `N` master steps that starts and ends at rest on the ramp table (start rate `v0`,
+//! acceleration `a`) and cruises at `v ≥ v0` lasts `T(v) = 2(v - v0)/a + (N - (v² - v0²)/a)/v`,
+//! i.e. `a·v·T = (v - v0)² + N·a`. For a requested `T` that is a quadratic in `v`; its smaller
+//! root is the trapezoid (the larger one would need more steps for the ramps than the move has):
+//! `v = 2c / (b + √(b² - 4c))` with `b = 2·v0 + a·T`, `c = v0² + N·a` (this form loses no digits
+//! when `a·T ≫ v0`). A rate at or below `v0` needs no ramp: `v = N/T`. When the discriminant is
+//! negative even the triangle (peak `√c`) is too slow: the move gets that peak, and the planner
+//! then clamps it to the axes' max rates and the table's top, as Grbl clamps a G93 rate to
+//! the axes' maximum rates (so the move takes longer than asked).
+//!
+//! The S-curve table (`$41=1`) is treated as the trapezoid with its mean acceleration
+//! `(vmax - v0) / ramp time`: exact for moves that reach the table's top, approximate (the
+//! logistic's slow start) for moves that turn back earlier.
+
+use crate::ramp::{RampConfig, RampTable, Shape};
+
+/// Master cruise rate (steps/s) for `steps` master steps to take `seconds`, starting and ending
+/// at rest on the ramp `cfg`.
+pub fn cruise_hz(steps: u64, seconds: f64, cfg: &RampConfig) -> f64 {
+    let n = steps as f64;
+    let v0 = cfg.v0 as f64;
+    let a = match cfg.shape {
+        Shape::Trapezoid => cfg.accel as f64,
+        Shape::SCurve => {
+            let ms = RampTable::<1>::ramp_ms(cfg).max(1) as f64;
+            (cfg.vmax as f64 - v0).max(1.0) * 1000.0 / ms
+        }
+    };
+    let flat = n / seconds;
+    if flat <= v0 || a <= 0.0 {
+        return flat;
+    }
+    let b = 2.0 * v0 + a * seconds;
+    let c = v0 * v0 + n * a;
+    let d = b * b - 4.0 * c;
+    if d < 0.0 {
+        return crate::planner::sqrt(c);
+    }
+    2.0 * c / (b + crate::planner::sqrt(d))
+}
+
+/// How long a move of `steps` master steps at cruise `v` lasts on the ramp `cfg`, s (the
+/// forward formula the solver inverts; for tests and reports).
+pub fn duration_s(steps: u64, v: f64, cfg: &RampConfig) -> f64 {
+    let (n, v0, a) = (steps as f64, cfg.v0 as f64, cfg.accel as f64);
+    if v <= v0 {
+        return n / v;
+    }
+    let peak2 = v0 * v0 + n * a;
+    if v * v >= peak2 {
+        // Triangle: up to the peak and down again.
+        return 2.0 * (crate::planner::sqrt(peak2) - v0) / a;
+    }
+    ((v - v0) * (v - v0) + n * a) / (a * v)
+}
