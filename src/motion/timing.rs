@@ -94,14 +94,14 @@ impl Timing {
     }
 }
 
-/// Step-handler cost per master step, timer ticks: the virtual bench measures ≈ 254 + 14.0 per
-/// slave modeled cycles with its silicon-checked memory model (bench/RESULTS.md, firmware
-/// 528dfc9: flash refills, APB bridge stalls, the DWT self-measurement), and the CPU stays
-/// ≤ 95 % busy up to 255 kHz with one axis and 197 kHz with six; these keep every move inside
-/// that.
+/// Step-handler cost per master step, timer ticks: the virtual bench measures ≈ 250 + 16.9 per
+/// slave modeled cycles with its silicon-checked memory model (bench/RESULTS.md: flash
+/// refills, APB bridge stalls, the DWT self-measurement), and the CPU stays ≤ 95 % busy up to
+/// 248 kHz with one axis, 224 kHz with three and 191 kHz with six; these keep every move
+/// inside that.
 pub const HANDLER_BASE_TICKS: u32 = 290;
 /// Extra handler ticks per slave axis (see [`HANDLER_BASE_TICKS`]).
-pub const HANDLER_PER_SLAVE_TICKS: u32 = 17;
+pub const HANDLER_PER_SLAVE_TICKS: u32 = 18;
 /// Where a short pulse's falling edge lands after its rising edge when the compare event is
 /// already pending at the end of the update handler (measured high time ≈ 142 + 12 per slave
 /// modeled cycles), rounded up.
