@@ -166,7 +166,7 @@ fn settings_list_change_and_refuse_while_moving() {
     assert_eq!(b.line("$0=2"), "ok\r\n");
     b.run_ms(2);
     assert!(b.actions.iter().any(|a| a.pulse_ticks == Some(144)), "{:?}", b.actions);
-    assert!(b.line("$I").contains("[MSG:max step rate 214285 Hz]"));
+    assert!(b.line("$I").contains("[MSG:max step rate 200000 Hz]"));
 }
 
 #[test]
@@ -189,7 +189,7 @@ fn build_info_names_us_and_the_rate_limit() {
     b.take();
     assert_eq!(
         b.line("$I"),
-        "[VER:1.1h.ddastep:]\r\n[OPT:,15,128]\r\n[MSG:max step rate 150000 Hz]\r\n\
+        "[VER:1.1h.ddastep:]\r\n[OPT:,15,128]\r\n[MSG:max step rate 142857 Hz]\r\n\
          [MSG:ramp 1000-60000 Hz 1000000 Hz/s trapezoid]\r\nok\r\n"
     );
     // Slow accel on Y: the table cannot reach the axes' top in 1.024 s.

@@ -40,6 +40,10 @@ impl<const N: usize> Controller<'_, N> {
     pub(super) fn spindle_out(&self) -> SpindleOut {
         let s = &self.settings;
         let (dir, speed, coolant) = self.tool;
+        if dir == SpindleDir::Off {
+            // Nothing to compute (the common case, once per poll).
+            return SpindleOut { mist: coolant & MIST != 0, flood: coolant & FLOOD != 0, ..SpindleOut::default() };
+        }
         let state = self.shared.state();
         let speed = if !s.laser_mode {
             speed
@@ -54,12 +58,11 @@ impl<const N: usize> Controller<'_, N> {
         } else {
             0.0
         };
-        let speed = if dir == SpindleDir::Off { 0.0 } else { speed };
         let ov = self.shared.overrides().spindle as f64 / 100.0;
         let arr = crate::spindle::PwmTiming::new(s.spindle_pwm_hz).arr;
         SpindleOut {
             ccr: duty(speed * ov, s.spindle_min as f64, s.spindle_max as f64, arr),
-            enable: dir != SpindleDir::Off,
+            enable: true,
             ccw: dir == SpindleDir::Ccw,
             mist: coolant & MIST != 0,
             flood: coolant & FLOOD != 0,
