@@ -4,11 +4,15 @@
 //!
 //! Three writers, each the only writer of its fields, and no locks:
 //! - the step interrupt ([`StepTime::record`], highest priority): entry count and busy cycles
-//!   (both wrapping), and the min / max since the last report;
-//! - the 1 ms tick ([`StepTime::tick_ms`]): 64-bit totals and the busiest millisecond, under a
-//!   sequence count (odd while it writes) so a reader never sees half an update;
-//! - the report ([`StepTime::take`], from `idle`): its previous totals, and it restarts min,
-//!   max and peak with atomic swaps (LDREX/STREX: a preempting writer makes it retry).
+//!   (both wrapping), and the min / max since the last tick;
+//! - the 1 ms tick ([`StepTime::tick_ms`]): takes the interrupt's min / max (atomic swaps) and
+//!   folds everything into 64-bit totals, the window's min / max and the busiest millisecond,
+//!   under a sequence count (odd while it writes);
+//! - the report ([`StepTime::take`], from `idle`): takes the window (atomic swaps, put back and
+//!   retried if a tick ran meanwhile) and keeps its previous totals.
+//!
+//! So a report covers whole milliseconds: every entry a tick has seen, in exactly one report
+//! (an entry that lands during the tick's few loads may set the min / max of the next one).
 //!
 //! Cost on the step path: two CYCCNT loads and a subtraction, then two load-add-stores and two
 //! compare-and-store (about 12 instructions, ~20 cycles; `bench/README.md` gives the modeled
@@ -34,6 +38,8 @@ pub struct StepTime {
     total_count: [AtomicU32; 2],
     total_busy: [AtomicU32; 2],
     peak_ms: AtomicU32,
+    win_min: AtomicU32,
+    win_max: AtomicU32,
     read_ms: AtomicU32,
     read_count: [AtomicU32; 2],
     read_busy: [AtomicU32; 2],
@@ -75,6 +81,8 @@ impl StepTime {
             total_count: [Z, Z],
             total_busy: [Z, Z],
             peak_ms: Z,
+            win_min: AtomicU32::new(u32::MAX),
+            win_max: Z,
             read_ms: Z,
             read_count: [Z, Z],
             read_busy: [Z, Z],
@@ -94,48 +102,55 @@ impl StepTime {
         }
     }
 
-    /// Every millisecond (one context only): extend the counters to 64 bits, track the peak.
+    /// Every millisecond (one context only): extend the counters to 64 bits, fold the min /
+    /// max into the window, track the busiest millisecond.
     pub fn tick_ms(&self) {
-        // Count first: an entry that lands between the two loads is counted next time, and
-        // its cycles can at most show in this millisecond's busy total.
         let count = self.count.load(Relaxed);
         let busy = self.busy.load(Relaxed);
+        let min = self.min.swap(u32::MAX, Relaxed);
+        let max = self.max.swap(0, Relaxed);
         let d_count = count.wrapping_sub(self.seen_count.load(Relaxed));
         let d_busy = busy.wrapping_sub(self.seen_busy.load(Relaxed));
         self.seen_count.store(count, Relaxed);
         self.seen_busy.store(busy, Relaxed);
-        if d_busy > self.peak_ms.load(Relaxed) {
-            self.peak_ms.store(d_busy, Relaxed);
-        }
         self.seq.store(self.seq.load(Relaxed).wrapping_add(1), Relaxed);
-        core::sync::atomic::compiler_fence(core::sync::atomic::Ordering::SeqCst);
+        fence();
         add64(&self.total_count, d_count);
         add64(&self.total_busy, d_busy);
         self.ms.store(self.ms.load(Relaxed).wrapping_add(1), Relaxed);
-        core::sync::atomic::compiler_fence(core::sync::atomic::Ordering::SeqCst);
+        self.win_min.store(self.win_min.load(Relaxed).min(min), Relaxed);
+        self.win_max.store(self.win_max.load(Relaxed).max(max), Relaxed);
+        self.peak_ms.store(self.peak_ms.load(Relaxed).max(d_busy), Relaxed);
+        fence();
         self.seq.store(self.seq.load(Relaxed).wrapping_add(1), Relaxed);
     }
 
     /// The figures since the previous call (one caller only), `None` if no entry was timed.
     pub fn take(&self) -> Option<StepTimeReport> {
-        let (ms, count, busy) = loop {
+        let (ms, count, busy, min, max, peak) = loop {
             let s = self.seq.load(Relaxed);
-            core::sync::atomic::compiler_fence(core::sync::atomic::Ordering::SeqCst);
-            let v = (self.ms.load(Relaxed), load64(&self.total_count), load64(&self.total_busy));
-            core::sync::atomic::compiler_fence(core::sync::atomic::Ordering::SeqCst);
-            if s % 2 == 0 && self.seq.load(Relaxed) == s {
+            if s % 2 == 1 {
+                continue;
+            }
+            fence();
+            let count = load64(&self.total_count);
+            if count == load64(&self.read_count) {
+                return None;
+            }
+            let (min, max, peak) = (self.win_min.swap(u32::MAX, Relaxed), self.win_max.swap(0, Relaxed), self.peak_ms.swap(0, Relaxed));
+            let v = (self.ms.load(Relaxed), count, load64(&self.total_busy), min, max, peak);
+            fence();
+            if self.seq.load(Relaxed) == s {
                 break v;
             }
+            // A tick ran meanwhile: give the window back and read it again.
+            self.win_min.fetch_min(min, Relaxed);
+            self.win_max.fetch_max(max, Relaxed);
+            self.peak_ms.fetch_max(peak, Relaxed);
         };
-        if count == load64(&self.read_count) {
-            return None;
-        }
         let d_ms = ms.wrapping_sub(self.read_ms.swap(ms, Relaxed));
         let d_count = count - swap64(&self.read_count, count);
         let d_busy = busy - swap64(&self.read_busy, busy);
-        let min = self.min.swap(u32::MAX, Relaxed);
-        let max = self.max.swap(0, Relaxed);
-        let peak = self.peak_ms.swap(0, Relaxed);
         let elapsed = (d_ms.max(1) as u64 * CYCLES_PER_MS as u64) as f32;
         Some(StepTimeReport {
             entries: d_count,
@@ -146,6 +161,11 @@ impl StepTime {
             peak_load: peak as f32 / CYCLES_PER_MS as f32,
         })
     }
+}
+
+// keep the compiler from moving loads and stores across a sequence-count update
+fn fence() {
+    core::sync::atomic::compiler_fence(core::sync::atomic::Ordering::SeqCst);
 }
 
 // add `d` to the 64-bit number held as [low, high] (single writer)

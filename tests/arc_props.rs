@@ -141,7 +141,8 @@ proptest! {
                 }
             }
         }
-        let want: [i64; 3] = std::array::from_fn(|k| to_steps(target[k], 100.0).unwrap() - to_steps(start[k], 100.0).unwrap());
+        let spm = |k: usize| Settings::BENCH.steps_per_mm[k] as f64;
+        let want: [i64; 3] = std::array::from_fn(|k| to_steps(target[k], spm(k)).unwrap() - to_steps(start[k], spm(k)).unwrap());
         prop_assert_eq!(sum, want);
         prop_assert_eq!(p.position_mm(), &target);
     }

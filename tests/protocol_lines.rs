@@ -166,7 +166,8 @@ fn settings_list_change_and_refuse_while_moving() {
     assert_eq!(b.line("$0=2"), "ok\r\n");
     b.run_ms(2);
     assert!(b.actions.iter().any(|a| a.pulse_ticks == Some(144)), "{:?}", b.actions);
-    assert!(b.line("$I").contains("[MSG:max step rate 200000 Hz]"));
+    let limit = 72_000_000 / (2 * 144 + ddastep::timing::STORE_LATENCY_TICKS);
+    assert!(b.line("$I").contains(&format!("[MSG:max step rate {limit} Hz]")));
 }
 
 #[test]
@@ -187,10 +188,14 @@ fn seven_axes_list_and_move() {
 fn build_info_names_us_and_the_rate_limit() {
     let mut b = Bench::<3>::with_defaults();
     b.take();
+    // 3 µs pulses: the period floor is 2 × 216 ticks plus the store latency.
+    let limit = 72_000_000 / (2 * 216 + ddastep::timing::STORE_LATENCY_TICKS);
     assert_eq!(
         b.line("$I"),
-        "[VER:1.1h.ddastep:]\r\n[OPT:,15,128]\r\n[MSG:max step rate 142857 Hz]\r\n\
-         [MSG:ramp 1000-60000 Hz 1000000 Hz/s trapezoid]\r\nok\r\n"
+        format!(
+            "[VER:1.1h.ddastep:]\r\n[OPT:,15,128]\r\n[MSG:max step rate {limit} Hz]\r\n\
+             [MSG:ramp 1000-60000 Hz 1000000 Hz/s trapezoid]\r\nok\r\n"
+        )
     );
     // Slow accel on Y: the table cannot reach the axes' top in 1.024 s.
     assert_eq!(b.line("$121=100"), "ok\r\n");

@@ -58,7 +58,8 @@ fn profile_uses_the_slowest_accel_and_the_fastest_axis() {
     s.set(120, 1.0, 3).unwrap();
     s.set(120, 10_000.0, 3).unwrap();
     let t = s.timing();
-    assert_eq!((t.pulse_ticks, t.dir_setup_ticks, t.min_period_ticks), (216, 360, 504));
+    let floor = 2 * 216 + ddastep::timing::STORE_LATENCY_TICKS;
+    assert_eq!((t.pulse_ticks, t.dir_setup_ticks, t.min_period_ticks), (216, 360, floor));
     let cfg = s.ramp_config(3, &t);
     assert_eq!((cfg.v0, cfg.vmax, cfg.accel), (1000, 100_000, 50_000));
     // 99 kHz at 50 000 steps/s² needs 1.98 s: the table caps the top.
@@ -68,7 +69,7 @@ fn profile_uses_the_slowest_accel_and_the_fastest_axis() {
     assert!(r.table_limited);
     assert_eq!(r.cfg.vmax, 1000 + 50_000 * 1024 / 1000 - 1);
     assert_eq!(g.ramp.config(), r.cfg);
-    assert_eq!(r.max_rate_hz, 142_857);
+    assert_eq!(r.max_rate_hz, 72_000_000 / floor);
     // The bench settings fit: 59 ms to 60 kHz.
     let r = Settings::BENCH.build_profile(3, &mut g);
     assert!(!r.table_limited);
@@ -78,11 +79,12 @@ fn profile_uses_the_slowest_accel_and_the_fastest_axis() {
 #[test]
 fn short_pulses_raise_the_rate_limit() {
     let mut s = Settings::BENCH;
-    // Period floor: 2 × pulse + 72 ticks of store latency, and the step handler's cost (220
-    // ticks + 15 per slave axis) with a pulse's low time after its end.
+    // Period floor: 2 × pulse + the store latency, and the step handler's cost (220 ticks +
+    // 15 per slave axis) with a pulse's low time after its end.
     s.set(0, 2.0, 3).unwrap();
-    assert_eq!(s.timing().max_rate_hz(), 200_000);
-    assert_eq!(s.timing().max_rate_for(2), 200_000);
+    let pulse_limit = 72_000_000 / (2 * 144 + ddastep::timing::STORE_LATENCY_TICKS);
+    assert_eq!(s.timing().max_rate_hz(), pulse_limit);
+    assert_eq!(s.timing().max_rate_for(2), pulse_limit);
     assert_eq!(s.timing().max_rate_for(6), 72_000_000 / (130 + 90 + 144));
     s.set(0, 1.0, 3).unwrap();
     assert_eq!(s.timing().max_rate_hz(), 327_272);

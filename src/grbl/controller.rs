@@ -114,8 +114,6 @@ struct Job<const N: usize> {
     end: bool,
     /// Write the persistent image (once the machine is idle) before the `ok`.
     save: bool,
-    /// `$C` off, `$RST`: a soft reset follows the `ok`.
-    reset: bool,
 }
 
 impl<const N: usize> Job<N> {
@@ -134,7 +132,6 @@ impl<const N: usize> Job<N> {
         pause: false,
         end: false,
         save: false,
-        reset: false,
     };
 }
 
@@ -169,12 +166,6 @@ pub struct Controller<'a, const N: usize> {
     pulse_changed: bool,
     pushed: u32,
     feed_ring: [f32; FEED_RING],
-    /// Laser power of each move in the queue (laser mode), indexed like `feed_ring`.
-    power_ring: [Power; FEED_RING],
-    /// Spindle direction and speed, and coolant, in force.
-    tool: (SpindleDir, f64, u8),
-    /// `$33` last handed to the shell (0: none yet).
-    pwm_hz: u32,
     /// Next `$N` startup line to run (`STARTUP_LINES`: none left).
     startup_next: usize,
     /// Status reports until `WCO:` / `Ov:` are due again (Grbl's refresh counters).
@@ -182,6 +173,14 @@ pub struct Controller<'a, const N: usize> {
     ovr_count: u8,
     ov_seen: Overrides,
     rx_free: u32,
+    /// Laser power of each move in the queue (laser mode), indexed like `feed_ring`.
+    power_ring: [Power; FEED_RING],
+    /// Spindle direction and speed, and coolant, in force.
+    tool: (SpindleDir, f64, u8),
+    /// `$33` last handed to the shell (0: none yet).
+    pwm_hz: u32,
+    /// `$C` off, `$RST`: a soft reset follows the line's `ok`.
+    reset_after: bool,
 }
 
 impl<'a, const N: usize> Controller<'a, N> {
@@ -225,14 +224,15 @@ impl<'a, const N: usize> Controller<'a, N> {
             pulse_changed: true,
             pushed: shared.moves_done(),
             feed_ring: [0.0; FEED_RING],
-            power_ring: [Power::default(); FEED_RING],
-            tool: (SpindleDir::Off, 0.0, 0),
-            pwm_hz: 0,
             startup_next: 0,
             wco_count: 0,
             ovr_count: 0,
             ov_seen: Overrides::NONE,
             rx_free: RX_BUFFER_LEN as u32,
+            power_ring: [Power::default(); FEED_RING],
+            tool: (SpindleDir::Off, 0.0, 0),
+            pwm_hz: 0,
+            reset_after: false,
         };
         c.startup_next = c.next_startup(0);
         c.apply_profile();
@@ -290,10 +290,10 @@ impl<'a, const N: usize> Controller<'a, N> {
         *self.planner.position_steps()
     }
 
-    /// True while a line (or a startup line) is being carried out, or asleep: [`Self::byte`]
-    /// takes nothing until it is done.
+    /// True while a line (or a startup line) is being carried out: [`Self::byte`] takes
+    /// nothing until it is done (nor while asleep).
     pub fn busy(&self) -> bool {
-        self.job.is_some() || self.startup_next < STARTUP_LINES || self.sleep
+        self.job.is_some() || self.startup_next < STARTUP_LINES
     }
 
     /// Free bytes in the shell's RX ring, for `Bf:` in status reports (at most the announced
@@ -314,7 +314,7 @@ impl<'a, const N: usize> Controller<'a, N> {
     /// [`REPLY_ROOM`] TX bytes are free): keep the byte and offer it again after a `poll`.
     #[must_use]
     pub fn byte(&mut self, b: u8, out: &mut impl Out) -> bool {
-        if self.busy() || out.room() < REPLY_ROOM {
+        if self.busy() || self.sleep || out.room() < REPLY_ROOM {
             return false;
         }
         match self.lines.push(b) {
@@ -326,12 +326,13 @@ impl<'a, const N: usize> Controller<'a, N> {
                 let r = match line.first() {
                     _ if n == 0 => Ok(()),
                     Some(b'$') => self.system(&line[1..n], out),
-                    _ if self.alarm => Err(Error::AlarmLock),
+                    // G-code is locked out in alarm, and while jogging (Grbl's error:9).
+                    _ if self.alarm || self.jogging() => Err(Error::AlarmLock),
                     _ => self.gcode(&line[..n], out),
                 };
                 match r {
                     Err(e) => put_error(out, e),
-                    Ok(()) if self.job.is_none() => put_ok(out),
+                    Ok(()) if self.job.is_none() => self.ok(out),
                     Ok(()) => {}
                 }
             }
@@ -384,14 +385,8 @@ impl<'a, const N: usize> Controller<'a, N> {
         }
         self.jog_poll(out);
         self.drive_enable();
-        if self.job.is_some() && out.room() >= POLL_REPLY_ROOM {
-            let reset = self.job.is_some_and(|j| j.reset);
-            if self.advance(true, out) {
-                put_ok(out);
-                if reset {
-                    self.soft_reset(out);
-                }
-            }
+        if self.job.is_some() && out.room() >= POLL_REPLY_ROOM && self.advance(true, out) {
+            self.ok(out);
         }
         self.run_startup(out);
         if self.status_wanted && out.room() >= report::status_len(N) {
@@ -411,6 +406,14 @@ impl<'a, const N: usize> Controller<'a, N> {
             pulse_ticks: pulse,
             save: core::mem::take(&mut self.save),
             restart: core::mem::take(&mut self.restart),
+        }
+    }
+
+    /// A line's `ok`, and the reset `$C`/`$RST` asked to follow it.
+    fn ok(&mut self, out: &mut impl Out) {
+        put_ok(out);
+        if core::mem::take(&mut self.reset_after) {
+            self.soft_reset(out);
         }
     }
 
@@ -629,7 +632,6 @@ impl<'a, const N: usize> Controller<'a, N> {
             }
             None => (None, Rate::Rapid),
         };
-        let (tool, power) = self.tool_sync(&modal, mv.is_some() || arc.is_some(), fx.motion.is_some_and(|m| m.1));
         let mut store = false;
         if let Some((slot, v)) = fx.coord_write {
             offsets.stored.set(slot, &v);
@@ -642,6 +644,8 @@ impl<'a, const N: usize> Controller<'a, N> {
             offsets.tlo = t;
         }
         // Commit: nothing below can fail.
+        let moves = mv.is_some() || mv2.is_some() || arc.is_some();
+        let (tool, power) = self.tool_sync(&modal, moves, fx.motion.is_some_and(|m| m.1));
         if offsets.wco(modal.coord) != self.offsets.wco(self.modal.coord) {
             self.wco_count = 0;
         }
@@ -651,7 +655,8 @@ impl<'a, const N: usize> Controller<'a, N> {
         if self.check {
             if let Some(a) = fx.arc {
                 // Check mode: only the position follows the arc.
-                self.planner.line(a.target(), None, &self.limits)?;
+                // (Infallible after `check_range`: nothing may fail once committed.)
+                let _ = self.planner.line(a.target(), None, &self.limits);
             }
             if fx.stop == Some(Stop::End) {
                 out.put(report::PROGRAM_END);

@@ -116,4 +116,39 @@ impl<const N: usize> Offsets<N> {
         let w = self.wcs(sel);
         core::array::from_fn(|i| w[i] + self.g92[i] + self.tlo_of(i))
     }
+
+    /// Machine position of program coordinate `w` on axis `i` in system `sel` (G90).
+    pub fn to_machine(&self, sel: u8, i: usize, w: f64) -> f64 {
+        w + self.wcs(sel).get(i).copied().unwrap_or(0.0) + self.g92[i] + self.tlo_of(i)
+    }
+
+    /// G92: the offset that makes the machine position `pos` read `words` in system `sel`
+    /// (`G92 = MPos − WCS − TLO − WPos`; axes without a word keep theirs).
+    pub fn g92_for(&self, sel: u8, pos: &[f64; N], words: &[Option<f64>; N]) -> [f64; N] {
+        let wcs = self.wcs(sel);
+        core::array::from_fn(|i| match words[i] {
+            Some(w) => pos[i] - wcs[i] - self.tlo_of(i) - w,
+            None => self.g92[i],
+        })
+    }
+
+    /// G10 L2 (`l20` false: the words are the offsets) or L20 (the position `pos` reads the
+    /// words: `WCS = MPos − G92 − TLO − WPos`): stored slot `slot` with the named axes changed.
+    pub fn g10(&self, slot: usize, l20: bool, pos: &[f64; N], words: &[Option<f64>; N]) -> [f64; N] {
+        let mut v = self.stored.get::<N>(slot);
+        for (i, x) in v.iter_mut().enumerate() {
+            if let Some(w) = words[i] {
+                *x = if l20 { pos[i] - self.g92[i] - self.tlo_of(i) - w } else { w };
+            }
+        }
+        v
+    }
+
+    /// G28 (`k` 0) / G30 (1): after the intermediate point, the named axes (all of them when
+    /// none is named) go to the stored position; the others stay at `pos`.
+    pub fn home(&self, k: u8, pos: &[f64; N], words: &[Option<f64>; N]) -> [f64; N] {
+        let stored = self.stored.get::<N>(G28 + k as usize);
+        let any = words.iter().any(Option::is_some);
+        core::array::from_fn(|i| if any && words[i].is_none() { pos[i] } else { stored[i] })
+    }
 }

@@ -574,18 +574,13 @@ impl Modal {
             }
             fx.tlo = Some(if on { words.get(crate::coords::TLO_AXIS).copied().flatten().unwrap_or(0.0) } else { 0.0 });
         }
-        let wcs = off.wcs(m.coord);
         match nm {
             Some(NonModal::SetCoordData) => fx.coord_write = Some(set_coord_data(b, &words, pos, off, m.coord)?),
             Some(NonModal::SetPosition) => {
                 if !b.has_axes() {
                     return Err(Error::NoAxisWords);
                 }
-                // WPos = MPos − WCS − G92 − TLO, so G92 = MPos − WCS − TLO − WPos.
-                fx.g92 = Some(core::array::from_fn(|i| match words[i] {
-                    Some(w) => pos[i] - wcs[i] - off.tlo_of(i) - w,
-                    None => off.g92[i],
-                }));
+                fx.g92 = Some(off.g92_for(m.coord, pos, &words));
             }
             Some(NonModal::ResetOffset) => fx.g92 = Some([0.0; N]),
             Some(NonModal::SetHome(k)) => fx.coord_write = Some((G28 + k as usize, *pos)),
@@ -605,7 +600,7 @@ impl Modal {
                     *t = in_range(match nm {
                         Some(NonModal::Absolute) => w,
                         _ if m.relative => pos[i] + w,
-                        _ => w + wcs[i] + off.g92[i] + off.tlo_of(i),
+                        _ => off.to_machine(m.coord, i, w),
                     })?;
                 }
             }
@@ -625,12 +620,7 @@ impl Modal {
             return Err(Error::UnusedWords);
         }
         if let Some(NonModal::GoHome(k)) = nm {
-            // Only the named axes go on to the stored position (all of them without words).
-            let stored = off.stored.get::<N>(G28 + k as usize);
-            fx.home = Some(core::array::from_fn(|i| match (b.has_axes(), words[i]) {
-                (true, None) => pos[i],
-                _ => stored[i],
-            }));
+            fx.home = Some(off.home(k, pos, &words));
         }
         if b.stop == Some(Stop::End) {
             m = Modal {
@@ -667,19 +657,12 @@ fn set_coord_data<const N: usize>(
         return Err(Error::UnsupportedCoordSys);
     }
     let l20 = match b.l.map(libm::trunc) {
-        Some(v) if v == 20.0 => true,
-        Some(v) if v == 2.0 => false,
+        Some(20.0) => true,
+        Some(2.0) => false,
         _ => return Err(Error::UnsupportedCommand),
     };
     let slot = if p > 0.0 { p as usize - 1 } else { active as usize };
-    let mut v = off.stored.get::<N>(slot);
-    for (i, x) in v.iter_mut().enumerate() {
-        if let Some(w) = words[i] {
-            // L20: the current position reads `w` in that system (WCS = MPos − G92 − TLO − WPos).
-            *x = if l20 { pos[i] - off.g92[i] - off.tlo_of(i) - w } else { w };
-        }
-    }
-    Ok((slot, v))
+    Ok((slot, off.g10(slot, l20, pos, words)))
 }
 
 /// G2/G3 words to a checked arc, in Grbl's order: axis words (`error:26`), axis words in the

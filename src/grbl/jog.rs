@@ -17,9 +17,19 @@ pub struct Jog<const N: usize> {
     pub feed: f64,
 }
 
-/// Parses the text after `$J=` against the modal state, the machine position and the offsets.
-pub fn plan<const N: usize>(line: &[u8], modal: &Modal, pos: &[f64; N], off: &Offsets<N>) -> Result<Jog<N>, Error> {
+/// Parses the text after `$J=` against the modal state, the machine position and the offsets,
+/// for a machine with `axes` axes.
+pub fn plan<const N: usize>(
+    line: &[u8],
+    axes: usize,
+    modal: &Modal,
+    pos: &[f64; N],
+    off: &Offsets<N>,
+) -> Result<Jog<N>, Error> {
     let b: Block<N> = parse(line)?;
+    if b.axes.get(axes..).is_some_and(|a| a.iter().any(Option::is_some)) {
+        return Err(Error::UnsupportedCommand);
+    }
     if b.groups() & !(group::DISTANCE | group::UNITS | group::NON_MODAL) != 0 {
         return Err(Error::InvalidJogCommand);
     }

@@ -31,12 +31,12 @@ pub const ISR_FLOOR_TICKS: u32 = 144;
 pub const DIR_SETUP: u16 = 29; // grblHAL's number for the direction-to-step delay
 pub const RAMP_START: u16 = 40;
 pub const RAMP_SHAPE: u16 = 41;
-pub const SPINDLE_PWM_HZ: u16 = 33; // grblHAL's number for the spindle PWM frequency
 /// Axes the machine has (3 = XYZ gantry … 7 = X Y Z A B C U): reports, `$#`, `$$` and G-code
 /// follow it.
 pub const AXIS_COUNT: u16 = 42;
 /// Grbl's status report mask: bit 0 MPos (else WPos), bit 1 `Bf:`.
 pub const STATUS_MASK: u16 = 10;
+pub const SPINDLE_PWM_HZ: u16 = 33; // grblHAL's number for the spindle PWM frequency
 
 /// Grbl settings we report but do not implement, with the only value they accept.
 const FIXED: [(u16, f32, u8); 10] = [

@@ -27,7 +27,7 @@ const TEXTS: usize = STARTUP_LINES + 1;
 pub const IMAGE_LEN: usize = TEXT_AT + TEXTS * (TEXT_LEN + 1) + 4;
 /// Flash page size.
 pub const PAGE_LEN: usize = 1024;
-const _: () = assert!(IMAGE_LEN <= PAGE_LEN && IMAGE_LEN % 4 == 0);
+const _: () = assert!(IMAGE_LEN <= PAGE_LEN && IMAGE_LEN.is_multiple_of(4));
 
 /// A short stored text (a startup line or the build info), upper case as lines arrive.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

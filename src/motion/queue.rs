@@ -29,6 +29,24 @@ pub enum State {
     Held = 3,
 }
 
+/// Grbl's override percentages (feed, rapid, spindle; 100 = as programmed), as `Ov:` reports
+/// them: feed 10–200, rapid 25/50/100, spindle 10–200.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Overrides {
+    pub feed: u8,
+    pub rapid: u8,
+    pub spindle: u8,
+}
+
+impl Overrides {
+    /// Everything as programmed (power-up and reset).
+    pub const NONE: Overrides = Overrides { feed: 100, rapid: 100, spindle: 100 };
+
+    const fn pack(self) -> u32 {
+        self.feed as u32 | (self.rapid as u32) << 8 | (self.spindle as u32) << 16
+    }
+}
+
 /// Why a move cannot be built.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MoveError {
@@ -91,24 +109,6 @@ impl<const N: usize> Move<N> {
     /// Master cruise period.
     pub fn cruise(&self) -> Period {
         self.cruise
-    }
-}
-
-/// Override percentages as Grbl reports them in `Ov:`: feed 10–200, rapid 25/50/100,
-/// spindle 10–200.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Overrides {
-    pub feed: u8,
-    pub rapid: u8,
-    pub spindle: u8,
-}
-
-impl Overrides {
-    /// 100 % everywhere (power-up and reset).
-    pub const NONE: Overrides = Overrides { feed: 100, rapid: 100, spindle: 100 };
-
-    const fn pack(self) -> u32 {
-        self.feed as u32 | (self.rapid as u32) << 8 | (self.spindle as u32) << 16
     }
 }
 

@@ -49,7 +49,7 @@ pub struct Timing {
 impl Timing {
     /// 3 µs pulses, 5 µs direction setup: safe for every driver in this module until
     /// settings say otherwise. The 3 µs pulse (216 ticks) sets the shortest period to 504
-    /// ticks, so this allows 142 857 Hz; 144 ticks (500 kHz) is only the absolute floor, below the
+    /// ticks, so this allows 142.9 kHz; 144 ticks (500 kHz) is only the absolute floor, below the
     /// handler's measured cost (`min_period_for`).
     pub const DEFAULT: Timing = Timing::new(216, 360, 144);
 
@@ -105,11 +105,11 @@ pub const HANDLER_PER_SLAVE_TICKS: u32 = 15;
 /// modeled cycles), rounded up.
 pub const HANDLER_FALL_TICKS: u32 = 130;
 
-/// Timer ticks from an update event to the step handler's BSRR store: 55..71 modeled cycles
-/// on the virtual bench since its flash and APB timing follow silicon (paper demo and
-/// `tests/firmware_loop.rs`; it was 40..45 before), rounded up. The firmware sets the compare
-/// event this much after the pulse width, so the high time is never shorter than asked, also
-/// when the compare event is already pending at the end of a long (move-loading) handler.
+/// Timer ticks from an update event to the step handler's BSRR store: 57..71 modeled cycles
+/// on the virtual bench with its silicon-checked memory model (bench/golden/paper_532.json,
+/// `bsrr_offset_*`), rounded up to 1 µs. The firmware sets the compare event this much after
+/// the pulse width, so the high time is never shorter than asked even when the rising store is
+/// at its latest and the falling one at its earliest.
 pub const STORE_LATENCY_TICKS: u32 = 72;
 
 /// Spread of that latency (the instruction an interrupt lands on, flash wait states): the

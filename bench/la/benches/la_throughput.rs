@@ -1,7 +1,7 @@
 //! Throughput of the logic-analyzer checker on a generated 10 s capture in sigrok-cli's VCD
 //! format at 24 MHz: X:Y:Z = 5:3:2 with X at 50 kHz (1 M pulses, 2 M edges, ~30 MB).
 //! `cargo bench-host --bench la_throughput` (or `cargo bench --target host-tuple -p
-//! ddastep-bench --bench la_throughput`). Prints numbers; nothing is asserted on time.
+//! ddastep-la --bench la_throughput`). Prints numbers; nothing is asserted on time.
 
 use std::io::Write;
 use std::time::Instant;

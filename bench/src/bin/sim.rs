@@ -50,6 +50,9 @@ struct Args {
     /// With --sweep: write bench/RESULTS.md-style results to this file.
     #[arg(long)]
     results: Option<PathBuf>,
+    /// With --sweep: rewrite the measured rows of this README's "Figures" table.
+    #[arg(long)]
+    readme: Option<PathBuf>,
     /// With --sweep: axis counts, e.g. 1,3,7 (default 1..=7).
     #[arg(long, value_delimiter = ',')]
     axes: Vec<usize>,
@@ -80,8 +83,18 @@ fn parse_pin(s: &str) -> Result<InputFlip> {
     Ok(InputFlip { cycle: (t * HZ as f64) as u64, port, pin: n, level: level == "1" })
 }
 
-fn main() -> Result<()> {
-    let args = Args::parse();
+// run, and on failure say why in one line (exit 1); usage errors exit 2 (clap)
+fn main() -> std::process::ExitCode {
+    match run(Args::parse()) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("sim: error: {e:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(args: Args) -> Result<()> {
     let elf = match args.elf.clone() {
         Some(p) => p,
         None => firmware_elf()?,
@@ -191,6 +204,10 @@ fn run_sweep(args: &Args, elf: &std::path::Path) -> Result<()> {
         let label = args.firmware_label.clone().unwrap_or_else(sweep::firmware_commit);
         std::fs::write(p, sweep::results_markdown(&s, &format!("cargo sim -- {command}"), &label, elf)?)?;
         eprintln!("wrote {}", p.display());
+    }
+    if let Some(p) = &args.readme {
+        ddastep_bench::emu::figures::update_readme(p, &s, elf)?;
+        eprintln!("rewrote the figures rows of {}", p.display());
     }
     Ok(())
 }

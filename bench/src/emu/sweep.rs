@@ -589,10 +589,13 @@ pub fn results_markdown(s: &Sweep, command: &str, firmware: &str, elf: &Path) ->
     writeln!(m, "change: on the same firmware only the date changes.\n")?;
     writeln!(m, "## What the numbers are\n")?;
     writeln!(m, "Every cycle and load figure is **modeled**: the release ELF runs on unicorn and the bench charges")?;
-    writeln!(m, "Cortex-M3 TRM cycle costs per instruction, 2 flash wait states on taken branches and literal loads")?;
-    writeln!(m, "at 72 MHz, exception entry 14 / return 12 / tail-chain 8 cycles (bench/README.md, \"Model\"). Expect")?;
-    writeln!(m, "a handler's cycles within roughly ±20 % of silicon (prefetch, division, bus contention are")?;
-    writeln!(m, "approximated); before/after comparisons on the bench are much tighter than that.\n")?;
+    writeln!(m, "Cortex-M3 TRM cycle costs per instruction plus the STM32F103's memory timing: flash lines with")?;
+    writeln!(m, "FLASH_ACR's 2 wait states and the prefetch buffer, refills after taken branches, AHB-to-APB")?;
+    writeln!(m, "bridge stalls (TIM2 reads 5 cycles, GPIO 3), exception entry 14 / return 12 / tail-chain 8")?;
+    writeln!(m, "(bench/README.md, \"Model\"). The memory model is checked against two published silicon")?;
+    writeln!(m, "measurements within ±5 % (`bench/tests/emu_silicon.rs`); expect a handler within roughly ±10 %,")?;
+    writeln!(m, "and before/after comparisons on the bench much tighter than that. On a board, `$I` reports the")?;
+    writeln!(m, "firmware's own DWT measurement of the step interrupt.\n")?;
     writeln!(m, "Per point: reset, then `{}`, `G91` and one `G1` on N axes", s.settings.join("`, `"))?;
     writeln!(m, "(steps X:Y:Z:A:B:C:U = 10:6:4:8:2:7:5, all positive, F for the target master rate, trapezoid")?;
     writeln!(m, "ramp at 10⁸ steps/s²). `$0={PULSE_US}` because the firmware's period floor is max(2·pulse + 48")?;
@@ -617,15 +620,7 @@ pub fn results_markdown(s: &Sweep, command: &str, firmware: &str, elf: &Path) ->
         writeln!(m, "monotone in the rate (how often `idle` completes its loop and reaches WFI between steps).")?;
     }
     writeln!(m, "BSRR offset: update event to the handler's first GPIOB store, over the points the ISR sustained.\n")?;
-    // Cost per master step against slave count.
-    let pts: Vec<(f64, f64)> = s.rows.iter().filter_map(|r| r.at(50_000).filter(|p| p.isr_entries > 0).map(|p| ((r.axes - 1) as f64, p.isr_cycles_per_step))).collect();
-    if pts.len() >= 2 {
-        let n = pts.len() as f64;
-        let (sx, sy) = (pts.iter().map(|p| p.0).sum::<f64>(), pts.iter().map(|p| p.1).sum::<f64>());
-        let sxx = pts.iter().map(|p| p.0 * p.0).sum::<f64>();
-        let sxy = pts.iter().map(|p| p.0 * p.1).sum::<f64>();
-        let b = (n * sxy - sx * sy) / (n * sxx - sx * sx);
-        let a = (sy - b * sx) / n;
+    if let Some((a, b)) = isr_cost_fit(s) {
         writeln!(m, "## Step ISR cost\n")?;
         writeln!(m, "Modeled step-ISR cycles per master step at 50 kHz cruise: ≈ {a:.0} + {b:.1} × slaves")?;
         let entries: Vec<f64> = s.rows.iter().filter_map(|r| r.at(50_000).map(|p| p.isr_entries as f64 / (p.target_hz as f64 * cruise_ms as f64 / 1000.0))).collect();
@@ -667,6 +662,21 @@ pub fn results_markdown(s: &Sweep, command: &str, firmware: &str, elf: &Path) ->
     Ok(m)
 }
 
+/// Step-ISR cycles per master step at 50 kHz against the slave count, least squares: (base,
+/// per slave), `None` with fewer than two axis counts.
+pub fn isr_cost_fit(s: &Sweep) -> Option<(f64, f64)> {
+    let pts: Vec<(f64, f64)> = s.rows.iter().filter_map(|r| r.at(50_000).filter(|p| p.isr_entries > 0).map(|p| ((r.axes - 1) as f64, p.isr_cycles_per_step))).collect();
+    if pts.len() < 2 {
+        return None;
+    }
+    let n = pts.len() as f64;
+    let (sx, sy) = (pts.iter().map(|p| p.0).sum::<f64>(), pts.iter().map(|p| p.1).sum::<f64>());
+    let sxx = pts.iter().map(|p| p.0 * p.0).sum::<f64>();
+    let sxy = pts.iter().map(|p| p.0 * p.1).sum::<f64>();
+    let b = (n * sxy - sx * sy) / (n * sxx - sx * sx);
+    Some(((sy - b * sx) / n, b))
+}
+
 /// Printed when thread mode runs more than 50 cycles per step interrupt.
 const IDLE_NOTE: &str = "\
 - Thread mode runs about as often as the step interrupt (the \"Thread mode\" figures above): `idle`
@@ -681,13 +691,13 @@ const NOTES: &str = "\
   back to back, updates are missed (overruns) and a rising edge can merge with the previous pulse
   (a step lost on the pins while the position counter counts it).
 - The BSRR offset grows when an update arrives while the previous handler is still running. The
-  falling edge comes at the compare event (`$0` + 48 ticks, `STORE_LATENCY_TICKS`, after the
+  falling edge comes at the compare event (`$0` + 72 ticks, `STORE_LATENCY_TICKS`, after the
   update) or at the end of the update handler, whichever is later: with the sweep's short pulse
   it is the handler's end (the X high times in the point list); with a pulse longer
   than the handler an offset above 48 ticks makes the high time shorter than `$0`.
-- Modeled, not measured: peripheral accesses cost what an SRAM access costs. On silicon a read
-  of TIM2 (APB1 at 36 MHz) stalls for the bridge, a few cycles more for each TIM2 register read
-  in the step handler than the figures here.
+- Peripheral bridge stalls are modeled (TIM2 reads on APB1 5 cycles, GPIO on APB2 3, writes
+  buffered); the APB2 figure is fitted to a silicon measurement, the APB1 one extrapolated.
+- The step interrupt includes its own DWT self-measurement (about 25 cycles per entry; `$I`).
 - The sweep measures one straight move per point; it says nothing about move-to-move refills
   (`Engine::load`, ~1 000 modeled cycles) at high rates.
 ";

@@ -6,7 +6,8 @@
 //! jump ahead of queued line bytes, so they reach the receiver at the next byte slot; every
 //! byte still takes its 10 bit times at the programmed baud rate), run the board in slices of
 //! at most 1 ms of simulated time up to the wall clock, pass new TX bytes to the clients, and
-//! refresh a status line on stderr. When the emulator falls more than 250 ms behind the wall
+//! refresh a status line on stderr (simulated time, position in steps, the fastest axis's
+//! step rate in the busiest 10 ms since the last refresh, modeled CPU load). When the emulator falls more than 250 ms behind the wall
 //! clock, the lag is dropped (the board goes on from where it is, one second per second) and
 //! the status line says the host cannot keep up. Runs until Ctrl-C (SIGINT/SIGTERM) or
 //! `max_seconds` of simulated time, then writes the VCD/JSON if asked.
@@ -211,7 +212,7 @@ pub fn run(opts: &Options) -> Result<Summary> {
                 "{:9.3} s | {} steps | {} | CPU {:3.0}%{slow}{clients}",
                 board.seconds(),
                 pos.text(),
-                status::rate_text(pos.rate_hz(dc)),
+                status::rate_text(pos.rate_hz()),
                 board.cpu_load(c0, board.cycles()) * 100.0,
             ));
             last = (Instant::now(), board.cycles(), lag);

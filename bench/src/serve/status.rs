@@ -4,13 +4,19 @@
 
 use crate::emu::{PinEdge, AXES, DIR_LOW_IS_POSITIVE, DIR_PINS, HZ, STEP_PINS};
 
+/// Rates are counted in bins of 10 ms of simulated time.
+const BIN: u64 = HZ / 100;
+
 /// Step counting from pin edges, fed in time order.
 #[derive(Default)]
 pub struct Position {
     pub steps: [i64; 7],
     dir_high: [bool; 7],
-    /// Rising step edges per axis since the last `rate` call.
-    window: [u64; 7],
+    /// The current 10 ms bin, its rising step edges per axis, and the busiest bin's count
+    /// (any axis) since the last `rate_hz` call.
+    bin: u64,
+    count: [u64; 7],
+    peak: u64,
 }
 
 impl Position {
@@ -23,21 +29,27 @@ impl Position {
                 if e.level {
                     let plus = self.dir_high[a] != DIR_LOW_IS_POSITIVE;
                     self.steps[a] += if plus { 1 } else { -1 };
-                    self.window[a] += 1;
+                    if e.cycle / BIN != self.bin {
+                        self.close_bin();
+                        self.bin = e.cycle / BIN;
+                    }
+                    self.count[a] += 1;
                 }
             }
         }
     }
 
-    // highest per-axis step rate over the last `cycles` modeled cycles (and restart the count)
-    pub fn rate_hz(&mut self, cycles: u64) -> f64 {
-        let top = self.window.iter().copied().max().unwrap_or(0);
-        self.window = [0; 7];
-        if cycles == 0 {
-            0.0
-        } else {
-            top as f64 * HZ as f64 / cycles as f64
-        }
+    // fold the current bin into the peak
+    fn close_bin(&mut self) {
+        self.peak = self.peak.max(self.count.iter().copied().max().unwrap_or(0));
+        self.count = [0; 7];
+    }
+
+    // the fastest axis's step rate in the busiest 10 ms since the last call (then restart)
+    pub fn rate_hz(&mut self) -> f64 {
+        self.close_bin();
+        let peak = std::mem::take(&mut self.peak);
+        (peak * HZ / BIN) as f64
     }
 
     // "X+5000 Y+3000 Z+2000" (axes that moved; "X0" when none has)
@@ -92,8 +104,9 @@ mod tests {
         p.feed(&[PinEdge { cycle: 40_000, port: 0, pin: STEP_PINS[0], level: true }]);
         assert_eq!(&p.steps[..2], &[10, -4]);
         assert_eq!(p.text(), "X+10 Y-4");
-        assert_eq!(p.rate_hz(HZ / 10), 100.0);
-        assert_eq!(p.rate_hz(HZ / 10), 0.0);
+        // 10 X steps 1000 cycles apart: all in one 10 ms bin -> 1 kHz
+        assert_eq!(p.rate_hz(), 1000.0);
+        assert_eq!(p.rate_hz(), 0.0);
         assert_eq!(rate_text(50_000.0), "50.0 kHz");
     }
 }

@@ -26,10 +26,7 @@ impl<const N: usize> Controller<'_, N> {
         if self.alarm || self.check || !(idle || self.jog == Jogging::On) {
             return Err(Error::NotIdle);
         }
-        let j = jog::plan(text, &self.modal, self.planner.position_mm(), &self.offsets)?;
-        if j.target[self.axes..] != self.planner.position_mm()[self.axes..] {
-            return Err(Error::UnsupportedCommand);
-        }
+        let j = jog::plan(text, self.axes, &self.modal, self.planner.position_mm(), &self.offsets)?;
         let mut planner = self.planner;
         let mv = planner.line(&j.target, Some(j.feed), &self.limits)?;
         self.planner = planner;

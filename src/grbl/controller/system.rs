@@ -29,7 +29,7 @@ impl<const N: usize> Controller<'_, N> {
             b"C" if self.check => {
                 // Leaving check mode resets, as in Grbl: state and position as before `$C`.
                 out.put(report::CHECK_OFF);
-                self.start(Job { reset: true, ..Job::NONE }, out);
+                self.reset_after = true;
             }
             b"C" => {
                 need_idle(idle && !self.alarm)?;
@@ -92,9 +92,8 @@ impl<const N: usize> Controller<'_, N> {
                     self.settings_changed(Change::Profile, out);
                 }
                 self.save_later(out);
-                if let Some(j) = &mut self.job {
-                    j.reset = true;
-                }
+                // A pin map change restarts the MCU after the save (its own banner).
+                self.reset_after = !self.restart;
             }
             [b'J', b'=', text @ ..] => self.jog_line(text, out)?,
             [b'0'..=b'9', ..] => {

@@ -1,0 +1,111 @@
+//! README figures from a sweep: the rows of README.md's "Figures" table that the sweep
+//! measures are rewritten in place (matched by their first cell), so one command
+//! (`bench/figures`) brings README.md, bench/RESULTS.md and the golden trace up to date.
+//! For the `sim` CLI (`--sweep --readme README.md`).
+
+use std::path::Path;
+
+use anyhow::{bail, Context, Result};
+
+use super::sweep::{isr_cost_fit, Bracket, Sweep, Verdict};
+
+// "327 kHz", or "≥ 327 kHz (the `$I` cap)" when the cap itself passed
+fn rate(b: &Bracket) -> String {
+    match b.fail_hz {
+        None => format!("≥ {} kHz (the `$I` cap)", b.max_hz / 1000),
+        Some(_) => format!("{} kHz", b.max_hz / 1000),
+    }
+}
+
+// the README rows (first cell, whole row) this sweep measures
+pub fn readme_rows(s: &Sweep, flash_bytes: u64, ram_bytes: u64) -> Vec<(String, String)> {
+    let mut rows = Vec::new();
+    let mut push = |key: &str, value: String, how: &str| rows.push((key.to_string(), format!("| {key} | {value} | {how} |")));
+    push(
+        "release flash / static RAM",
+        format!("{flash_bytes} B / {ram_bytes} B (budgets 62 KiB / 16 KiB)"),
+        "`cargo build --release && arm-none-eabi-size target/thumbv7m-none-eabi/release/ddastep`; checked in CI by `tests/firmware_size.rs`",
+    );
+    let row = |axes: usize| s.rows.iter().find(|r| r.axes == axes);
+    let rates: Vec<String> = [1, 3, 7].iter().filter_map(|&a| row(a).map(|r| format!("{} with {a} {}", rate(&r.cpu), if a == 1 { "axis" } else { "axes" }))).collect();
+    if !rates.is_empty() {
+        push("highest sustainable master rate (no overrun, exact steps, CPU ≤ 95 %)", rates.join(", "), "`cargo sim -- --sweep` → `bench/RESULTS.md`");
+    }
+    if let Some(r7) = row(7) {
+        let load = |hz: u32| match r7.at(hz) {
+            Some(p) if matches!(p.isr_verdict, Verdict::Ok | Verdict::Load(_)) => format!("{:.0} %", p.load_max * 100.0),
+            _ => "not sustained".into(),
+        };
+        push("modeled CPU load at 50 / 200 kHz, 7 axes", format!("{} / {}", load(50_000), load(200_000)), "same");
+    }
+    if let Some((a, b)) = isr_cost_fit(s) {
+        let seven = row(7).and_then(|r| r.at(50_000)).map_or(String::new(), |p| format!(" ({:.0} for 7 axes)", p.isr_cycles_per_step));
+        push(
+            "step interrupt per master step",
+            format!("≈ {a:.0} + {b:.1} × slaves modeled cycles{seven}"),
+            "same; `cargo sim -- --point 7@200000` shows where they go",
+        );
+    }
+    let sustained = || s.rows.iter().flat_map(|r| r.tried.iter()).filter(|p| p.isr_ok());
+    if let (Some(lo), Some(hi)) = (sustained().filter_map(|p| p.bsrr_min).min(), sustained().filter_map(|p| p.bsrr_max).max()) {
+        push("update event → BSRR store", format!("{lo}–{hi} modeled cycles"), "same");
+    }
+    rows
+}
+
+// replace the rows of `readme` whose first cell matches; every row must be found
+pub fn rewrite_rows(readme: &str, rows: &[(String, String)]) -> Result<String> {
+    let mut out: Vec<String> = readme.lines().map(str::to_string).collect();
+    for (key, row) in rows {
+        let prefix = format!("| {key} |");
+        match out.iter_mut().find(|l| l.starts_with(&prefix)) {
+            Some(l) => *l = row.clone(),
+            None => bail!("README has no figures row starting with {prefix:?}"),
+        }
+    }
+    Ok(out.join("\n") + "\n")
+}
+
+// rewrite the figures rows of the README at `path`
+pub fn update_readme(path: &Path, s: &Sweep, elf: &Path) -> Result<()> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let (flash, ram) = image_sizes(elf);
+    std::fs::write(path, rewrite_rows(&text, &readme_rows(s, flash, ram))?)?;
+    Ok(())
+}
+
+// (flash, static RAM) bytes of the ELF, as `arm-none-eabi-size` counts them (text + data, data + bss)
+pub fn image_sizes(elf: &Path) -> (u64, u64) {
+    use object::{Object, ObjectSection, SectionFlags};
+    let Ok(bytes) = std::fs::read(elf) else { return (0, 0) };
+    let Ok(file) = object::File::parse(&*bytes) else { return (0, 0) };
+    let (mut flash, mut ram) = (0, 0);
+    for sec in file.sections() {
+        let SectionFlags::Elf { sh_flags } = sec.flags() else { continue };
+        if sh_flags & u64::from(object::elf::SHF_ALLOC) == 0 {
+            continue;
+        }
+        let in_ram = (0x2000_0000..0x2000_5000).contains(&sec.address());
+        let nobits = sec.kind() == object::SectionKind::UninitializedData;
+        if !in_ram || !nobits {
+            flash += if nobits { 0 } else { sec.size() };
+        }
+        if in_ram {
+            ram += sec.size();
+        }
+    }
+    (flash, ram)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rows_are_replaced_by_their_first_cell() {
+        let readme = "# x\n| what | figure | how |\n|---|---|---|\n| a | 1 | m |\n| b | 2 | n |\n";
+        let out = rewrite_rows(readme, &[("b".into(), "| b | 3 | n |".into())]).unwrap();
+        assert_eq!(out, "# x\n| what | figure | how |\n|---|---|---|\n| a | 1 | m |\n| b | 3 | n |\n");
+        assert!(rewrite_rows(readme, &[("c".into(), "| c | 0 | - |".into())]).is_err());
+    }
+}

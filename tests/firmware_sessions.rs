@@ -1,0 +1,158 @@
+//! Firmware in the loop: what UGS and CNCjs send to set up, jog, zero, run and stop, over the
+//! emulated USART of the release ELF, with every reply checked against the pins.
+
+mod fil;
+
+use ddastep_bench::emu::Board;
+use fil::*;
+
+/// MPos (or WPos) from a status line.
+fn pos(status: &str) -> Vec<f64> {
+    let p = status.split("Pos:").nth(1).unwrap_or_else(|| panic!("no position in {status:?}"));
+    p.split(['|', '>']).next().unwrap().split(',').map(|v| v.parse().unwrap()).collect()
+}
+
+/// Runs until the status word is not `Jog`/`Run`/`Hold` (10 ms polls, like a sender).
+fn wait_not(b: &mut Board, states: &[&str], max_s: f64) -> String {
+    let end = b.seconds() + max_s;
+    while b.seconds() < end {
+        b.run_seconds(0.01).unwrap();
+        let s = status(b);
+        if !states.iter().any(|w| s.starts_with(w)) {
+            return s;
+        }
+    }
+    panic!("still {states:?} after {max_s} s: {}", status(b));
+}
+
+/// The pins' net steps as millimetres at `spm` steps/mm.
+fn pins_mm(b: &Board, spm: f64) -> Vec<f64> {
+    net(&steps(b))[..3].iter().map(|&n| n as f64 / spm).collect()
+}
+
+fn close(a: &[f64], b: &[f64]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() < 0.0006)
+}
+
+#[test]
+fn ugs_like_session_on_the_safe_defaults() {
+    // Blank flash: the firmware's own defaults (250 steps/mm, 500 mm/min, 10 mm/s², XYZ).
+    let mut b = boot_with(None);
+    b.serial_send(&[0x18]);
+    b.run_seconds(0.05).unwrap();
+    // Connect: status, build info, settings, parser state, parameters.
+    let s = status(&mut b);
+    assert!(s.starts_with("<Idle|MPos:0.000,0.000,0.000|FS:0,0"), "{s}");
+    let info = reply(&mut b, "$I");
+    assert!(info.contains("[VER:1.1h.ddastep:]\r\n[OPT:,15,128]\r\n"), "{info}");
+    let list = reply(&mut b, "$$");
+    assert!(list.contains("$10=1\r\n") && list.contains("$100=250.000\r\n") && list.contains("$110=500.000\r\n"));
+    assert!(!list.contains("$103="), "three axes by default");
+    assert!(reply(&mut b, "$G").contains("[GC:G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0]"));
+    // Jog X +2 mm.
+    ok(&mut b, "$J=G21G91X2F500");
+    b.run_seconds(0.1).unwrap();
+    assert!(status(&mut b).starts_with("<Jog|"));
+    wait_not(&mut b, &["<Jog"], 3.0);
+    assert_eq!(net(&steps(&b))[..3], [500, 0, 0]);
+    // Jog Y +10 mm and cancel it part-way.
+    ok(&mut b, "$J=G21G91Y10F500");
+    b.run_seconds(0.5).unwrap();
+    b.serial_send(&[0x85]);
+    let s = wait_not(&mut b, &["<Jog"], 2.0);
+    assert!(s.starts_with("<Idle|"), "{s}");
+    let y = net(&steps(&b))[1];
+    assert!(y > 0 && y < 2500, "stopped part-way: {y}");
+    assert!(close(&pos(&s), &pins_mm(&b, 250.0)), "{s} vs pins");
+    // Zero all axes here (UGS's "Reset zero"), move away, return to zero.
+    ok(&mut b, "G10 P0 L20 X0 Y0 Z0");
+    let params = reply(&mut b, "$#");
+    assert!(params.starts_with(&format!("[G54:2.000,{:.3},0.000]", y as f64 / 250.0)), "{params}");
+    ok(&mut b, "$J=G21G91X-1Z1F500");
+    wait_not(&mut b, &["<Jog"], 3.0);
+    ok(&mut b, "G90 G0 X0 Y0");
+    ok(&mut b, "G90 G0 Z0");
+    wait_idle(&mut b, 3.0);
+    assert_eq!(net(&steps(&b))[..3], [500, y, 0]);
+    // Run a program, stop it from a hold: no alarm, position kept.
+    ok(&mut b, "G90 G1 X5 Y5 F500");
+    b.run_seconds(0.3).unwrap();
+    b.serial_send(b"!");
+    let s = wait_not(&mut b, &["<Run", "<Hold:1"], 2.0);
+    assert!(s.starts_with("<Hold:0|"), "{s}");
+    let mark = b.serial_output().len();
+    b.serial_send(&[0x18]);
+    b.run_seconds(0.05).unwrap();
+    let after = b.serial_output()[mark..].to_string();
+    assert!(after.contains("Grbl 1.1h") && !after.contains("ALARM"), "{after}");
+    let held = net(&steps(&b));
+    b.run_seconds(0.1).unwrap();
+    assert_eq!(net(&steps(&b)), held, "stopped");
+    let s = status(&mut b);
+    assert!(s.starts_with("<Idle|") && close(&pos(&s), &pins_mm(&b, 250.0)), "{s}");
+    // And it runs again from there.
+    ok(&mut b, "G53 G0 X0 Y0");
+    wait_idle(&mut b, 5.0);
+    assert_eq!(net(&steps(&b))[..3], [0, 0, 0]);
+    assert!(b.fault().is_none());
+}
+
+#[test]
+fn cncjs_like_session_with_work_offsets() {
+    let mut b = boot();
+    b.run_seconds(0.02).unwrap();
+    for line in ["$$", "$#", "$G", "$I"] {
+        ok(&mut b, line);
+    }
+    ok(&mut b, "$42=3");
+    ok(&mut b, "$10=0");
+    // CNCjs's own jog: G91 moves bracketed by G90, and $J= with a cancel.
+    ok(&mut b, "G91");
+    ok(&mut b, "G0 X5 Y-3");
+    ok(&mut b, "G90");
+    wait_idle(&mut b, 2.0);
+    assert_eq!(net(&steps(&b))[..3], [500, -300, 0]);
+    for _ in 0..4 {
+        ok(&mut b, "$J=G91 G21 Z-10 F600");
+    }
+    b.run_seconds(0.3).unwrap();
+    b.serial_send(&[0x85]);
+    wait_not(&mut b, &["<Jog"], 3.0);
+    let z = net(&steps(&b))[2];
+    assert!(z < 0 && z > -4000, "{z}");
+    // Zero X and Y in G54 (P1) and Z in G55 (P2), select G55.
+    ok(&mut b, "G10 L20 P1 X0 Y0");
+    ok(&mut b, "G10 L20 P2 Z0");
+    ok(&mut b, "G55");
+    let s = status(&mut b);
+    assert!(s.starts_with("<Idle|WPos:5.000,-3.000,0.000|"), "{s}");
+    // Go to work zero, then machine zero for Z.
+    ok(&mut b, "G0 X0 Y0");
+    wait_idle(&mut b, 2.0);
+    assert_eq!(net(&steps(&b))[..3], [0, 0, z]);
+    ok(&mut b, "G53 G0 Z0");
+    wait_idle(&mut b, 2.0);
+    assert_eq!(net(&steps(&b))[2], 0);
+    // A program in G55, stopped with feed hold + reset (CNCjs "Stop").
+    ok(&mut b, "G1 X20 Y10 F1200");
+    ok(&mut b, "G1 X0 Y0");
+    b.run_seconds(0.4).unwrap();
+    b.serial_send(b"!");
+    wait_not(&mut b, &["<Run", "<Hold:1"], 2.0);
+    let mark = b.serial_output().len();
+    b.serial_send(&[0x18]);
+    b.run_seconds(0.05).unwrap();
+    assert!(!b.serial_output()[mark..].contains("ALARM"));
+    let s = status(&mut b);
+    // After the reset G54 is back in force (Grbl), with X/Y zeroed at machine 5,-3.
+    let mm = pins_mm(&b, 100.0);
+    assert!(close(&pos(&s), &[mm[0] - 5.0, mm[1] + 3.0, mm[2]]), "{s} vs {mm:?}");
+    ok(&mut b, "G0 X0 Y0");
+    wait_idle(&mut b, 3.0);
+    assert_eq!(net(&steps(&b))[..2], [500, -300]);
+    // The offsets are in flash.
+    let st = stored(&mut b).expect("image");
+    assert_eq!(st.coords.get::<3>(0)[..2], [5.0, -3.0]);
+    assert_eq!(st.coords.get::<3>(1)[2], (z as f64 / 100.0) as f32 as f64, "stored as f32, like Grbl's EEPROM floats");
+    assert!(b.fault().is_none());
+}
