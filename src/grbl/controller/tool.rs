@@ -36,6 +36,34 @@ impl<const N: usize> Controller<'_, N> {
         (stage, power)
     }
 
+    /// For status reports: the spindle speed in force (S with the override, within `$31..=$30`
+    /// as Grbl reports it; 0 when off) and the `A:` letters (S/C spindle, F flood, M mist).
+    pub(super) fn accessories(&self) -> (f64, [u8; 3], usize) {
+        let (dir, speed, coolant) = self.tool;
+        let mut acc = [0u8; 3];
+        let mut n = 0;
+        let mut push = |c: u8| {
+            acc[n] = c;
+            n += 1;
+        };
+        let speed = match dir {
+            SpindleDir::Off => 0.0,
+            _ => {
+                push(if dir == SpindleDir::Cw { b'S' } else { b'C' });
+                let s = &self.settings;
+                let v = speed * self.shared.overrides().spindle as f64 / 100.0;
+                if v > 0.0 { v.max(s.spindle_min as f64).min(s.spindle_max as f64) } else { 0.0 }
+            }
+        };
+        if coolant & FLOOD != 0 {
+            push(b'F');
+        }
+        if coolant & MIST != 0 {
+            push(b'M');
+        }
+        (speed, acc, n)
+    }
+
     /// The spindle PWM and pins now (spindle override applied).
     pub(super) fn spindle_out(&self) -> SpindleOut {
         let s = &self.settings;
