@@ -163,13 +163,17 @@ fn build_info_names_us_and_the_rate_limit() {
     b.take();
     assert_eq!(
         b.line("$I"),
-        "[VER:1.1h.ddastep:]\r\n[OPT:,15,128]\r\n[MSG:max step rate 150000 Hz]\r\n\
-         [MSG:ramp 1000-60000 Hz 1000000 Hz/s trapezoid]\r\nok\r\n"
+        "[VER:1.1h.ddastep:]\r\n[OPT:,32,128]\r\n[MSG:max step rate 150000 Hz]\r\n\
+         [MSG:ramp 1000-103923 Hz 2000000 Hz/s trapezoid]\r\nok\r\n"
     );
-    // Slow accel on Y: the table cannot reach the axes' top in 1.024 s.
-    assert_eq!(b.line("$121=100"), "ok\r\n");
+    // Slow accel on every axis: the table (path units, twice the largest acceleration)
+    // cannot reach the axes' top in 1.024 s.
+    for l in ["$120=100", "$121=100", "$122=100"] {
+        assert_eq!(b.line(l), "ok\r\n");
+    }
     b.run_ms(2);
-    assert!(b.line("$I").contains("[MSG:ramp 1000-11239 Hz 10000 Hz/s trapezoid (table-limited)]"));
+    let info = b.line("$I");
+    assert!(info.contains("[MSG:ramp 1000-21479 Hz 20000 Hz/s trapezoid (table-limited)]"), "{info}");
     assert!(b.line("$#").starts_with("[G54:0.000,0.000,0.000]\r\n[G55:"));
     assert_eq!(b.line("$"), "[HLP:$$ $# $G $I $N $x=val $X $H $RST=$ ~ ! ? ctrl-x]\r\nok\r\n");
 }

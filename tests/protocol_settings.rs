@@ -51,28 +51,33 @@ fn ids_cover_every_gettable_setting_once() {
 }
 
 #[test]
-fn profile_uses_the_slowest_accel_and_the_fastest_axis() {
+fn profile_is_in_path_units_at_twice_the_fastest_accel() {
     let mut s = Settings::DEFAULT;
-    s.set(121, 500.0, 3).unwrap(); // Y: 50 000 steps/s²
-    s.set(112, 60_000.0, 3).unwrap(); // Z: 100 kHz
+    s.set(121, 500.0, 3).unwrap(); // Y: slow, but the table serves the fastest axis
+    s.set(112, 60_000.0, 3).unwrap(); // Z: 1000 mm/s
     s.set(120, 1.0, 3).unwrap();
     s.set(120, 10_000.0, 3).unwrap();
     let t = s.timing();
     assert_eq!((t.pulse_ticks, t.dir_setup_ticks, t.min_period_ticks), (216, 360, 480));
     let cfg = s.ramp_config(3, &t);
-    assert_eq!((cfg.v0, cfg.vmax, cfg.accel), (1000, 100_000, 50_000));
-    // 99 kHz at 50 000 steps/s² needs 1.98 s: the table caps the top.
+    // Rate = path speed × 100 steps/mm; top √(600² + 600² + 1000²) mm/s; 2 × 10 000 mm/s².
+    assert_eq!((cfg.v0, cfg.vmax, cfg.accel), (1000, 131_148, 2_000_000));
+    assert_eq!(s.per_mm(3), 100.0);
+    // Slow on every axis: 130 kHz at 100 000 /s² needs 1.3 s: the table caps the top.
+    for id in [120, 121, 122] {
+        s.set(id, 500.0, 3).unwrap();
+    }
     static SLOT: RampSlot = RampSlot::new();
     let mut g = SLOT.try_write().unwrap();
     let r = s.build_profile(3, &mut g);
     assert!(r.table_limited);
-    assert_eq!(r.cfg.vmax, 1000 + 50_000 * 1024 / 1000 - 1);
+    assert_eq!(r.cfg.vmax, 1000 + 100_000 * 1024 / 1000 - 1);
     assert_eq!(g.ramp.config(), r.cfg);
     assert_eq!(r.max_rate_hz, 150_000);
-    // Defaults fit: 59 ms to 60 kHz.
+    // Defaults fit: 52 ms to √3 × 600 mm/s.
     let r = Settings::DEFAULT.build_profile(3, &mut g);
     assert!(!r.table_limited);
-    assert_eq!((r.cfg.vmax, g.ramp.len()), (60_000, 59));
+    assert_eq!((r.cfg.vmax, g.ramp.len()), (103_923, 52));
 }
 
 #[test]

@@ -13,7 +13,8 @@ mod app {
     use ddastep::controller::Controller;
     use ddastep::engine::Engine;
     use ddastep::protocol::{realtime, Realtime};
-    use ddastep::queue::{Feeder, Move, Shared};
+    use ddastep::queue::{Feeder, Shared};
+    use ddastep::ring::MoveRing;
     use ddastep::ramp::RampSlot;
     use heapless::spsc::{Consumer, Producer, Queue};
     use stm32f1xx_hal::pac;
@@ -56,7 +57,7 @@ mod app {
     }
 
     #[init(local = [
-        moves: Queue<Move<AXES>, 16> = Queue::new(),
+        moves: MoveRing<AXES> = MoveRing::new(),
         rxq: Queue<u8, 256> = Queue::new(),
         txq: Queue<u8, 512> = Queue::new(),
     ])]
@@ -68,7 +69,7 @@ mod app {
         let (tx_in, tx_out) = cx.local.txq.split();
         let pins = board::pin_map::<AXES>(settings.step_invert, settings.dir_invert);
         let engine = Engine::new(&SHARED, mv_out, &PROFILE, pins);
-        let controller = Controller::new(Feeder::new(mv_in, &SHARED), &SHARED, &PROFILE, settings);
+        let controller = Controller::new(Feeder::new(mv_in, &SHARED, &PROFILE, pins), &SHARED, &PROFILE, settings);
         defmt::info!("ddastep up: 72 MHz, {} axes", AXES);
         hw::start_step_timer();
         (

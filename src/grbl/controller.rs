@@ -108,6 +108,8 @@ pub struct Controller<'a, const N: usize> {
     pulse_changed: bool,
     pushed: u32,
     feed_ring: [f32; FEED_RING],
+    /// After a soft reset: take the engine's position once it has stopped.
+    resync: bool,
 }
 
 impl<'a, const N: usize> Controller<'a, N> {
@@ -138,6 +140,7 @@ impl<'a, const N: usize> Controller<'a, N> {
             pulse_changed: true,
             pushed: shared.moves_done(),
             feed_ring: [0.0; FEED_RING],
+            resync: false,
         };
         c.apply_profile();
         c.planner.sync(shared.positions(), &c.limits);
@@ -181,7 +184,7 @@ impl<'a, const N: usize> Controller<'a, N> {
     /// [`REPLY_ROOM`] TX bytes are free): keep the byte and offer it again after a `poll`.
     #[must_use]
     pub fn byte(&mut self, b: u8, out: &mut impl Out) -> bool {
-        if self.busy() || out.room() < REPLY_ROOM {
+        if self.busy() || self.resync || out.room() < REPLY_ROOM {
             return false;
         }
         match self.lines.push(b) {
@@ -222,7 +225,9 @@ impl<'a, const N: usize> Controller<'a, N> {
         self.job = None;
         self.modal = Modal::RESET;
         self.pushed = self.shared.moves_done();
-        self.planner.sync(self.shared.positions(), &self.limits);
+        // The engine stops at its next tick; its position is final only then (see `poll`).
+        self.resync = true;
+        self.take_position();
         if moving {
             self.alarm = true;
             out.put(report::ALARM_RESET);
@@ -234,9 +239,11 @@ impl<'a, const N: usize> Controller<'a, N> {
     /// carries on a held line (printing its `ok`), writes a requested status report.
     pub fn poll(&mut self, now_ms: u32, out: &mut impl Out) -> Actions {
         self.now = now_ms;
+        self.take_position();
         if self.profile_dirty {
             self.apply_profile();
         }
+        self.feeder.service();
         self.drive_enable();
         if self.job.is_some() && out.room() >= POLL_REPLY_ROOM && self.advance(true, out) {
             put_ok(out);
@@ -252,6 +259,14 @@ impl<'a, const N: usize> Controller<'a, N> {
             pulse_ticks: pulse,
             save: core::mem::take(&mut self.save),
             restart: core::mem::take(&mut self.restart),
+        }
+    }
+
+    /// After a soft reset: once the engine has stopped, its position is the planner's.
+    fn take_position(&mut self) {
+        if self.resync && self.shared.state() == State::Idle {
+            self.planner.sync(self.shared.positions(), &self.limits);
+            self.resync = false;
         }
     }
 
@@ -330,7 +345,7 @@ impl<'a, const N: usize> Controller<'a, N> {
                 if !self.drained() {
                     break 'run false;
                 }
-                self.shared.set_positions(steps);
+                self.feeder.set_positions(steps);
                 job.set_steps = None;
             }
             if let Some(pl) = job.mv {
@@ -378,6 +393,9 @@ impl<'a, const N: usize> Controller<'a, N> {
         let block = gcode::parse::<N>(line)?;
         let (modal, fx) = self.modal.interpret(&block, self.planner.position_mm())?;
         let mut planner = self.planner;
+        let ovr = self.shared.overrides();
+        self.limits.feed_ovr = ovr.feed as f64 / 100.0;
+        self.limits.rapid_ovr = ovr.rapid as f64 / 100.0;
         let set_steps = match fx.set_position {
             Some(set) => Some(planner.set_position(&set, &self.limits)?),
             None => None,

@@ -7,7 +7,7 @@ use ddastep::queue::{Feeder, Move, Shared, State};
 use ddastep::ramp::{RampConfig, RampSlot, Shape};
 use ddastep::sim::{apply_bsrr, Edge, TimerSim};
 use ddastep::timing::Timing;
-use heapless::spsc::Queue;
+use ddastep::ring::MoveRing;
 
 /// One step edge of one axis.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -42,7 +42,7 @@ impl<const N: usize> Rig<N> {
             p.ramp.build(cfg).expect("ramp builds");
             p.timing = timing;
         }
-        let q: &'static mut Queue<Move<N>, 16> = Box::leak(Box::new(Queue::new()));
+        let q: &'static mut MoveRing<N> = Box::leak(Box::new(MoveRing::new()));
         let (prod, cons) = q.split();
         let pins = pin_map::<N>(0, 0);
         let engine = Engine::new(shared, cons, slot, pins);
@@ -52,7 +52,7 @@ impl<const N: usize> Rig<N> {
         Rig {
             shared,
             slot,
-            feeder: Feeder::new(prod, shared),
+            feeder: Feeder::new(prod, shared, slot, pins),
             engine,
             timer: TimerSim::new(),
             pins,
@@ -78,6 +78,8 @@ impl<const N: usize> Rig<N> {
 
     /// One update event: decode the word into step edges and direction changes.
     pub fn update(&mut self) -> Edge {
+        // The feeder hands moves over as the firmware's idle loop would (between ticks).
+        self.feeder.service();
         let e = self.timer.update(&mut self.engine);
         self.updates += 1;
         let after = apply_bsrr(self.odr, e.word);

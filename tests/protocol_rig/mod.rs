@@ -6,12 +6,12 @@ use ddastep::board::pin_map;
 use ddastep::controller::{Actions, Controller};
 use ddastep::engine::Engine;
 use ddastep::protocol::{realtime, Out, Realtime};
-use ddastep::queue::{Feeder, Move, Shared, State};
+use ddastep::queue::{Feeder, Shared, State};
 use ddastep::ramp::RampSlot;
 use ddastep::settings::Settings;
 use ddastep::sim::TimerSim;
 use ddastep::TICKS_PER_MS;
-use heapless::spsc::Queue;
+use ddastep::ring::MoveRing;
 
 /// A TX ring: bytes beyond `cap` are dropped, as the firmware's would be.
 pub struct Tx {
@@ -49,10 +49,10 @@ impl<const N: usize> Bench<N> {
     pub fn new(settings: Settings) -> Self {
         let shared: &'static Shared<N> = Box::leak(Box::new(Shared::new()));
         let slot: &'static RampSlot = Box::leak(Box::new(RampSlot::new()));
-        let q: &'static mut Queue<Move<N>, 16> = Box::leak(Box::new(Queue::new()));
+        let q: &'static mut MoveRing<N> = Box::leak(Box::new(MoveRing::new()));
         let (prod, cons) = q.split();
         let engine = Engine::new(shared, cons, slot, pin_map::<N>(0, 0));
-        let ctl = Controller::new(Feeder::new(prod, shared), shared, slot, settings);
+        let ctl = Controller::new(Feeder::new(prod, shared, slot, pin_map::<N>(0, 0)), shared, slot, settings);
         let mut b = Bench {
             shared,
             ctl,

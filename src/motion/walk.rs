@@ -1,0 +1,102 @@
+//! The ramp walk: where on the ramp table the running motion is, one update per millisecond.
+//!
+//! Who uses it: the step engine, at each millisecond of timer time and when a move starts.
+//!
+//! The index (Q20) is a path speed, the same across moves (see [`crate::prepared`]), so it
+//! simply carries over from one move to the next. Each millisecond the walk moves it by the
+//! running move's walk rate: up towards the move's cruise index while accelerating, down
+//! towards the exit index once decelerating (to 0 under a feed hold or when no successor is
+//! queued yet). The deceleration starts when the master steps left are at most the distance
+//! from the current index down to the exit, from the table's distance sums (an integer
+//! multiply, no division): it steps one walk down at once and restarts the millisecond, so the
+//! way down samples the table exactly as the distance assumes (a left Riemann sum: the sums'
+//! integral less half the end slopes).
+
+use crate::prepared::RampPlan;
+use crate::ramp::{Period, RampTable};
+
+/// Steps added to the deceleration distance: covers rounding of the table distance and the
+/// step a millisecond boundary falls in.
+pub const DECEL_MARGIN: u32 = 0;
+
+/// The walk's state.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Walk {
+    /// Table index, Q20.
+    pub idx: u32,
+    /// Walking down (towards the exit, or 0 under a hold).
+    pub decel: bool,
+    /// Start walking down once the master steps left are at most this.
+    pub decel_at: u32,
+}
+
+impl Walk {
+    /// From rest.
+    pub const REST: Walk = Walk { idx: 0, decel: false, decel_at: 0 };
+
+    /// One millisecond has passed: move the index; returns true when walking down has come
+    /// to rest (index 0 with a target of 0).
+    #[inline(always)]
+    pub fn per_ms<const L: usize>(&mut self, plan: &RampPlan, target: u32, left: u32, table: &RampTable<L>) -> bool {
+        if self.decel {
+            if self.idx > target {
+                self.idx = self.idx.saturating_sub(plan.walk_q).max(target);
+            } else if target == 0 {
+                return true;
+            }
+        } else {
+            // Up one walk only if the way down from there still fits in the steps left;
+            // otherwise stay (cruise) until the trigger for this index.
+            if self.idx < plan.cruise_q {
+                let up = (self.idx + plan.walk_q).min(plan.cruise_q);
+                let d = decel_steps(up, target, plan, table);
+                if left >= d {
+                    self.idx = up;
+                    self.decel_at = d;
+                    return false;
+                }
+            }
+            self.plan_decel(plan, target, table);
+        }
+        false
+    }
+
+    /// Sets the deceleration trigger: the master steps from the current index down to
+    /// `target`, one walk per ms.
+    #[inline(always)]
+    pub fn plan_decel<const L: usize>(&mut self, plan: &RampPlan, target: u32, table: &RampTable<L>) {
+        self.decel_at = decel_steps(self.idx, target, plan, table);
+    }
+
+}
+
+/// Master steps walking down from `idx` to `target` (samples at idx − walk, …, target, one per
+/// ms: the table distance less half the end slopes), plus [`DECEL_MARGIN`].
+#[inline(always)]
+fn decel_steps<const L: usize>(idx: u32, target: u32, plan: &RampPlan, table: &RampTable<L>) -> u32 {
+    let t = target.min(idx);
+    let d = table.sum_at(idx) - table.sum_at(t);
+    let ends = (table.per_ms_at(idx).saturating_sub(table.per_ms_at(t)) as u64 * plan.walk_q as u64) >> 21;
+    let steps = ((d as u64).saturating_sub(ends) * plan.dist_q) >> 24;
+    (steps.min(u32::MAX as u64 - DECEL_MARGIN as u64) as u32) + DECEL_MARGIN
+}
+
+impl Walk {
+    /// Starts walking down now: one walk down at once (the caller restarts the millisecond).
+    #[inline(always)]
+    pub fn start_decel(&mut self, plan: &RampPlan, target: u32) {
+        self.decel = true;
+        self.decel_at = 0;
+        if self.idx > target {
+            self.idx = self.idx.saturating_sub(plan.walk_q).max(target);
+        }
+    }
+
+    /// The master period at the current index for a move's plan, never below `min`.
+    #[inline(always)]
+    pub fn period<const L: usize>(&self, plan: &RampPlan, min: Period, table: &RampTable<L>) -> Period {
+        let p = if table.is_empty() { Period::ZERO } else { table.period_at(self.idx) };
+        let scaled = ((p.to_bits() as u64 * plan.scale as u64) >> 16).min(u32::MAX as u64) as u32;
+        Period::from_bits(scaled).max(plan.cruise).max(min)
+    }
+}
