@@ -315,6 +315,12 @@ impl Settings {
         self.steps_per_mm.iter().take(axes.max(1)).fold(0.0f32, |a, &b| a.max(b))
     }
 
+    /// The ramp table's top on `axes` axes once built (what the planner's limits take).
+    pub fn wanted_vmax(s: &Settings, axes: usize) -> u32 {
+        let mut p: Profile = Profile { ramp: crate::ramp::RampTable::new(), timing: Timing::UNSET, per_mm: 0.0 };
+        s.build_profile(axes, &mut p).cfg.vmax
+    }
+
     /// The ramp asked for by the first `axes` axes (before the table's length is considered).
     /// The table is in path units (rate = path speed × [`Self::per_mm`]): its acceleration is
     /// twice the largest `$120+i` (a diagonal may accelerate faster than one axis; each move

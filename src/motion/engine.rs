@@ -78,6 +78,8 @@ pub struct Engine<'a, const N: usize, const L: usize = RAMP_LEN> {
     period: Period,
     walk: Walk,
     hold: bool,
+    /// The running move's direction change is still to be written (kept across a hold).
+    dir_pending: bool,
     ctl_seen: Ctl,
 }
 
@@ -108,6 +110,7 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
             period: Period::ZERO,
             walk: Walk::REST,
             hold: false,
+            dir_pending: false,
             ctl_seen: shared.ctl.load(),
         }
     }
@@ -220,6 +223,7 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
     #[inline(never)]
     fn dir_change(&mut self) -> (u32, u32) {
         self.phase = Phase::Run;
+        self.dir_pending = false;
         // SAFETY: as in `step`; plain fields the feeder never writes after publishing.
         unsafe { ((*self.cur).dir_word, (*self.cur).dir_setup) }
     }
@@ -297,7 +301,7 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
                 self.plan_decel();
                 self.set_period();
                 self.ms_left = TICKS_PER_MS as i32;
-                self.phase = Phase::Run;
+                self.phase = if self.dir_pending { Phase::Dir } else { Phase::Run };
                 self.publish(State::Run);
             }
             Phase::Idle => {}
@@ -341,6 +345,7 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
                 self.enter(p);
                 if dir != 0 {
                     self.phase = Phase::Dir;
+                    self.dir_pending = true;
                     return gap.saturating_sub(setup).max(min_gap);
                 }
                 return gap;
@@ -384,6 +389,7 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
         self.left = 0;
         self.walk = Walk::REST;
         self.phase = Phase::Idle;
+        self.dir_pending = false;
         self.shared.period_bits.store(0, Relaxed);
         self.publish(State::Idle);
     }

@@ -149,7 +149,8 @@ pub struct Shared<const N: usize> {
     pub(crate) state: AtomicU8,
     pub(crate) moves_done: AtomicU32,
     pub(crate) period_bits: AtomicU32,
-    /// Moves that ended above rest with nothing queued (the feeder was late at speed).
+    /// Moves that ended above the table's first entry with nothing queued (a deceleration to
+    /// rest that landed a little high, or a feeder late at speed): a diagnostic.
     pub(crate) starved: AtomicU32,
     /// Override percentages: feed | rapid << 8 | spindle << 16.
     ovr: AtomicU32,
@@ -207,7 +208,7 @@ impl<const N: usize> Shared<N> {
         self.moves_done.load(Relaxed)
     }
 
-    /// Moves that ended above rest with nothing queued after them (should stay 0).
+    /// Moves that ended above the table's first entry with nothing queued after them.
     pub fn starved(&self) -> u32 {
         self.starved.load(Relaxed)
     }

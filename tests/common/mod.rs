@@ -35,12 +35,25 @@ pub struct Rig<const N: usize> {
 
 impl<const N: usize> Rig<N> {
     pub fn new(cfg: RampConfig, timing: Timing) -> Self {
+        Self::with_profile(|p| {
+            p.ramp.build(cfg).expect("ramp builds");
+            p.timing = timing;
+        })
+    }
+
+    /// A rig whose profile (table in path units, timing) comes from Grbl settings.
+    pub fn with_settings(s: &ddastep::settings::Settings) -> Self {
+        Self::with_profile(|p| {
+            s.build_profile(N, p);
+        })
+    }
+
+    fn with_profile(build: impl FnOnce(&mut ddastep::ramp::Profile)) -> Self {
         let shared: &'static Shared<N> = Box::leak(Box::new(Shared::new()));
         let slot: &'static RampSlot = Box::leak(Box::new(RampSlot::new()));
         {
             let mut p = slot.try_write().expect("fresh slot is parked");
-            p.ramp.build(cfg).expect("ramp builds");
-            p.timing = timing;
+            build(&mut p);
         }
         let q: &'static mut MoveRing<N> = Box::leak(Box::new(MoveRing::new()));
         let (prod, cons) = q.split();
