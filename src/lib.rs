@@ -21,7 +21,7 @@ pub mod grbl;
 pub mod motion;
 pub mod planning;
 
-pub use grbl::{controller, gcode, protocol, report, settings};
+pub use grbl::{controller, gcode, protocol, report, settings, shell};
 pub use motion::{control, engine, interp, prepared, queue, ramp, ring, sim, timing, walk};
 pub use planning::{feeder, lookahead, planner};
 

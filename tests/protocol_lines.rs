@@ -214,11 +214,11 @@ fn dwell_waits_for_the_queue_then_the_time() {
     b.send("G4 P0.25\n");
     let t0 = b.now_ms;
     assert!(b.ctl.busy(), "the dwell holds its line");
-    // The next line waits behind the dwell.
+    // The next line waits (in the RX ring) behind the dwell.
     b.send("G0 Y1\n");
+    b.finish();
     let t = b.now_ms - t0;
     assert!((350..400).contains(&t), "dwell ended after {t} ms");
-    b.finish();
     assert_eq!(replies(&b.take()), (2, 0));
     b.run_to_idle(1000);
     assert_eq!(b.shared.positions(), [1000, 100, 0]);

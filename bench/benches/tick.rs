@@ -23,7 +23,7 @@ fn bench_axes<const N: usize>(c: &mut Criterion, name: &str) {
     }
     let q: &'static mut MoveRing<N> = Box::leak(Box::new(MoveRing::new()));
     let (prod, cons) = q.split();
-    let mut feeder = Feeder::new(prod, shared, slot, pin_map::<N>(0, 0));
+    let mut feeder = Feeder::new(prod, Box::leak(Box::new(ddastep::lookahead::Buffer::new())), shared, slot, pin_map::<N>(0, 0));
     let mut engine = Engine::new(shared, cons, slot, pin_map::<N>(0, 0));
     let steps: [i64; N] = core::array::from_fn(|i| 1_000_000_000 / (i as i64 + 2) * 2 - i as i64);
     feeder.push(Move::new(steps, 400_000).expect("move")).expect("room");

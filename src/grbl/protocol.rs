@@ -24,7 +24,8 @@ pub enum Realtime {
     Resume,
     /// Ctrl-X (0x18): soft reset ([`crate::controller::Controller::soft_reset`]).
     Reset,
-    /// Grbl's extended realtime bytes (0x80..=0xFF: overrides, jog cancel, door): ignored.
+    /// Grbl's extended realtime bytes (0x80..=0xFF): overrides 0x90–0x9D act
+    /// ([`crate::queue::Overrides::apply`]); the rest (jog cancel, door, …) are ignored.
     Extended(u8),
 }
 

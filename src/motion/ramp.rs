@@ -262,28 +262,29 @@ impl<const L: usize> RampTable<L> {
     }
 
     /// The highest fractional index (Q20) whose [`Self::sum_at`] is at most `sum` (clamped to
-    /// the table). Binary search: planner side only.
-    pub fn index_of_sum(&self, sum: f32) -> u32 {
+    /// the table). Integer binary search: planner side only.
+    pub fn index_of_sum(&self, sum: u32) -> u32 {
         let n = self.len as usize;
-        if n <= 1 || !(sum > 0.0) {
+        if n <= 1 || sum == 0 {
             return 0;
         }
-        if sum >= self.sums[n - 1] as f32 {
+        if sum >= self.sums[n - 1] {
             return self.top_q();
         }
         let (mut lo, mut hi) = (0usize, n - 1);
         while hi - lo > 1 {
             let mid = (lo + hi) / 2;
-            if self.sums[mid] as f32 <= sum {
+            if self.sums[mid] <= sum {
                 lo = mid;
             } else {
                 hi = mid;
             }
         }
-        let (a, b) = (self.sums[lo] as f32, self.sums[hi] as f32);
-        let f = if b > a { (sum - a) / (b - a) } else { 0.0 };
-        // Round down: the index must never promise more distance than there is.
-        ((lo as u32) << IDX_FRAC) + ((f.max(0.0).min(1.0) * IDX_ONE as f32) as u32).min(IDX_MASK).saturating_sub(1)
+        let (a, b) = (self.sums[lo], self.sums[hi]);
+        // 12 fraction bits are plenty (an entry's sum is < 2^20, so this fits in 32 bits);
+        // rounded down: the index never promises more distance than there is.
+        let f = if b > a { ((sum - a) << 12) / (b - a) } else { 0 };
+        ((lo as u32) << IDX_FRAC) + (f.min(4095) << (IDX_FRAC - 12))
     }
 
     /// Number of entries (milliseconds of ramp).

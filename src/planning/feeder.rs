@@ -12,7 +12,7 @@
 //! runs out of moves at speed: at worst it slows to rest at the end of what it has.
 
 use crate::board::PinMap;
-use crate::lookahead::{replan, Block, Tail, LOOKAHEAD};
+use crate::lookahead::{replan, Block, Buffer, Tail, LOOKAHEAD};
 use crate::prepared::{DirState, Prepared};
 use crate::queue::{Move, Shared, State};
 use crate::ramp::RampSlot;
@@ -28,7 +28,7 @@ pub struct Feeder<'a, const N: usize> {
     slot: &'a RampSlot,
     pins: PinMap<N>,
     /// The look-ahead buffer, oldest first.
-    blocks: heapless::Vec<Block<N>, LOOKAHEAD>,
+    blocks: &'a mut Buffer<N>,
     /// The last move handed to the engine (for the forward pass).
     tail: Option<Tail>,
     dir: DirState,
@@ -43,13 +43,20 @@ pub struct Feeder<'a, const N: usize> {
 
 impl<'a, const N: usize> Feeder<'a, N> {
     /// A feeder at the engine's current position.
-    pub fn new(ring: RingProducer<'a, N>, shared: &'a Shared<N>, slot: &'a RampSlot, pins: PinMap<N>) -> Self {
+    pub fn new(
+        ring: RingProducer<'a, N>,
+        blocks: &'a mut Buffer<N>,
+        shared: &'a Shared<N>,
+        slot: &'a RampSlot,
+        pins: PinMap<N>,
+    ) -> Self {
+        blocks.clear();
         Feeder {
             ring,
             shared,
             slot,
             pins,
-            blocks: heapless::Vec::new(),
+            blocks,
             tail: None,
             dir: DirState::UNKNOWN,
             pos: shared.positions(),
@@ -75,7 +82,7 @@ impl<'a, const N: usize> Feeder<'a, N> {
         let profile = self.slot.producer_view();
         let joins = !(self.blocks.is_empty() && self.ring.is_empty());
         let block = Block::new(mv, profile, joins);
-        if self.blocks.push(block).is_err() {
+        if self.blocks.push_back(block).is_err() {
             return Err(mv); // unreachable: checked above
         }
         self.accepted = self.accepted.wrapping_add(1);
@@ -145,16 +152,14 @@ impl<'a, const N: usize> Feeder<'a, N> {
 
     fn replan(&mut self) {
         let tail = if self.ring.is_empty() { None } else { self.tail };
-        replan(&mut self.blocks, tail.as_ref(), &self.slot.producer_view().ramp);
+        let (front, back) = self.blocks.as_mut_slices();
+        replan(front, back, tail.as_ref(), &self.slot.producer_view().ramp);
     }
 
     /// Prepares the oldest buffered move and publishes it.
+    /// (No replan here: handing over the front block leaves the plan of the rest as it was.)
     fn commit(&mut self) {
-        self.replan();
-        if self.blocks.is_empty() {
-            return;
-        }
-        let b = self.blocks.remove(0);
+        let Some(b) = self.blocks.pop_front() else { return };
         let profile = self.slot.producer_view();
         let mut ramp = b.ramp;
         ramp.exit_q = b.exit_q;

@@ -25,7 +25,11 @@ use crate::timing::Timing;
 use crate::walk::DECEL_MARGIN;
 
 /// Moves the look-ahead buffers (beyond the few already prepared in the engine's ring).
-pub const LOOKAHEAD: usize = 24;
+pub const LOOKAHEAD: usize = 16;
+
+/// The look-ahead buffer's storage (a `static` in the firmware, so the feeder holds a
+/// reference and no 2 KiB value moves over the stack at boot).
+pub type Buffer<const N: usize> = heapless::Deque<Block<N>, LOOKAHEAD>;
 
 /// One buffered move with its plan.
 #[derive(Clone, Copy, Debug)]
@@ -34,9 +38,11 @@ pub struct Block<const N: usize> {
     /// Ramp plan except the exit (set by the passes).
     pub ramp: RampPlan,
     /// Table distance the move covers at its walk rate (1/256 step of the table).
-    pub budget: f32,
+    pub budget: u32,
     /// Highest entry the junction and the nominal speeds allow.
     pub max_entry_q: u32,
+    /// Highest entry the moves after it allow (reverse pass; kept to stop early).
+    pub rev_entry_q: u32,
     /// Planned entry and exit.
     pub entry_q: u32,
     pub exit_q: u32,
@@ -48,7 +54,7 @@ pub struct Block<const N: usize> {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Tail {
     pub entry_q: u32,
-    pub budget: f32,
+    pub budget: u32,
     pub cruise_q: u32,
 }
 
@@ -91,7 +97,8 @@ impl<const N: usize> Block<N> {
                 (plan, usable(total) * 256.0, 0, total as f32 / cruise_hz.max(1.0) * 1e6)
             }
         };
-        Block { mv, ramp, budget, max_entry_q, entry_q: 0, exit_q: 0, est_us: est_us.min(4e9) as u32 }
+        let budget = budget.clamp(0.0, u32::MAX as f32) as u32;
+        Block { mv, ramp, budget, max_entry_q, rev_entry_q: u32::MAX, entry_q: 0, exit_q: 0, est_us: est_us.min(4e9) as u32 }
     }
 
     /// What the passes keep of it once it is handed over.
@@ -107,26 +114,38 @@ fn usable(total: u32) -> f32 {
 }
 
 /// Index reached from `from_q` walking `budget` of table distance up (or down) the table.
-fn reach<const L: usize>(table: &RampTable<L>, from_q: u32, budget: f32) -> u32 {
-    table.index_of_sum(table.sum_at(from_q) as f32 + budget)
+fn reach<const L: usize>(table: &RampTable<L>, from_q: u32, budget: u32) -> u32 {
+    table.index_of_sum(table.sum_at(from_q).saturating_add(budget))
 }
 
-/// Replans `blocks` (oldest first): the reverse pass from rest, then the forward pass from
-/// `tail` (the last move the engine has, if it is still running) or from rest.
-pub fn replan<const N: usize, const L: usize>(blocks: &mut [Block<N>], tail: Option<&Tail>, table: &RampTable<L>) {
+/// Replans the buffered moves `front` then `back` (oldest first, as a ring buffer's two
+/// slices): the reverse pass from rest (stopping at the first move whose bound did not
+/// change: the ones before it cannot change either), then the forward pass from `tail` (the
+/// last move the engine has, if it is still running) or from rest.
+pub fn replan<const N: usize, const L: usize>(
+    front: &mut [Block<N>],
+    back: &mut [Block<N>],
+    tail: Option<&Tail>,
+    table: &RampTable<L>,
+) {
     let mut next_entry = 0;
-    for b in blocks.iter_mut().rev() {
-        b.exit_q = next_entry;
-        b.entry_q = b.max_entry_q.min(reach(table, next_entry, b.budget));
-        next_entry = b.entry_q;
+    for b in back.iter_mut().rev().chain(front.iter_mut().rev()) {
+        let e = b.max_entry_q.min(reach(table, next_entry, b.budget));
+        if e == b.rev_entry_q {
+            break;
+        }
+        b.rev_entry_q = e;
+        next_entry = e;
     }
     let mut entry = match tail {
         Some(t) => reach(table, t.entry_q, t.budget).min(t.cruise_q),
         None => 0,
     };
-    for b in blocks.iter_mut() {
-        b.entry_q = b.entry_q.min(entry);
-        b.exit_q = b.exit_q.min(reach(table, b.entry_q, b.budget)).min(b.ramp.cruise_q);
+    let mut it = front.iter_mut().chain(back.iter_mut()).peekable();
+    while let Some(b) = it.next() {
+        b.entry_q = b.rev_entry_q.min(entry);
+        let next_rev = it.peek().map_or(0, |n| n.rev_entry_q);
+        b.exit_q = next_rev.min(reach(table, b.entry_q, b.budget)).min(b.ramp.cruise_q);
         entry = b.exit_q;
     }
 }

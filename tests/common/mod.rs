@@ -65,7 +65,7 @@ impl<const N: usize> Rig<N> {
         Rig {
             shared,
             slot,
-            feeder: Feeder::new(prod, shared, slot, pins),
+            feeder: Feeder::new(prod, Box::leak(Box::new(ddastep::lookahead::Buffer::new())), shared, slot, pins),
             engine,
             timer: TimerSim::new(),
             pins,

@@ -25,6 +25,7 @@ pub mod nvic;
 pub mod profile;
 mod report;
 mod stats;
+pub mod stream;
 pub mod sweep;
 mod systick;
 mod timer;
