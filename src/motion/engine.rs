@@ -34,7 +34,7 @@ use crate::prepared::{Prepared, RampPlan};
 use crate::queue::{Shared, State};
 use crate::ramp::{Period, RampSlot, RAMP_LEN};
 use crate::ring::RingConsumer;
-use crate::walk::Walk;
+use crate::walk::{Step as WalkStep, Walk};
 use crate::TICKS_PER_MS;
 
 /// Longest timer period one tick can set (ARR is 16 bits).
@@ -256,12 +256,14 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
         }
         let target = self.target();
         let table = &self.ramp.profile().ramp;
-        if self.walk.per_ms(&self.plan, target, self.left, table) && self.hold {
-            self.phase = Phase::Held;
-            self.publish(State::Held);
-            return;
+        match self.walk.per_ms(&self.plan, target, self.left, table) {
+            WalkStep::Same => {}
+            WalkStep::AtRest if self.hold => {
+                self.phase = Phase::Held;
+                self.publish(State::Held);
+            }
+            _ => self.set_period(),
         }
-        self.set_period();
     }
 
     /// Period for the current ramp index.

@@ -19,6 +19,17 @@ use crate::ramp::{Period, RampTable};
 /// step a millisecond boundary falls in.
 pub const DECEL_MARGIN: u32 = 0;
 
+/// What a millisecond of walking did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Step {
+    /// The index (or the trigger) changed: set the period again.
+    Moved,
+    /// Nothing changed.
+    Same,
+    /// Walking down to 0 has come to rest.
+    AtRest,
+}
+
 /// The walk's state.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Walk {
@@ -28,23 +39,30 @@ pub struct Walk {
     pub decel: bool,
     /// Start walking down once the master steps left are at most this.
     pub decel_at: u32,
+    /// The target `decel_at` was computed for (a cruise millisecond with the same target
+    /// changes nothing and costs nothing).
+    pub decel_for: u32,
 }
 
 impl Walk {
     /// From rest.
-    pub const REST: Walk = Walk { idx: 0, decel: false, decel_at: 0 };
+    pub const REST: Walk = Walk { idx: 0, decel: false, decel_at: 0, decel_for: u32::MAX };
 
-    /// One millisecond has passed: move the index; returns true when walking down has come
-    /// to rest (index 0 with a target of 0).
+    /// One millisecond has passed: move the index. Returns what changed.
     #[inline(always)]
-    pub fn per_ms<const L: usize>(&mut self, plan: &RampPlan, target: u32, left: u32, table: &RampTable<L>) -> bool {
+    pub fn per_ms<const L: usize>(&mut self, plan: &RampPlan, target: u32, left: u32, table: &RampTable<L>) -> Step {
         if self.decel {
             if self.idx > target {
                 self.idx = self.idx.saturating_sub(plan.walk_q).max(target);
             } else if target == 0 {
-                return true;
+                return Step::AtRest;
+            } else {
+                return Step::Same;
             }
         } else {
+            if self.idx == plan.cruise_q && target == self.decel_for {
+                return Step::Same; // cruising, nothing new
+            }
             // Up one walk only if the way down from there still fits in the steps left;
             // otherwise stay (cruise) until the trigger for this index.
             if self.idx < plan.cruise_q {
@@ -53,12 +71,13 @@ impl Walk {
                 if left >= d {
                     self.idx = up;
                     self.decel_at = d;
-                    return false;
+                    self.decel_for = u32::MAX;
+                    return Step::Moved;
                 }
             }
             self.plan_decel(plan, target, table);
         }
-        false
+        Step::Moved
     }
 
     /// Sets the deceleration trigger: the master steps from the current index down to
@@ -66,6 +85,7 @@ impl Walk {
     #[inline(always)]
     pub fn plan_decel<const L: usize>(&mut self, plan: &RampPlan, target: u32, table: &RampTable<L>) {
         self.decel_at = decel_steps(self.idx, target, plan, table);
+        self.decel_for = target;
     }
 
 }

@@ -71,6 +71,11 @@ pub fn stream_segments(board: &mut Board, n: usize, seed: u64) -> Result<StreamR
         }
     }
     let thread: u64 = prof.iter().map(|f| f.cycles).sum();
+    if std::env::var_os("STREAM_PROFILE").is_some() {
+        for f in board.profile(16 + super::TIM2_IRQ).iter().take(12) {
+            eprintln!("TIM2 {:>10} {:>8} runs {:>5.1}% {}", f.cycles, f.block_runs, f.share * 100.0, f.function);
+        }
+    }
     board.set_profile(false);
     board.run_until_quiet(HZ / 10, 30 * HZ)?;
     let first = first_step.unwrap_or(last_ok);
