@@ -45,3 +45,29 @@ fn circle_of_360_segments_runs_near_its_feed() {
     assert!(took <= 1.1 * ideal, "circle took {took:.3} s, ideal {ideal:.3} s");
     assert_eq!(b.report().overruns, 0);
 }
+
+#[test]
+fn fast_532_reaches_200_khz_on_the_seven_axis_firmware() {
+    let mut b = boot();
+    let g = std::fs::read_to_string(ddastep_bench::emu::repo_root().join("bench/demo/fast_532.gcode")).unwrap();
+    for l in gcode_lines(&g) {
+        ok(&mut b, &l);
+    }
+    wait_idle(&mut b, 3.0);
+    let s = steps(&b);
+    assert_eq!(s.iter().filter(|s| s.axis == 0).count(), 10_000);
+    assert_eq!(net(&s), [0; 7]);
+    // Cruise: X at 200 kHz (± 0.5 %) over 1000 master steps in the middle of the first move.
+    let x: Vec<u64> = s.iter().filter(|s| s.axis == 0).map(|s| s.cycle).collect();
+    let rate = 1000.0 * HZ as f64 / (x[3000] - x[2000]) as f64;
+    assert!((rate - 200_000.0).abs() < 1_000.0, "cruise {rate} Hz");
+    assert_eq!(b.report().overruns, 0);
+}
+
+#[test]
+fn streamed_short_segments_never_starve() {
+    let mut b = boot();
+    let r = ddastep_bench::emu::stream::stream_segments(&mut b, 150, 7).unwrap();
+    assert_eq!(r.starved_windows, 0, "{r:?}");
+    assert_eq!(b.report().overruns, 0);
+}

@@ -41,7 +41,7 @@ pub struct RampPlan {
     /// Master steps per table distance unit (1/256 step) at this walk rate, Q24:
     /// `scale⁻¹ / walk`, so a deceleration from `a` to `b` takes
     /// `(sum(a) − sum(b)) · dist_q / 2^24` master steps.
-    pub dist_q: u64,
+    pub dist_q: u32,
     /// Master period at cruise (the move's own rate, which the table may not hold exactly).
     pub cruise: Period,
 }

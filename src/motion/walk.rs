@@ -74,6 +74,9 @@ impl Walk {
                     self.decel_for = u32::MAX;
                     return Step::Moved;
                 }
+                if target == self.decel_for {
+                    return Step::Same; // stay: the trigger for this index stands
+                }
             }
             self.plan_decel(plan, target, table);
         }
@@ -97,7 +100,7 @@ fn decel_steps<const L: usize>(idx: u32, target: u32, plan: &RampPlan, table: &R
     let t = target.min(idx);
     let d = table.sum_at(idx) - table.sum_at(t);
     let ends = (table.per_ms_at(idx).saturating_sub(table.per_ms_at(t)) as u64 * plan.walk_q as u64) >> 21;
-    let steps = ((d as u64).saturating_sub(ends) * plan.dist_q) >> 24;
+    let steps = ((d as u64).saturating_sub(ends).min(u32::MAX as u64) * plan.dist_q as u64) >> 24;
     (steps.min(u32::MAX as u64 - DECEL_MARGIN as u64) as u32) + DECEL_MARGIN
 }
 

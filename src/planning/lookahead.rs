@@ -84,7 +84,7 @@ impl<const N: usize> Block<N> {
                     exit_q: 0,
                     walk_q,
                     scale: (65536.0 / s).min(u32::MAX as f32) as u32,
-                    dist_q: ((s / r) * 65536.0).min(1e18) as u64,
+                    dist_q: ((s / r) * 65536.0).min(u32::MAX as f32) as u32,
                     cruise: mv.cruise,
                 };
                 let budget = usable(total) * 256.0 * r / s;
