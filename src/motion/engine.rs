@@ -163,6 +163,8 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
         if self.ms_left <= 0 {
             self.ms_left += TICKS_PER_MS as i32;
             self.walk_ramp();
+        } else if self.walk.unsettled() {
+            self.settle();
         }
         (chunk - 1) as u16
     }
@@ -255,8 +257,11 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
             return;
         }
         let target = self.target();
-        let table = &self.ramp.profile().ramp;
-        match self.walk.per_ms(&self.plan, target, self.left, table) {
+        while self.walk.unsettled() {
+            // Slower than a step per ms: the work of the ticks in between happens here.
+            self.walk.settle(&self.plan, target, &self.ramp.profile().ramp);
+        }
+        match self.walk.per_ms(&self.plan, target, self.left) {
             WalkStep::Same => {}
             WalkStep::AtRest if self.hold => {
                 self.phase = Phase::Held;
@@ -264,6 +269,16 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
             }
             _ => self.set_period(),
         }
+    }
+
+    /// Pending trigger work, one distance (a tick without a ramp millisecond).
+    #[inline(never)]
+    fn settle(&mut self) {
+        if !matches!(self.phase, Phase::Run | Phase::Dir) {
+            return;
+        }
+        let target = self.target();
+        self.walk.settle(&self.plan, target, &self.ramp.profile().ramp);
     }
 
     /// Period for the current ramp index.
@@ -330,7 +345,8 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
         self.left = self.total;
         self.shared.start_move(p as *const Prepared<N>);
         self.walk.decel = self.hold;
-        self.plan_decel();
+        // The trigger comes at the next tick (a move change costs no distance).
+        self.walk.defer_decel();
         self.set_period();
     }
 

@@ -30,6 +30,11 @@ pub enum Step {
     AtRest,
 }
 
+/// Trigger work left for the next tick (one distance per tick, so no tick pays for two).
+const SETTLED: u8 = 0;
+const TRIGGER: u8 = 1;
+const UP: u8 = 2;
+
 /// The walk's state.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Walk {
@@ -39,58 +44,85 @@ pub struct Walk {
     pub decel: bool,
     /// Start walking down once the master steps left are at most this.
     pub decel_at: u32,
-    /// The target `decel_at` was computed for (a cruise millisecond with the same target
-    /// changes nothing and costs nothing).
+    /// The target `decel_at` and `up_at` were computed for.
     pub decel_for: u32,
+    /// The deceleration distance from one walk up: going up needs at least this many steps
+    /// left (and it becomes `decel_at` there).
+    pub up_at: u32,
+    /// Trigger work for the next tick ([`Walk::settle`]).
+    pending: u8,
 }
 
 impl Walk {
     /// From rest.
-    pub const REST: Walk = Walk { idx: 0, decel: false, decel_at: 0, decel_for: u32::MAX };
+    pub const REST: Walk = Walk { idx: 0, decel: false, decel_at: 0, decel_for: u32::MAX, up_at: u32::MAX, pending: SETTLED };
 
-    /// One millisecond has passed: move the index. Returns what changed.
+    /// True when [`Self::settle`] has work for this tick.
     #[inline(always)]
-    pub fn per_ms<const L: usize>(&mut self, plan: &RampPlan, target: u32, left: u32, table: &RampTable<L>) -> Step {
+    pub fn unsettled(&self) -> bool {
+        self.pending != SETTLED
+    }
+
+    /// One millisecond has passed: move the index. Returns what changed. The distances it
+    /// needs were computed on earlier ticks; the new ones are left to [`Self::settle`].
+    #[inline(always)]
+    pub fn per_ms(&mut self, plan: &RampPlan, target: u32, left: u32) -> Step {
         if self.decel {
             if self.idx > target {
                 self.idx = self.idx.saturating_sub(plan.walk_q).max(target);
-            } else if target == 0 {
-                return Step::AtRest;
-            } else {
-                return Step::Same;
+                return Step::Moved;
             }
-        } else {
-            if self.idx == plan.cruise_q && target == self.decel_for {
-                return Step::Same; // cruising, nothing new
-            }
-            // Up one walk only if the way down from there still fits in the steps left;
-            // otherwise stay (cruise) until the trigger for this index.
-            if self.idx < plan.cruise_q {
-                let up = (self.idx + plan.walk_q).min(plan.cruise_q);
-                let d = decel_steps(up, target, plan, table);
-                if left >= d {
-                    self.idx = up;
-                    self.decel_at = d;
-                    self.decel_for = u32::MAX;
-                    return Step::Moved;
-                }
-                if target == self.decel_for {
-                    return Step::Same; // stay: the trigger for this index stands
-                }
-            }
-            self.plan_decel(plan, target, table);
+            return if target == 0 { Step::AtRest } else { Step::Same };
         }
-        Step::Moved
+        if target != self.decel_for {
+            self.pending = TRIGGER; // a successor came (or went): both distances again
+            return Step::Same;
+        }
+        // Up one walk only if the way down from there still fits in the steps left;
+        // otherwise stay (cruise) until the trigger for this index.
+        if self.idx < plan.cruise_q && left >= self.up_at {
+            self.idx = (self.idx + plan.walk_q).min(plan.cruise_q);
+            self.decel_at = self.up_at;
+            self.pending = UP;
+            return Step::Moved;
+        }
+        Step::Same
     }
 
-    /// Sets the deceleration trigger: the master steps from the current index down to
-    /// `target`, one walk per ms.
+    /// The trigger for the current index and target, at once (a move start, a resume).
     #[inline(always)]
     pub fn plan_decel<const L: usize>(&mut self, plan: &RampPlan, target: u32, table: &RampTable<L>) {
         self.decel_at = decel_steps(self.idx, target, plan, table);
         self.decel_for = target;
+        self.up_at = u32::MAX;
+        self.pending = UP;
     }
 
+    /// The trigger for a new move at the next tick; until then it cannot fire.
+    #[inline(always)]
+    pub fn defer_decel(&mut self) {
+        self.decel_at = 0;
+        self.decel_for = u32::MAX;
+        self.up_at = u32::MAX;
+        self.pending = TRIGGER;
+    }
+
+    /// One distance of pending trigger work (a tick without a ramp millisecond).
+    #[inline(always)]
+    pub fn settle<const L: usize>(&mut self, plan: &RampPlan, target: u32, table: &RampTable<L>) {
+        if self.pending == TRIGGER {
+            self.decel_at = decel_steps(self.idx, target, plan, table);
+            self.decel_for = target;
+            self.pending = UP;
+        } else {
+            self.up_at = if self.idx < plan.cruise_q {
+                decel_steps((self.idx + plan.walk_q).min(plan.cruise_q), self.decel_for, plan, table)
+            } else {
+                u32::MAX
+            };
+            self.pending = SETTLED;
+        }
+    }
 }
 
 /// Master steps walking down from `idx` to `target` (samples at idx − walk, …, target, one per
@@ -110,11 +142,11 @@ impl Walk {
     pub fn start_decel(&mut self, plan: &RampPlan, target: u32) {
         self.decel = true;
         self.decel_at = 0;
+        self.pending = SETTLED;
         if self.idx > target {
             self.idx = self.idx.saturating_sub(plan.walk_q).max(target);
         }
     }
-
     /// The master period at the current index for a move's plan, never below `min`.
     #[inline(always)]
     pub fn period<const L: usize>(&self, plan: &RampPlan, min: Period, table: &RampTable<L>) -> Period {
