@@ -163,7 +163,7 @@ fn build_info_names_us_and_the_rate_limit() {
     b.take();
     assert_eq!(
         b.line("$I"),
-        "[VER:1.1h.ddastep:]\r\n[OPT:,32,128]\r\n[MSG:max step rate 150000 Hz]\r\n\
+        "[VER:1.1h.ddastep:]\r\n[OPT:,24,128]\r\n[MSG:max step rate 150000 Hz]\r\n\
          [MSG:ramp 1000-103923 Hz 2000000 Hz/s trapezoid]\r\nok\r\n"
     );
     // Slow accel on every axis: the table (path units, twice the largest acceleration)

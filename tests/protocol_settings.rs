@@ -83,16 +83,16 @@ fn profile_is_in_path_units_at_twice_the_fastest_accel() {
 #[test]
 fn short_pulses_raise_the_rate_limit() {
     let mut s = Settings::DEFAULT;
-    // Period floor: 2 × pulse + 48 ticks of store latency, and the step handler's cost (220
+    // Period floor: 2 × pulse + 48 ticks of store latency, and the step handler's cost (248
     // ticks + 15 per slave axis) with a pulse's low time after its end.
     s.set(0, 2.0, 3).unwrap();
     assert_eq!(s.timing().max_rate_hz(), 214_285);
     assert_eq!(s.timing().max_rate_for(2), 214_285);
     assert_eq!(s.timing().max_rate_for(6), 72_000_000 / (130 + 90 + 144));
     s.set(0, 1.0, 3).unwrap();
-    assert_eq!(s.timing().max_rate_hz(), 327_272);
-    assert_eq!(s.timing().max_rate_for(6), 232_258);
+    assert_eq!(s.timing().max_rate_hz(), 290_322);
+    assert_eq!(s.timing().max_rate_for(6), 72_000_000 / (248 + 90));
     s.set(0, 0.5, 3).unwrap();
-    assert_eq!(s.timing().max_rate_hz(), 327_272);
+    assert_eq!(s.timing().max_rate_hz(), 290_322);
     assert!(s.set(0, 0.1, 3).is_err());
 }

@@ -13,8 +13,9 @@
 //! stays 0, so pulse width and resolution never change).
 //!
 //! Moves arrive prepared ([`crate::prepared`]) in a ring and run in their slot: a move change
-//! is a pointer switch, a position-record swap and the ramp walk's trigger for the new move
-//! (no search, no division, no loop over axes). The ramp index carries over from move to move
+//! is a pointer switch, a position-record swap and the new move's period; its deceleration
+//! trigger follows on the next ticks ([`crate::walk`]): no search, no division, no loop over
+//! axes. The ramp index carries over from move to move
 //! (look-ahead junctions run through at speed). A direction change at a junction is carved out
 //! of the gap before the next step (the change, then `dir_setup`), so it never delays an edge
 //! unless the period is shorter than the setup.

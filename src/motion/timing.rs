@@ -94,10 +94,11 @@ impl Timing {
     }
 }
 
-/// Step-handler cost per master step, timer ticks: the virtual bench measures ≈ 190 + 14.4 per
-/// slave modeled cycles (bench/RESULTS.md, firmware 9e80f71), and the CPU stays ≤ 95 % busy
-/// up to 331 kHz with one axis and 235 kHz with seven; these keep every move inside that.
-pub const HANDLER_BASE_TICKS: u32 = 220;
+/// Step-handler cost per master step, timer ticks: the virtual bench measures ≈ 203 + 14.7 per
+/// slave modeled cycles at cruise, plus ramp-millisecond and move-change ticks, and sustains
+/// 292 kHz with one axis and 216 kHz with seven (bench/RESULTS.md, look-ahead engine); these
+/// keep every move inside that.
+pub const HANDLER_BASE_TICKS: u32 = 248;
 /// Extra handler ticks per slave axis (see [`HANDLER_BASE_TICKS`]).
 pub const HANDLER_PER_SLAVE_TICKS: u32 = 15;
 /// Where a short pulse's falling edge lands after its rising edge when the compare event is

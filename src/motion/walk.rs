@@ -10,13 +10,19 @@
 //! from the current index down to the exit, from the table's distance sums (an integer
 //! multiply, no division): it steps one walk down at once and restarts the millisecond, so the
 //! way down samples the table exactly as the distance assumes (a left Riemann sum: the sums'
-//! integral less half the end slopes).
+//! integral less half the end slopes). The walk goes up only if the way down from one walk up
+//! still fits in the steps left, otherwise it stays (cruises) until the trigger fires.
+//!
+//! Cost: a ramp millisecond only moves the index and sets the period; the distances it needs
+//! next (the trigger here, the one from a walk up) are computed one per tick on the ticks that
+//! follow ([`Walk::settle`]), and a move change computes none, so no tick pays for two
+//! distances (below one step per ms the walk does it all at once; time is not short there).
 
 use crate::prepared::RampPlan;
 use crate::ramp::{Period, RampTable};
 
-/// Steps added to the deceleration distance: covers rounding of the table distance and the
-/// step a millisecond boundary falls in.
+/// Steps added to the deceleration distance (0: an early start would leave steps to crawl at
+/// the table's first entry; a late one ends at most a step's worth of walk high).
 pub const DECEL_MARGIN: u32 = 0;
 
 /// What a millisecond of walking did.
