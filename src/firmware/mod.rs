@@ -12,8 +12,10 @@ mod app {
     use ddastep::board;
     use ddastep::controller::Controller;
     use ddastep::engine::Engine;
-    use ddastep::protocol::{realtime, Realtime};
-    use ddastep::queue::{Feeder, Move, Shared};
+    use ddastep::shell::{dispatch, idle_step, Requests};
+    use ddastep::queue::{Feeder, Shared};
+    use ddastep::lookahead::Buffer;
+    use ddastep::ring::MoveRing;
     use ddastep::ramp::RampSlot;
     use ddastep::steptime::STEP_TIME;
     use heapless::spsc::{Consumer, Producer, Queue};
@@ -31,12 +33,8 @@ mod app {
     pub static PROFILE: RampSlot = RampSlot::new();
     /// Milliseconds since boot (SysTick).
     pub static MILLIS: AtomicU32 = AtomicU32::new(0);
-    /// `?` arrived (set by the USART interrupt, taken by `idle`).
-    static STATUS_REQ: AtomicBool = AtomicBool::new(false);
-    /// Ctrl-X arrived.
-    static RESET_REQ: AtomicBool = AtomicBool::new(false);
-    /// 0x85 (jog cancel) arrived.
-    static JOG_CANCEL_REQ: AtomicBool = AtomicBool::new(false);
+    /// `?` and Ctrl-X, left by the USART interrupt for `idle`.
+    static REQUESTS: Requests = Requests::new();
     /// Work for `idle`: set by SysTick (every ms) and USART1, not by the step interrupt, so
     /// `idle` sleeps through step ticks instead of polling after each one.
     static POLL: AtomicBool = AtomicBool::new(true);
@@ -59,7 +57,8 @@ mod app {
     }
 
     #[init(local = [
-        moves: Queue<Move<AXES>, 16> = Queue::new(),
+        moves: MoveRing<AXES> = MoveRing::new(),
+        plans: Buffer<AXES> = Buffer::new(),
         rxq: Queue<u8, 256> = Queue::new(),
         txq: Queue<u8, 512> = Queue::new(),
     ])]
@@ -74,7 +73,7 @@ mod app {
         let (tx_in, tx_out) = cx.local.txq.split();
         let pins = board::pin_map::<AXES>(settings.step_invert, settings.dir_invert);
         let engine = Engine::new(&SHARED, mv_out, &PROFILE, pins);
-        let controller = Controller::new(Feeder::new(mv_in, &SHARED), &SHARED, &PROFILE, stored);
+        let controller = Controller::new(Feeder::new(mv_in, cx.local.plans, &SHARED, &PROFILE, pins), &SHARED, &PROFILE, stored);
         defmt::info!("ddastep up: 72 MHz, {} axes", AXES);
         hw::start_step_timer();
         (
@@ -118,17 +117,9 @@ mod app {
     fn usart(mut cx: usart::Context) {
         POLL.store(true, Relaxed);
         while let Ok(b) = cx.local.rx.read() {
-            match realtime(b) {
-                Some(Realtime::Hold) => SHARED.set_hold(true),
-                Some(Realtime::Resume) => SHARED.set_hold(false),
-                Some(Realtime::Status) => STATUS_REQ.store(true, Relaxed),
-                Some(Realtime::Reset) => RESET_REQ.store(true, Relaxed),
-                Some(Realtime::JogCancel) => JOG_CANCEL_REQ.store(true, Relaxed),
-                Some(Realtime::Extended(_)) => {}
+            if let Some(b) = dispatch(b, &SHARED, &REQUESTS) {
                 // A full ring drops the byte: a character-counting sender never fills it.
-                None => {
-                    let _ = cx.local.rx_in.enqueue(b);
-                }
+                let _ = cx.local.rx_in.enqueue(b);
             }
         }
         let tx_out = cx.local.tx_out;
@@ -171,25 +162,7 @@ mod app {
                 continue;
             }
             let now = MILLIS.load(Relaxed);
-            if RESET_REQ.swap(false, Relaxed) {
-                // Bytes before the Ctrl-X belong to the old stream.
-                while rx_out.dequeue().is_some() {}
-                ctl.soft_reset(tx_in);
-            }
-            if STATUS_REQ.swap(false, Relaxed) {
-                ctl.status_request();
-            }
-            if JOG_CANCEL_REQ.swap(false, Relaxed) {
-                ctl.jog_cancel();
-            }
-            while let Some(&b) = rx_out.peek() {
-                if !ctl.byte(b, tx_in) {
-                    break;
-                }
-                rx_out.dequeue();
-            }
-            ctl.set_rx_free(rx_out.capacity() - rx_out.len());
-            let act = ctl.poll(now, tx_in);
+            let act = idle_step(ctl, rx_out, tx_in, now, &REQUESTS);
             hw::set_enable(act.enable_pin_high);
             if let Some(ticks) = act.pulse_ticks {
                 hw::set_pulse_ticks(ticks);

@@ -181,6 +181,8 @@ pub struct Controller<'a, const N: usize> {
     pwm_hz: u32,
     /// `$C` off, `$RST`: a soft reset follows the line's `ok`.
     reset_after: bool,
+    /// After a soft reset: take the engine's position once it has stopped.
+    resync: bool,
 }
 
 impl<'a, const N: usize> Controller<'a, N> {
@@ -233,6 +235,7 @@ impl<'a, const N: usize> Controller<'a, N> {
             tool: (SpindleDir::Off, 0.0, 0),
             pwm_hz: 0,
             reset_after: false,
+            resync: false,
         };
         c.startup_next = c.next_startup(0);
         c.apply_profile();
@@ -314,7 +317,7 @@ impl<'a, const N: usize> Controller<'a, N> {
     /// [`REPLY_ROOM`] TX bytes are free): keep the byte and offer it again after a `poll`.
     #[must_use]
     pub fn byte(&mut self, b: u8, out: &mut impl Out) -> bool {
-        if self.busy() || self.sleep || out.room() < REPLY_ROOM {
+        if self.busy() || self.sleep || self.resync || out.room() < REPLY_ROOM {
             return false;
         }
         match self.lines.push(b) {
@@ -362,7 +365,9 @@ impl<'a, const N: usize> Controller<'a, N> {
         self.jog = Jogging::Off;
         self.check = false;
         self.pushed = self.shared.moves_done();
-        self.planner.sync(self.shared.positions(), &self.limits);
+        // The engine stops at its next tick; its position is final only then (see `poll`).
+        self.resync = true;
+        self.take_position();
         self.wco_count = 0;
         self.ovr_count = 0;
         if moving {
@@ -380,9 +385,11 @@ impl<'a, const N: usize> Controller<'a, N> {
     /// writes a requested status report.
     pub fn poll(&mut self, now_ms: u32, out: &mut impl Out) -> Actions {
         self.now = now_ms;
+        self.take_position();
         if self.profile_dirty {
             self.apply_profile();
         }
+        self.feeder.service();
         self.jog_poll(out);
         self.drive_enable();
         if self.job.is_some() && out.room() >= POLL_REPLY_ROOM && self.advance(true, out) {
@@ -414,6 +421,14 @@ impl<'a, const N: usize> Controller<'a, N> {
         put_ok(out);
         if core::mem::take(&mut self.reset_after) {
             self.soft_reset(out);
+        }
+    }
+
+    /// After a soft reset: once the engine has stopped, its position is the planner's.
+    fn take_position(&mut self) {
+        if self.resync && self.shared.state() == State::Idle {
+            self.planner.sync(self.shared.positions(), &self.limits);
+            self.resync = false;
         }
     }
 
@@ -607,6 +622,9 @@ impl<'a, const N: usize> Controller<'a, N> {
         }
         let (modal, fx) = self.modal.interpret_with(&block, self.planner.position_mm(), &self.offsets)?;
         let mut planner = self.planner;
+        let ovr = self.shared.overrides();
+        self.limits.feed_ovr = ovr.feed as f64 / 100.0;
+        self.limits.rapid_ovr = ovr.rapid as f64 / 100.0;
         let mut offsets = self.offsets;
         // G93: F is 1/minutes (checked positive where a motion needs it).
         let rate = if modal.inverse_time { Rate::Minutes(1.0 / modal.feed) } else { Rate::Feed(modal.feed) };

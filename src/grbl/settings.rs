@@ -4,14 +4,16 @@
 //! Who uses it: the controller (`$$`, `$N=`), the firmware shell (flash load/save via
 //! [`Settings::from_bytes`] / [`Settings::to_bytes`]).
 //!
-//! One ramp table serves every move, so its acceleration is the smallest axis limit in master
-//! steps/s² (`min_i $120+i × $100+i`): a slave has at most the master's steps, so it never
-//! accelerates faster than its own limit. Its top is the fastest axis limit in steps/s
-//! (`max_i $110+i × $100+i / 60`), capped by the timing's fastest rate and by what fits in the
-//! table's 1.024 s.
+//! One ramp table serves every move. It is in path units: its rate is the path speed times the
+//! largest `$100+i`, its acceleration twice the largest `$120+i` in those units, its top the
+//! fastest path speed all axes allow together (capped by what fits in the table's 1.024 s).
+//! Each move walks it at its own acceleration's fraction (from the axes it moves) and scales
+//! it to its master's share of the path, so axes that do not move never slow a move down.
 
 use crate::protocol::Error;
 use crate::ramp::{Profile, RampConfig, RampError, Shape, MAX_RATE_HZ};
+#[allow(unused_imports)]
+use crate::ramp::MAX_RATE_HZ as _;
 use crate::timing::{ns_to_ticks, Timing};
 use crate::MAX_AXES;
 
@@ -388,24 +390,42 @@ impl Settings {
         Timing::new(pulse, dir, ISR_FLOOR_TICKS)
     }
 
+    /// Table rate per mm/s of path speed on the first `axes` axes: the largest `$100+i`, so a
+    /// move's master never runs faster than the table.
+    pub fn per_mm(&self, axes: usize) -> f32 {
+        self.steps_per_mm.iter().take(axes.max(1)).fold(0.0f32, |a, &b| a.max(b))
+    }
+
+    /// The ramp table's top on `axes` axes once built (what the planner's limits take).
+    pub fn wanted_vmax(s: &Settings, axes: usize) -> u32 {
+        let mut p: Profile = Profile { ramp: crate::ramp::RampTable::new(), timing: Timing::UNSET, per_mm: 0.0 };
+        s.build_profile(axes, &mut p).cfg.vmax
+    }
+
     /// The ramp asked for by the first `axes` axes (before the table's length is considered).
+    /// The table is in path units (rate = path speed × [`Self::per_mm`]): its acceleration is
+    /// twice the largest `$120+i` (a diagonal may accelerate faster than one axis; each move
+    /// walks it at its own fraction), its top the fastest path speed the axes allow together.
     pub fn ramp_config(&self, axes: usize, timing: &Timing) -> RampConfig {
+        let _ = timing;
         // max/min, not clamp, here and below: clamp's panic message would link integer
         // formatting into the firmware.
         #[allow(clippy::manual_clamp, reason = "clamp's panic path costs flash")]
         let axes = axes.max(1).min(MAX_AXES);
-        let mut accel = f64::MAX;
-        let mut top = 0.0f64;
+        let c = self.per_mm(axes) as f64;
+        let mut accel = 0.0f64;
+        let mut top2 = 0.0f64;
         for i in 0..axes {
-            let spm = self.steps_per_mm[i] as f64;
-            accel = accel.min(self.accel[i] as f64 * spm);
-            top = top.max(self.max_rate[i] as f64 * spm / 60.0);
+            accel = accel.max(self.accel[i] as f64 * 2.0);
+            let v = self.max_rate[i] as f64 / 60.0;
+            top2 += v * v;
         }
-        let vmax = (top as u32).max(1).min(timing.max_rate_hz());
+        let accel = accel * c;
+        let vmax = ((libm::sqrt(top2) * c) as u32).max(1).min(crate::ramp::MAX_RATE_HZ);
         RampConfig {
             v0: self.ramp_start_hz.max(1).min(vmax),
             vmax,
-            accel: (accel as u32).max(1),
+            accel: (accel.min(u32::MAX as f64) as u32).max(1),
             shape: self.shape,
         }
     }
@@ -417,6 +437,7 @@ impl Settings {
         let mut cfg = self.ramp_config(axes, &timing);
         let mut table_limited = false;
         profile.timing = timing;
+        profile.per_mm = self.per_mm(axes);
         for _ in 0..4 {
             match profile.ramp.build(cfg) {
                 Err(RampError::TooLong { reachable_vmax }) => {

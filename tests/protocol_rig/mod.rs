@@ -5,13 +5,15 @@
 use ddastep::board::pin_map;
 use ddastep::controller::{Actions, Controller};
 use ddastep::engine::Engine;
-use ddastep::protocol::{realtime, Out, Realtime};
-use ddastep::queue::{Feeder, Move, Shared, State};
+use ddastep::protocol::Out;
+use ddastep::shell::{dispatch, idle_step, Requests};
+use heapless::spsc::{Consumer, Producer, Queue};
+use ddastep::queue::{Feeder, Shared, State};
 use ddastep::ramp::RampSlot;
 use ddastep::settings::Settings;
 use ddastep::sim::TimerSim;
 use ddastep::TICKS_PER_MS;
-use heapless::spsc::Queue;
+use ddastep::ring::MoveRing;
 
 /// A TX ring: bytes beyond `cap` are dropped, as the firmware's would be.
 pub struct Tx {
@@ -43,16 +45,28 @@ pub struct Bench<const N: usize> {
     pub peak_hz: u32,
     pub stepped_while_disabled: bool,
     pub enabled: bool,
+    /// The RX ring and the requests, as the firmware's USART interrupt leaves them.
+    rx_in: Producer<'static, u8>,
+    rx_out: Consumer<'static, u8>,
+    req: &'static Requests,
 }
 
 impl<const N: usize> Bench<N> {
     pub fn new(settings: Settings) -> Self {
+        Self::with_stored(settings)
+    }
+
+    /// A rig whose controller boots from a persistent image (settings, coordinates, startup
+    /// lines, build info), as the firmware does from flash.
+    pub fn with_stored(stored: impl Into<ddastep::store::Stored>) -> Self {
         let shared: &'static Shared<N> = Box::leak(Box::new(Shared::new()));
         let slot: &'static RampSlot = Box::leak(Box::new(RampSlot::new()));
-        let q: &'static mut Queue<Move<N>, 16> = Box::leak(Box::new(Queue::new()));
+        let q: &'static mut MoveRing<N> = Box::leak(Box::new(MoveRing::new()));
         let (prod, cons) = q.split();
         let engine = Engine::new(shared, cons, slot, pin_map::<N>(0, 0));
-        let ctl = Controller::new(Feeder::new(prod, shared), shared, slot, settings);
+        let ctl = Controller::new(Feeder::new(prod, Box::leak(Box::new(ddastep::lookahead::Buffer::new())), shared, slot, pin_map::<N>(0, 0)), shared, slot, stored);
+        let rxq: &'static mut Queue<u8, 256> = Box::leak(Box::new(Queue::new()));
+        let (rx_in, rx_out) = rxq.split();
         let mut b = Bench {
             shared,
             ctl,
@@ -65,6 +79,9 @@ impl<const N: usize> Bench<N> {
             peak_hz: 0,
             stepped_while_disabled: false,
             enabled: false,
+            rx_in,
+            rx_out,
+            req: Box::leak(Box::new(Requests::new())),
         };
         b.ctl.welcome(&mut b.tx);
         b.drain();
@@ -99,7 +116,12 @@ impl<const N: usize> Bench<N> {
         if self.shared.positions() != before && !self.enabled {
             self.stepped_while_disabled = true;
         }
-        let a = self.ctl.poll(self.now_ms, &mut self.tx);
+        self.idle_step();
+    }
+
+    /// One pass of the firmware's idle loop (the library's `idle_step`).
+    fn idle_step(&mut self) {
+        let a = idle_step(&mut self.ctl, &mut self.rx_out, &mut self.tx, self.now_ms, self.req);
         self.enabled = a.enable;
         self.actions.push(a);
         self.drain();
@@ -111,29 +133,19 @@ impl<const N: usize> Bench<N> {
         }
     }
 
-    /// One received byte, as the RX interrupt and the serial task treat it; waits (in 1 ms
-    /// steps) while the controller holds a line.
+    /// One received byte through the library's RX dispatch (realtime bytes act at once, line
+    /// bytes go to the RX ring), then a pass of the idle loop; waits (in 1 ms steps) while the
+    /// ring is full.
     pub fn byte(&mut self, b: u8) {
-        match realtime(b) {
-            Some(Realtime::Status) => self.ctl.status_request(),
-            Some(Realtime::Hold) => self.shared.set_hold(true),
-            Some(Realtime::Resume) => self.shared.set_hold(false),
-            Some(Realtime::Reset) => {
-                self.ctl.soft_reset(&mut self.tx);
-                self.drain();
-            }
-            Some(Realtime::JogCancel) => self.ctl.jog_cancel(),
-            Some(Realtime::Extended(_)) => {}
-            None => {
-                let mut waited = 0;
-                while !self.ctl.byte(b, &mut self.tx) {
-                    self.tick_ms();
-                    waited += 1;
-                    assert!(waited < 600_000, "line held for 10 min");
-                }
-                self.drain();
+        if let Some(b) = dispatch(b, self.shared, self.req) {
+            let mut waited = 0;
+            while self.rx_in.enqueue(b).is_err() {
+                self.tick_ms();
+                waited += 1;
+                assert!(waited < 600_000, "RX ring full for 10 min");
             }
         }
+        self.idle_step();
     }
 
     pub fn send(&mut self, s: &str) {
@@ -154,7 +166,7 @@ impl<const N: usize> Bench<N> {
     /// Runs until the held line, if any, is accepted.
     pub fn finish(&mut self) {
         let mut waited = 0;
-        while self.ctl.busy() {
+        while self.ctl.busy() || self.rx_out.len() > 0 {
             self.tick_ms();
             waited += 1;
             assert!(waited < 600_000, "line held for 10 min");
@@ -165,7 +177,7 @@ impl<const N: usize> Bench<N> {
     pub fn run_to_idle(&mut self, max_ms: u32) {
         for _ in 0..max_ms {
             self.tick_ms();
-            if !self.ctl.busy() && self.shared.state() == State::Idle && self.queue_empty() {
+            if !self.ctl.busy() && self.rx_out.len() == 0 && self.shared.state() == State::Idle && self.queue_empty() {
                 return;
             }
         }

@@ -28,6 +28,7 @@ pub mod profile;
 pub mod pwm;
 mod report;
 mod stats;
+pub mod stream;
 pub mod sweep;
 mod systick;
 mod timer;
