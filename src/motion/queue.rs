@@ -271,7 +271,7 @@ impl<const N: usize> Shared<N> {
         loop {
             let s1 = self.seq.load(Acquire);
             let cur = self.cur.load(Relaxed) as *const Prepared<N>;
-            let done = self.mv_done.load(Relaxed) as u64;
+            let done = self.mv_done.load(Relaxed);
             let p = if cur.is_null() {
                 core::array::from_fn(|i| self.base[i].load(Relaxed))
             } else {
@@ -284,10 +284,11 @@ impl<const N: usize> Shared<N> {
                         core::ptr::read_volatile(core::ptr::addr_of!((*cur).total)),
                     )
                 };
-                let total = total.max(1) as u64;
+                let total = total.max(1);
                 core::array::from_fn(|i| {
                     let c = steps[i];
-                    let made = ((done.min(total) * c.unsigned_abs() as u64 + total / 2) / total) as i32;
+                    // |c| <= total (the master has the most steps), so the quotient fits.
+                    let made = mul_div(done.min(total), c.unsigned_abs(), total / 2, total) as i32;
                     start[i].wrapping_add(if c < 0 { -made } else { made })
                 })
             };
@@ -331,5 +332,51 @@ impl<const N: usize> Shared<N> {
     fn end_write(&self) {
         fence(Release);
         self.seq.store(self.seq.load(Relaxed).wrapping_add(1), Release);
+    }
+}
+
+/// `(a * b + add) / d` for a quotient that fits 32 bits (`a * b + add < d * 2^32`), without a
+/// 64-bit division: shift-subtract on the 64-bit product. Saves the ~900 B `__aeabi_uldivmod`
+/// the firmware otherwise links (only status reports and the feeder's horizon call this).
+pub fn mul_div(a: u32, b: u32, add: u32, d: u32) -> u32 {
+    let n = a as u64 * b as u64 + add as u64;
+    let d64 = d as u64;
+    let mut rem = n >> 32;
+    let mut q = 0u32;
+    for bit in (0..32).rev() {
+        rem = (rem << 1) | ((n >> bit) & 1);
+        q <<= 1;
+        if rem >= d64 {
+            rem -= d64;
+            q |= 1;
+        }
+    }
+    q
+}
+
+#[cfg(test)]
+mod tests {
+    use super::mul_div;
+    use proptest::prelude::*;
+
+    fn reference(a: u32, b: u32, add: u32, d: u32) -> u64 {
+        (a as u64 * b as u64 + add as u64) / d as u64
+    }
+
+    #[test]
+    fn mul_div_edges() {
+        let m = u32::MAX;
+        for (a, b, add, d) in [(0, 0, 0, 1), (m, m, m / 2, m), (m, 1, 0, 1), (m - 1, m, 0, m), (7, 3, 1, 2), (1, 1, 0, m)] {
+            assert_eq!(mul_div(a, b, add, d) as u64, reference(a, b, add, d), "{a} {b} {add} {d}");
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn mul_div_matches_u64(total in 1u32.., done in any::<u32>(), c in any::<u32>()) {
+            let (done, c) = (done % (total as u64 + 1) as u32, c % (total as u64 + 1) as u32);
+            prop_assert_eq!(mul_div(done, c, total / 2, total) as u64, reference(done, c, total / 2, total));
+            prop_assert_eq!(mul_div(c, done, 0, total) as u64, reference(c, done, 0, total));
+        }
     }
 }

@@ -188,7 +188,7 @@ impl<'a, const N: usize> Feeder<'a, N> {
             let (est, total) = self.est[done.wrapping_add(k) as usize % RING];
             let left = if k == 0 {
                 let made = self.shared.mv_done.load(core::sync::atomic::Ordering::Relaxed).min(total);
-                (est as u64 * (total - made) as u64 / total as u64) as u32
+                crate::queue::mul_div(est, total - made, 0, total)
             } else {
                 est
             };
