@@ -234,31 +234,31 @@ impl<const L: usize> RampTable<L> {
 
     /// The fractional index (Q20) whose interpolated rate is `hz` (clamped to the table; 0
     /// below its start). Binary search: planner side only.
-    pub fn index_of_hz(&self, hz: f32) -> u32 {
+    pub fn index_of_hz(&self, hz: f64) -> u32 {
         if self.len == 0 || !(hz > 0.0) {
             return 0;
         }
-        let p = TIMER_HZ as f32 * 16.0 / hz;
+        let p = TIMER_HZ as f64 * 16.0 / hz;
         let n = self.len as usize;
-        if p >= self.periods[0].to_bits() as f32 {
+        if p >= self.periods[0].to_bits() as f64 {
             return 0;
         }
-        if p <= self.periods[n - 1].to_bits() as f32 {
+        if p <= self.periods[n - 1].to_bits() as f64 {
             return self.top_q();
         }
         // Last entry i with periods[i] > p (periods never rise along the table).
         let (mut lo, mut hi) = (0usize, n - 1);
         while hi - lo > 1 {
             let mid = (lo + hi) / 2;
-            if self.periods[mid].to_bits() as f32 > p {
+            if self.periods[mid].to_bits() as f64 > p {
                 lo = mid;
             } else {
                 hi = mid;
             }
         }
-        let (a, b) = (self.periods[lo].to_bits() as f32, self.periods[hi].to_bits() as f32);
+        let (a, b) = (self.periods[lo].to_bits() as f64, self.periods[hi].to_bits() as f64);
         let f = if a > b { (a - p) / (a - b) } else { 0.0 };
-        ((lo as u32) << IDX_FRAC) + ((f.max(0.0).min(1.0) * IDX_ONE as f32) as u32).min(IDX_MASK)
+        ((lo as u32) << IDX_FRAC) + ((f.max(0.0).min(1.0) * IDX_ONE as f64) as u32).min(IDX_MASK)
     }
 
     /// The highest fractional index (Q20) whose [`Self::sum_at`] is at most `sum` (clamped to

@@ -62,7 +62,9 @@ impl<const N: usize> Block<N> {
     /// Plans `mv` on `table` (`per_mm`: table rate per mm/s of path; 0 if the table is in
     /// master steps); `joins` when a move runs before it (else it starts from rest).
     pub fn new<const L: usize>(mv: Move<N>, profile: &Profile<L>, joins: bool) -> Self {
-        let (table, per_mm) = (&profile.ramp, profile.per_mm);
+        // f64 arithmetic (the inputs are stored as f32): the firmware links f64 soft float for the
+        // planner anyway, and f32 arithmetic here would add a second set (~2 KB of flash).
+        let (table, per_mm) = (&profile.ramp, profile.per_mm as f64);
         let total = mv.steps[mv.master as usize].unsigned_abs();
         // The cruise the engine will hold: the move's own, at most the step timing's ceiling.
         let timing = match profile.timing {
@@ -70,34 +72,34 @@ impl<const N: usize> Block<N> {
             t => t,
         };
         let slaves = mv.steps.iter().filter(|s| **s != 0).count().saturating_sub(1) as u32;
-        let cruise_hz = (crate::ramp::hz_of_period(mv.cruise) as f32).min(timing.max_rate_for(slaves) as f32);
-        let t_accel = table.config().accel.max(1) as f32;
+        let cruise_hz = (crate::ramp::hz_of_period(mv.cruise) as f64).min(timing.max_rate_for(slaves) as f64);
+        let t_accel = table.config().accel.max(1) as f64;
         let (ramp, budget, max_entry_q, est_us) = match (&mv.path, per_mm > 0.0) {
             (Some(p), true) => {
-                let s = (p.share / per_mm).clamp(1e-6, 1.0);
-                let r = (p.accel * per_mm / t_accel).clamp(0.0, 1.0);
-                let walk_q = ((r * IDX_ONE as f32) as u32).max(1);
-                let r = walk_q as f32 / IDX_ONE as f32;
+                let s = (p.share as f64 / per_mm).clamp(1e-6, 1.0);
+                let r = (p.accel as f64 * per_mm / t_accel).clamp(0.0, 1.0);
+                let walk_q = ((r * IDX_ONE as f64) as u32).max(1);
+                let r = walk_q as f64 / IDX_ONE as f64;
                 let cruise_q = table.index_of_hz(cruise_hz / s);
                 let plan = RampPlan {
                     cruise_q,
                     exit_q: 0,
                     walk_q,
-                    scale: (65536.0 / s).min(u32::MAX as f32) as u32,
-                    dist_q: ((s / r) * 65536.0).min(u32::MAX as f32) as u32,
+                    scale: (65536.0 / s).min(u32::MAX as f64) as u32,
+                    dist_q: ((s / r) * 65536.0).min(u32::MAX as f64) as u32,
                     cruise: mv.cruise,
                 };
                 let budget = usable(total) * 256.0 * r / s;
-                let v_j = if joins { p.junction.min(p.speed) } else { 0.0 };
-                let est = p.len / p.speed.max(1e-3) * 1e6;
+                let v_j = if joins { (p.junction as f64).min(p.speed as f64) } else { 0.0 };
+                let est = p.len as f64 / (p.speed as f64).max(1e-3) * 1e6;
                 (plan, budget, table.index_of_hz(v_j * per_mm).min(cruise_q), est)
             }
             _ => {
                 let plan = RampPlan::lone(table.index_of_hz(cruise_hz), mv.cruise);
-                (plan, usable(total) * 256.0, 0, total as f32 / cruise_hz.max(1.0) * 1e6)
+                (plan, usable(total) * 256.0, 0, total as f64 / cruise_hz.max(1.0) * 1e6)
             }
         };
-        let budget = budget.clamp(0.0, u32::MAX as f32) as u32;
+        let budget = budget.clamp(0.0, u32::MAX as f64) as u32;
         Block { mv, ramp, budget, max_entry_q, rev_entry_q: u32::MAX, entry_q: 0, exit_q: 0, est_us: est_us.min(4e9) as u32 }
     }
 
@@ -109,8 +111,8 @@ impl<const N: usize> Block<N> {
 
 /// Master steps a deceleration may plan on: the engine's trigger is conservative by
 /// [`DECEL_MARGIN`] steps and by the step a millisecond boundary falls in.
-fn usable(total: u32) -> f32 {
-    total.saturating_sub(2 * DECEL_MARGIN + 1) as f32
+fn usable(total: u32) -> f64 {
+    total.saturating_sub(2 * DECEL_MARGIN + 1) as f64
 }
 
 /// Index reached from `from_q` walking `budget` of table distance up (or down) the table.

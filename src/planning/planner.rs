@@ -79,7 +79,7 @@ pub struct Planner<const N: usize> {
     mm: [f64; N],
     steps: [i64; N],
     /// Direction and nominal speed of the last planned move (for the junction).
-    prev: Option<([f32; N], f32)>,
+    prev: Option<([f64; N], f64)>,
 }
 
 impl<const N: usize> Default for Planner<N> {
@@ -169,18 +169,17 @@ impl<const N: usize> Planner<N> {
         let cruise_millihz = (libm::round(wanted_hz.max(1.0).min(top) * 1000.0) as u64).min(top_millihz);
         let mv = Move::new_millihz(delta, cruise_millihz).map_err(|_| Error::InvalidTarget)?;
         let speed = cruise_millihz as f64 / 1000.0 / share;
-        let unit32: [f32; N] = unit.map(|u| u as f32);
         let junction = match self.prev {
-            Some((pu, pspeed)) => junction_speed(&pu, &unit32, &lim.accel, lim.junction_dev as f32).min(pspeed),
+            Some((pu, pspeed)) => junction_speed(&pu, &unit, &lim.accel, lim.junction_dev).min(pspeed),
             None => 0.0,
         };
-        self.prev = Some((unit32, speed as f32));
+        self.prev = Some((unit, speed));
         let path = Path {
             len: len as f32,
             share: share as f32,
             speed: speed as f32,
             accel: accel.min(1e12) as f32,
-            junction: junction.min(speed as f32),
+            junction: junction.min(speed) as f32,
         };
         self.mm = *target;
         self.steps = to;
@@ -192,9 +191,10 @@ impl<const N: usize> Planner<N> {
 /// speed at which a circle of deviation `dev` tangent to both moves is driven at the largest
 /// acceleration the axes allow along the change of direction,
 /// `v² = acc·dev·sin(θ/2)/(1 − sin(θ/2))`; 0 for a reversal, unlimited straight on.
-pub fn junction_speed<const N: usize>(a: &[f32; N], b: &[f32; N], axis_accel: &[f64; N], dev: f32) -> f32 {
-    let mut cos = 0.0f32;
-    let mut ju = [0.0f32; N];
+/// In f64 like the rest of the planner: f32 arithmetic would link a second soft-float set.
+pub fn junction_speed<const N: usize>(a: &[f64; N], b: &[f64; N], axis_accel: &[f64; N], dev: f64) -> f64 {
+    let mut cos = 0.0f64;
+    let mut ju = [0.0f64; N];
     for i in 0..N {
         cos -= a[i] * b[i];
         ju[i] = b[i] - a[i];
@@ -203,18 +203,18 @@ pub fn junction_speed<const N: usize>(a: &[f32; N], b: &[f32; N], axis_accel: &[
         return 0.0;
     }
     if cos < -0.999_999 {
-        return f32::MAX;
+        return f64::MAX;
     }
-    let n = libm::sqrtf(ju.iter().map(|v| v * v).sum::<f32>());
-    let mut acc = f32::MAX;
+    let n = sqrt(ju.iter().map(|v| v * v).sum::<f64>());
+    let mut acc = f64::MAX;
     for i in 0..N {
-        let u = libm::fabsf(ju[i]) / n;
+        let u = libm::fabs(ju[i]) / n;
         if u > 1e-9 {
-            acc = acc.min(axis_accel[i] as f32 / u);
+            acc = acc.min(axis_accel[i] / u);
         }
     }
-    let sin_d2 = libm::sqrtf(0.5 * (1.0 - cos));
-    libm::sqrtf(acc * dev * sin_d2 / (1.0 - sin_d2))
+    let sin_d2 = sqrt(0.5 * (1.0 - cos));
+    sqrt(acc * dev * sin_d2 / (1.0 - sin_d2))
 }
 
 /// Square root, correctly rounded like `libm::sqrt`, in ~100 bytes of flash instead of ~700
