@@ -393,7 +393,8 @@ impl Settings {
     /// Table rate per mm/s of path speed on the first `axes` axes: the largest `$100+i`, so a
     /// move's master never runs faster than the table.
     pub fn per_mm(&self, axes: usize) -> f32 {
-        self.steps_per_mm.iter().take(axes.max(1)).fold(0.0f32, |a, &b| a.max(b))
+        // Compared in f64 (exact for f32 values): f32 max would link fmaxf and the f32 compares.
+        self.steps_per_mm.iter().take(axes.max(1)).fold(0.0f64, |a, &b| a.max(b as f64)) as f32
     }
 
     /// The ramp table's top on `axes` axes once built (what the planner's limits take).
@@ -421,7 +422,7 @@ impl Settings {
             top2 += v * v;
         }
         let accel = accel * c;
-        let vmax = ((libm::sqrt(top2) * c) as u32).max(1).min(crate::ramp::MAX_RATE_HZ);
+        let vmax = ((crate::planner::sqrt(top2) * c) as u32).max(1).min(crate::ramp::MAX_RATE_HZ);
         RampConfig {
             v0: self.ramp_start_hz.max(1).min(vmax),
             vmax,
