@@ -74,7 +74,10 @@ impl<const N: usize> Block<N> {
         let slaves = mv.steps.iter().filter(|s| **s != 0).count().saturating_sub(1) as u32;
         let cruise_hz = (crate::ramp::hz_of_period(mv.cruise) as f64).min(timing.max_rate_for(slaves) as f64);
         let t_accel = table.config().accel.max(1) as f64;
-        let (ramp, budget, max_entry_q, est_us) = match (&mv.path, per_mm > 0.0) {
+        // `per_mm > 0.0` on the f32's bits (positive: 1 ..= +inf): LLVM would narrow an f64 compare of
+        // a widened f32 back to an f32 one and link the f32 compare routines for it.
+        let positive = (1..=0x7F80_0000).contains(&profile.per_mm.to_bits());
+        let (ramp, budget, max_entry_q, est_us) = match (&mv.path, positive) {
             (Some(p), true) => {
                 let s = (p.share as f64 / per_mm).clamp(1e-6, 1.0);
                 let r = (p.accel as f64 * per_mm / t_accel).clamp(0.0, 1.0);
@@ -90,9 +93,11 @@ impl<const N: usize> Block<N> {
                     cruise: mv.cruise,
                 };
                 let budget = usable(total) * 256.0 * r / s;
-                let v_j = if joins { (p.junction as f64).min(p.speed as f64) } else { 0.0 };
+                // min(junction, speed) · per_mm as the min of the products (per_mm > 0: same
+                // value; the min of two widened f32s would be narrowed to fminf).
+                let v_j = if joins { (p.junction as f64 * per_mm).min(p.speed as f64 * per_mm) } else { 0.0 };
                 let est = p.len as f64 / (p.speed as f64).max(1e-3) * 1e6;
-                (plan, budget, table.index_of_hz(v_j * per_mm).min(cruise_q), est)
+                (plan, budget, table.index_of_hz(v_j).min(cruise_q), est)
             }
             _ => {
                 let plan = RampPlan::lone(table.index_of_hz(cruise_hz), mv.cruise);
