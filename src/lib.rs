@@ -21,7 +21,7 @@ pub mod motion;
 pub mod planning;
 pub mod steptime;
 
-pub use grbl::{controller, coords, gcode, jog, protocol, report, settings, spindle, store};
+pub use grbl::{controller, coords, gcode, jog, limits, protocol, report, settings, spindle, store};
 pub use motion::{engine, interp, queue, ramp, sim, timing};
 pub use planning::{arc, inverse_time, planner};
 

@@ -18,6 +18,7 @@
 //! program coordinates into machine ones in the interpreter, and reports subtract them again.
 
 mod jogging;
+mod soft_limits;
 mod status;
 mod system;
 mod tool;
@@ -34,6 +35,7 @@ use crate::report;
 use crate::settings::{Ramped, Settings};
 use crate::spindle::{Power, PwmTiming, SpindleDir, SpindleOut};
 use crate::store::{Stored, IMAGE_LEN, STARTUP_LINES};
+use soft_limits::SoftLimit;
 
 /// Time from enabling the drivers to the first step, in poll milliseconds (2 ≥ 1 ms real).
 pub const ENABLE_SETTLE_MS: u32 = 2;
@@ -181,6 +183,8 @@ pub struct Controller<'a, const N: usize> {
     pwm_hz: u32,
     /// `$C` off, `$RST`: a soft reset follows the line's `ok`.
     reset_after: bool,
+    /// A soft-limit trip in progress (see `soft_limits.rs`).
+    soft_limit: SoftLimit,
 }
 
 impl<'a, const N: usize> Controller<'a, N> {
@@ -209,7 +213,8 @@ impl<'a, const N: usize> Controller<'a, N> {
             offsets: Offsets::new(stored.coords),
             planner: Planner::new(),
             job: None,
-            alarm: false,
+            // Grbl's homing lock: with homing enabled, power-up is in the alarm state.
+            alarm: settings.homing,
             check: false,
             sleep: false,
             jog: Jogging::Off,
@@ -233,6 +238,7 @@ impl<'a, const N: usize> Controller<'a, N> {
             tool: (SpindleDir::Off, 0.0, 0),
             pwm_hz: 0,
             reset_after: false,
+            soft_limit: SoftLimit::Off,
         };
         c.startup_next = c.next_startup(0);
         c.apply_profile();
@@ -293,7 +299,7 @@ impl<'a, const N: usize> Controller<'a, N> {
     /// True while a line (or a startup line) is being carried out: [`Self::byte`] takes
     /// nothing until it is done (nor while asleep).
     pub fn busy(&self) -> bool {
-        self.job.is_some() || self.startup_next < STARTUP_LINES
+        self.job.is_some() || self.startup_next < STARTUP_LINES || self.tripped()
     }
 
     /// Free bytes in the shell's RX ring, for `Bf:` in status reports (at most the announced
@@ -361,6 +367,7 @@ impl<'a, const N: usize> Controller<'a, N> {
         self.offsets = Offsets::new(self.stored.coords);
         self.jog = Jogging::Off;
         self.check = false;
+        self.soft_limit = SoftLimit::Off;
         self.pushed = self.shared.moves_done();
         self.planner.sync(self.shared.positions(), &self.limits);
         self.wco_count = 0;
@@ -384,6 +391,7 @@ impl<'a, const N: usize> Controller<'a, N> {
             self.apply_profile();
         }
         self.jog_poll(out);
+        self.soft_limit_poll(out);
         self.drive_enable();
         if self.job.is_some() && out.room() >= POLL_REPLY_ROOM && self.advance(true, out) {
             self.ok(out);
@@ -411,6 +419,9 @@ impl<'a, const N: usize> Controller<'a, N> {
 
     /// A line's `ok`, and the reset `$C`/`$RST` asked to follow it.
     fn ok(&mut self, out: &mut impl Out) {
+        if self.tripped() {
+            return; // a soft-limit trip: the line gets no reply (Grbl)
+        }
         put_ok(out);
         if core::mem::take(&mut self.reset_after) {
             self.soft_reset(out);
@@ -436,7 +447,7 @@ impl<'a, const N: usize> Controller<'a, N> {
             out.put(b":");
             match self.gcode(line, out) {
                 Err(e) => put_error(out, e),
-                Ok(()) if self.job.is_none() => put_ok(out),
+                Ok(()) if self.job.is_none() && !self.tripped() => put_ok(out),
                 Ok(()) => {}
             }
         }
@@ -632,6 +643,14 @@ impl<'a, const N: usize> Controller<'a, N> {
             }
             None => (None, Rate::Rapid),
         };
+        // Soft limits: every target this line moves to, arc chord ends included (a chord
+        // between two points in the box stays in it).
+        let arc_out = arc.is_some_and(|mut seg| seg.any(|p| self.beyond_travel(&p)));
+        let home_out = fx.home.is_some_and(|t| self.beyond_travel(&t));
+        if arc_out || home_out || fx.motion.is_some_and(|(t, _)| self.beyond_travel(&t)) {
+            self.soft_limit_trip();
+            return Ok(());
+        }
         let mut store = false;
         if let Some((slot, v)) = fx.coord_write {
             offsets.stored.set(slot, &v);
