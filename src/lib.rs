@@ -20,6 +20,7 @@ pub mod grbl;
 pub mod motion;
 pub mod planning;
 pub mod steptime;
+pub mod watchdog;
 
 pub use grbl::{controller, coords, gcode, jog, limits, protocol, report, settings, spindle, store};
 pub use motion::{engine, interp, queue, ramp, sim, timing};

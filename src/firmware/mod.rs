@@ -1,7 +1,9 @@
 //! The RTIC application and its hardware glue (MCU only).
 
+mod boot;
 mod hw;
 mod panic;
+mod watchdog;
 
 use defmt_rtt as _;
 
@@ -20,7 +22,7 @@ mod app {
     use stm32f1xx_hal::pac;
     use stm32f1xx_hal::serial::{Rx, Tx};
 
-    use super::hw;
+    use super::{hw, watchdog};
 
     /// Axes the firmware drives: X Y Z A B C U.
     pub const AXES: usize = ddastep::MAX_AXES;
@@ -64,6 +66,8 @@ mod app {
         txq: Queue<u8, 512> = Queue::new(),
     ])]
     fn init(cx: init::Context) -> (SharedRes, Local) {
+        // (Step pins low and drivers off came first: `boot.rs`.)
+        let by_watchdog = watchdog::take_reset_cause();
         let mut core = cx.core;
         hw::start_cycle_counter(&mut core.DCB, &mut core.DWT);
         let board = hw::Board::setup(cx.device, core.SYST);
@@ -74,9 +78,15 @@ mod app {
         let (tx_in, tx_out) = cx.local.txq.split();
         let pins = board::pin_map::<AXES>(settings.step_invert, settings.dir_invert);
         let engine = Engine::new(&SHARED, mv_out, &PROFILE, pins);
-        let controller = Controller::new(Feeder::new(mv_in, &SHARED), &SHARED, &PROFILE, stored);
+        let mut controller = Controller::new(Feeder::new(mv_in, &SHARED), &SHARED, &PROFILE, stored);
+        // Drivers off at the level `$4` asks for (`boot.rs` assumed active low).
+        hw::set_enable(!settings.enable_invert);
+        if by_watchdog {
+            controller.watchdog_reset();
+        }
         defmt::info!("ddastep up: 72 MHz, {} axes", AXES);
         hw::start_step_timer();
+        watchdog::start();
         (
             SharedRes { tx: board.tx },
             Local {
@@ -162,6 +172,7 @@ mod app {
         let tx_in = cx.local.tx_in;
         let rx_out = cx.local.rx_out;
         ctl.welcome(tx_in);
+        let mut life = ddastep::watchdog::Liveness::new(MILLIS.load(Relaxed), STEP_TIME.entries());
         loop {
             if !POLL.swap(false, Relaxed) {
                 cortex_m::asm::wfi();
@@ -199,6 +210,10 @@ mod app {
                 hw::save_store(cx.local.flash, &ctl.image());
             }
             hw::heartbeat(now);
+            watchdog::stall_hook();
+            if life.alive(MILLIS.load(Relaxed), STEP_TIME.entries()) {
+                watchdog::feed();
+            }
             if tx_in.len() > 0 {
                 cx.shared.tx.lock(|tx| tx.listen());
             }

@@ -185,6 +185,8 @@ pub struct Controller<'a, const N: usize> {
     reset_after: bool,
     /// A soft-limit trip in progress (see `soft_limits.rs`).
     soft_limit: SoftLimit,
+    /// The MCU was reset by the watchdog: say so after the next banner.
+    watchdog_note: bool,
 }
 
 impl<'a, const N: usize> Controller<'a, N> {
@@ -239,6 +241,7 @@ impl<'a, const N: usize> Controller<'a, N> {
             pwm_hz: 0,
             reset_after: false,
             soft_limit: SoftLimit::Off,
+            watchdog_note: false,
         };
         c.startup_next = c.next_startup(0);
         c.apply_profile();
@@ -311,9 +314,21 @@ impl<'a, const N: usize> Controller<'a, N> {
     /// The start-up banner (also after a soft reset).
     pub fn welcome(&mut self, out: &mut impl Out) {
         out.put(report::BANNER);
+        if core::mem::take(&mut self.watchdog_note) {
+            out.put(report::WATCHDOG_RESET);
+        }
         if self.alarm {
             out.put(report::UNLOCK_HINT);
         }
+    }
+
+    /// The MCU came up from a watchdog reset (call before [`Self::welcome`]): the banner is
+    /// followed by `[MSG:Reset by watchdog]`, and the controller is in the alarm state (the
+    /// position is not known to be right; no startup lines run).
+    pub fn watchdog_reset(&mut self) {
+        self.watchdog_note = true;
+        self.alarm = true;
+        self.startup_next = STARTUP_LINES;
     }
 
     /// Takes one line byte; `false` when it cannot yet (a line is held, or fewer than

@@ -22,6 +22,8 @@ pub const UNLOCK_HINT: &[u8] = b"[MSG:'$H'|'$X' to unlock]\r\n";
 pub const UNLOCKED: &[u8] = b"[MSG:Caution: Unlocked]\r\n";
 /// Soft reset during motion (Grbl's ALARM:3, "Reset while in motion").
 pub const ALARM_RESET: &[u8] = b"ALARM:3\r\n";
+/// Boot after an independent-watchdog reset (the controller starts in the alarm state).
+pub const WATCHDOG_RESET: &[u8] = b"[MSG:Reset by watchdog]\r\n";
 /// A G-code target outside the travel box (Grbl's ALARM:2, "Soft limit"), then Grbl's
 /// critical-event message: nothing is read until Ctrl-X.
 pub const ALARM_SOFT_LIMIT: &[u8] = b"ALARM:2\r\n[MSG:Reset to continue]\r\n";

@@ -57,6 +57,8 @@ pub struct Board {
     split: Option<usize>,
     inputs: Vec<InputFlip>,
     fault: Option<String>,
+    /// Cycles of the resets by the independent watchdog so far.
+    watchdogs: Vec<u64>,
 }
 
 impl Board {
@@ -80,6 +82,7 @@ impl Board {
             split: None,
             inputs: Vec::new(),
             fault: None,
+            watchdogs: Vec::new(),
         })
     }
 
@@ -367,6 +370,10 @@ impl Board {
             self.set_input(f.port, f.pin, f.level);
         }
         self.cpu.get_data_mut().sync(now);
+        if self.cpu.get_data().reset_due {
+            self.watchdog_reset();
+            return Ok(());
+        }
         let basepri = self.reg(RegisterARM::BASEPRI);
         let primask = self.reg(RegisterARM::PRIMASK) != 0;
         let next_input = self.inputs.last().map_or(u64::MAX, |f| f.cycle);
@@ -499,6 +506,37 @@ impl Board {
         }
         exception::unstack(&mut self.cpu, exc_return);
         self.cpu.get_data_mut().now += return_cycles;
+    }
+
+    // the IWDG expired: peripherals to reset (RCC_CSR.IWDGRSTF set), the core restarts at the
+    // reset vector with the initial SP; RAM keeps its contents (the firmware's startup code
+    // zeroes .bss and copies .data, as after any reset)
+    fn watchdog_reset(&mut self) {
+        self.cpu.get_data_mut().system_reset(super::iwdg::CSR_IWDGRSTF);
+        self.watchdogs.push(self.cycles());
+        let regs = [
+            (RegisterARM::PRIMASK, 0),
+            (RegisterARM::BASEPRI, 0),
+            (RegisterARM::CONTROL, 0),
+            (RegisterARM::MSP, self.image.initial_sp as u64),
+            (RegisterARM::SP, self.image.initial_sp as u64),
+            (RegisterARM::APSR_NZCVQ, 0),
+            (RegisterARM::EPSR, 1 << 24),
+            (RegisterARM::LR, 0xFFFF_FFFF),
+            (RegisterARM::PC, (self.image.reset & !1) as u64),
+        ];
+        for (r, v) in regs {
+            let _ = self.cpu.reg_write(r, v);
+        }
+        self.sleeping = false;
+        self.sleep_on_exit = None;
+        self.split = None;
+        self.stats.isr = None;
+    }
+
+    // modeled cycles at which the independent watchdog reset the MCU
+    pub fn watchdog_resets(&self) -> &[u64] {
+        &self.watchdogs
     }
 
     // charge an exception return of exception `n` to the profile (the clock is charged apart)

@@ -13,6 +13,7 @@ use std::collections::{BTreeMap, HashMap, HashSet};
 
 use super::cost::{Block, BlockCache};
 use super::gpio::{PinEdge, Port};
+use super::iwdg::{self, Iwdg};
 use super::memory::{apb_divider, bridge_cycles, bus_of, Bus, FlashConfig};
 use super::nvic::{Nvic, IRQ0};
 use super::profile::Histogram;
@@ -31,6 +32,8 @@ const TIM1: u32 = 0x4001_2C00;
 const USART1: u32 = 0x4001_3800;
 const GPIOA: u32 = 0x4001_0800;
 const RCC: u32 = 0x4002_1000;
+const IWDG: u32 = 0x4000_3000;
+const RCC_CSR: u32 = 0x4002_1024;
 const FLASH_IF: u32 = 0x4002_2000;
 const RCC_CFGR: u32 = 0x4002_1004;
 const SCS: u32 = 0xE000_E000;
@@ -126,6 +129,9 @@ pub struct Machine {
     pub bridge_free: u64,
     /// FLASH_ACR was written: blocks are re-costed for this from the next block on.
     pub flash_pending: Option<FlashConfig>,
+    /// Independent watchdog; `reset_due` is set when it expires (the board resets the MCU).
+    pub iwdg: Iwdg,
+    pub reset_due: bool,
 }
 
 impl Machine {
@@ -134,6 +140,7 @@ impl Machine {
         let mut regs = HashMap::new();
         regs.insert(RCC, 0x0000_0083);
         regs.insert(FLASH_IF, 0x30);
+        regs.insert(RCC_CSR, iwdg::CSR_PORRSTF | iwdg::CSR_PINRSTF);
         Self {
             now: 0,
             insns: 0,
@@ -163,7 +170,39 @@ impl Machine {
             stall: 0,
             bridge_free: 0,
             flash_pending: None,
+            iwdg: Iwdg::default(),
+            reset_due: false,
         }
+    }
+
+    // a system reset (watchdog): peripherals, NVIC and clocks to their reset state, RCC_CSR
+    // flags `csr` added; time, traces, the serial transcript and external inputs are kept
+    pub fn system_reset(&mut self, csr: u32) {
+        let mut fresh = Machine::new();
+        std::mem::swap(self, &mut fresh);
+        let old = fresh;
+        self.now = old.now;
+        self.insns = old.insns;
+        self.blocks = old.blocks;
+        self.flash_pending = Some(FlashConfig::RESET);
+        self.edges = old.edges;
+        self.record_edges = old.record_edges;
+        self.unmodeled = old.unmodeled;
+        self.logged = old.logged;
+        self.profile = old.profile;
+        self.bridge_free = old.now;
+        self.tim1.changes = old.tim1.changes;
+        let u = old.usart1;
+        self.usart1.transcript = u.transcript;
+        self.usart1.tx_times = u.tx_times;
+        self.usart1.rx_queue = u.rx_queue;
+        self.usart1.rx_overruns = u.rx_overruns;
+        for (p, o) in self.ports.iter_mut().zip(&old.ports) {
+            p.ext_level = o.ext_level;
+            p.ext_driven = o.ext_driven;
+        }
+        let flags = old.regs.get(&RCC_CSR).copied().unwrap_or(0) & 0xFE00_0000;
+        self.regs.insert(RCC_CSR, flags | csr);
     }
 
     // the block being executed
@@ -229,6 +268,9 @@ impl Machine {
         if wraps > 0 {
             self.nvic.pending[super::nvic::SYSTICK as usize] = true;
         }
+        if self.iwdg.expires_at(super::board::HZ).is_some_and(|e| e <= t) {
+            self.reset_due = true;
+        }
         self.nvic.level[(IRQ0 + TIM2_IRQ) as usize] = self.tim2.irq();
         self.nvic.level[(IRQ0 + USART1_IRQ) as usize] = self.usart1.irq();
         self.pending = self.nvic.any_pending();
@@ -236,7 +278,7 @@ impl Machine {
 
     // the next cycle at which a peripheral changes state
     pub fn next_event(&self) -> u64 {
-        [self.tim2.next_event(), self.usart1.next_event(), self.systick.next_event()]
+        [self.tim2.next_event(), self.usart1.next_event(), self.systick.next_event(), self.iwdg.expires_at(super::board::HZ)]
             .into_iter()
             .flatten()
             .min()
@@ -261,6 +303,7 @@ impl Machine {
             TIM2..=0x4000_03FF => self.tim2.read(word - TIM2, t),
             TIM1..=0x4001_2FFF => self.tim1.read(word - TIM1),
             USART1..=0x4001_3BFF => self.usart1.read(word - USART1, t),
+            IWDG..=0x4000_33FF => self.iwdg.read(word - IWDG),
             GPIOA..=0x4001_1BFF => {
                 let p = ((word - GPIOA) / 0x400) as usize;
                 self.ports[p].read((word - GPIOA) % 0x400)
@@ -302,6 +345,7 @@ impl Machine {
                 self.tim1.write(word - TIM1, merged, t)
             }
             USART1..=0x4001_3BFF => self.usart1.write(word - USART1, v, t),
+            IWDG..=0x4000_33FF => self.iwdg.write(word - IWDG, v, t),
             GPIOA..=0x4001_1BFF => self.gpio_write(word, v, mask, lands),
             0xE000_E010..=0xE000_E01F => self.systick.write(word - 0xE000_E010, v, t),
             DWT_CTRL => {
@@ -360,6 +404,7 @@ impl Machine {
             }
             0x4002_1004 => (v & !0xC) | (v & 3) << 2, // CFGR.SWS = SW
             0x4002_200C => 0,                          // FLASH_SR: never busy
+            RCC_CSR => v | (v & 1) << 1,               // LSIRDY = LSION
             FLASH_IF => (v & !0x20) | (v & 0x10) << 1, // ACR.PRFTBS = PRFTBE
             _ => {
                 self.log_unmodeled(word);
@@ -371,6 +416,10 @@ impl Machine {
     fn plain_write(&mut self, word: u32, v: u32, mask: u32) {
         let old = self.regs.get(&word).copied().unwrap_or(0);
         self.regs.insert(word, (old & !mask) | v);
+        if word == RCC_CSR && v & iwdg::CSR_RMVF != 0 {
+            // RMVF clears every reset flag (and reads back 0).
+            self.regs.insert(word, old & !mask & 0x00FF_FFFF | v & 0x00FF_FFFF & !iwdg::CSR_RMVF);
+        }
         if word == FLASH_IF {
             self.flash_pending = Some(FlashConfig::from_acr((old & !mask) | v));
         }

@@ -22,6 +22,7 @@ mod exception;
 pub mod figures;
 mod firmware;
 mod gpio;
+pub mod iwdg;
 pub mod memory;
 pub mod nvic;
 pub mod profile;
