@@ -125,6 +125,12 @@ pub fn set_spindle(o: SpindleOut) {
     gpioa.bsrr().write(|w| unsafe { w.bits(word) });
 }
 
+/// GPIOA's input register (the limit inputs).
+pub fn gpioa_idr() -> u32 {
+    // SAFETY: a read of the input data register, no side effects.
+    unsafe { &*pac::GPIOA::ptr() }.idr().read().bits()
+}
+
 /// PC13 LED (active low): on for 100 ms of every second.
 pub fn heartbeat(now_ms: u32) {
     let on = now_ms % 1000 < 100;

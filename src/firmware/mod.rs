@@ -197,6 +197,7 @@ mod app {
                 rx_out.dequeue();
             }
             ctl.set_rx_free(rx_out.capacity() - rx_out.len());
+            ctl.set_limit_inputs(hw::gpioa_idr());
             let act = ctl.poll(now, tx_in);
             hw::set_enable(act.enable_pin_high);
             if let Some(ticks) = act.pulse_ticks {

@@ -187,6 +187,8 @@ pub struct Controller<'a, const N: usize> {
     soft_limit: SoftLimit,
     /// The MCU was reset by the watchdog: say so after the next banner.
     watchdog_note: bool,
+    /// Limit pins active (bit i = axis i), for `Pn:`.
+    limit_pins: u8,
 }
 
 impl<'a, const N: usize> Controller<'a, N> {
@@ -242,6 +244,7 @@ impl<'a, const N: usize> Controller<'a, N> {
             reset_after: false,
             soft_limit: SoftLimit::Off,
             watchdog_note: false,
+            limit_pins: 0,
         };
         c.startup_next = c.next_startup(0);
         c.apply_profile();
@@ -309,6 +312,12 @@ impl<'a, const N: usize> Controller<'a, N> {
     /// RX buffer size).
     pub fn set_rx_free(&mut self, n: usize) {
         self.rx_free = n.min(RX_BUFFER_LEN) as u32;
+    }
+
+    /// The limit inputs as the shell read them (GPIOA's input register), for `Pn:` in status
+    /// reports; `$5` applies here.
+    pub fn set_limit_inputs(&mut self, gpioa_idr: u32) {
+        self.limit_pins = crate::limits::active_pins(gpioa_idr, self.settings.limit_invert);
     }
 
     /// The start-up banner (also after a soft reset).

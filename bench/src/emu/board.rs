@@ -247,6 +247,22 @@ impl Board {
         }
     }
 
+    // wire a machine model to the pins (replaces any previous one); its power-on input levels
+    // apply at once
+    pub fn attach_plant(&mut self, mut plant: Box<dyn super::plant::Plant>) {
+        let mut flips = Vec::new();
+        plant.initial(&mut flips);
+        for f in flips {
+            self.schedule_input(f);
+        }
+        self.cpu.get_data_mut().plant = Some(plant);
+    }
+
+    // the machine model wired to the pins
+    pub fn plant(&self) -> Option<&dyn super::plant::Plant> {
+        self.cpu.get_data().plant.as_deref()
+    }
+
     // schedule an input change at a modeled cycle
     pub fn schedule_input(&mut self, flip: InputFlip) {
         self.inputs.push(flip);
@@ -365,6 +381,11 @@ impl Board {
             bail!("CPU stopped: {f}");
         }
         let now = self.cycles();
+        if !self.cpu.get_data().plant_flips.is_empty() {
+            let flips = std::mem::take(&mut self.cpu.get_data_mut().plant_flips);
+            self.inputs.extend(flips);
+            self.inputs.sort_by_key(|f| std::cmp::Reverse(f.cycle));
+        }
         while self.inputs.last().is_some_and(|f| f.cycle <= now) {
             let f = self.inputs.pop().unwrap();
             self.set_input(f.port, f.pin, f.level);

@@ -132,6 +132,9 @@ pub struct Machine {
     /// Independent watchdog; `reset_due` is set when it expires (the board resets the MCU).
     pub iwdg: Iwdg,
     pub reset_due: bool,
+    /// The machine wired to the pins, and the input changes it scheduled (board applies them).
+    pub plant: Option<Box<dyn super::plant::Plant>>,
+    pub plant_flips: Vec<super::board::InputFlip>,
 }
 
 impl Machine {
@@ -172,6 +175,8 @@ impl Machine {
             flash_pending: None,
             iwdg: Iwdg::default(),
             reset_due: false,
+            plant: None,
+            plant_flips: Vec::new(),
         }
     }
 
@@ -192,6 +197,8 @@ impl Machine {
         self.profile = old.profile;
         self.bridge_free = old.now;
         self.tim1.changes = old.tim1.changes;
+        self.plant = old.plant;
+        self.plant_flips = old.plant_flips;
         let u = old.usart1;
         self.usart1.transcript = u.transcript;
         self.usart1.tx_times = u.tx_times;
@@ -383,6 +390,13 @@ impl Machine {
                 self.first_bsrr = Some(t);
             }
             let changed = old ^ new;
+            if let (Some(plant), true) = (&mut self.plant, changed != 0) {
+                plant.outputs(t, p as u8, old, new, &mut self.plant_flips);
+                // Stop the CPU in time for the earliest input change.
+                if let Some(first) = self.plant_flips.iter().map(|f| f.cycle).min() {
+                    self.deadline = self.deadline.min(first);
+                }
+            }
             if self.record_edges && changed != 0 {
                 for pin in 0..16 {
                     if changed & 1 << pin != 0 {

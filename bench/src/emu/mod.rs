@@ -24,6 +24,7 @@ mod firmware;
 mod gpio;
 pub mod iwdg;
 pub mod memory;
+pub mod plant;
 pub mod nvic;
 pub mod profile;
 pub mod pwm;

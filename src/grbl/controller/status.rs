@@ -86,6 +86,7 @@ impl<const N: usize> Controller<'_, N> {
                 mpos: mpos_only,
                 bf: (self.settings.status_mask & 2 != 0).then_some((blocks, self.rx_free)),
                 feed: rate * per_step * 60.0,
+                pins: self.limit_pins,
                 wco: show_wco.then_some(&wco[..n]),
                 ov: show_ov.then_some(ov),
             },
