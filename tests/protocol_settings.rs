@@ -81,17 +81,17 @@ fn profile_uses_the_slowest_accel_and_the_fastest_axis() {
 #[test]
 fn short_pulses_raise_the_rate_limit() {
     let mut s = Settings::BENCH;
-    // Period floor: 2 × pulse + the store latency, and the step handler's cost (220 ticks +
-    // 15 per slave axis) with a pulse's low time after its end.
+    // Period floor: 2 × pulse + the store latency, and the step handler's cost (290 ticks +
+    // 18 per slave axis) with a pulse's low time after its end (150 + 18 per slave).
     s.set(0, 2.0, 3).unwrap();
     let pulse_limit = 72_000_000 / (2 * 144 + ddastep::timing::STORE_LATENCY_TICKS);
     assert_eq!(s.timing().max_rate_hz(), pulse_limit);
     assert_eq!(s.timing().max_rate_for(2), pulse_limit);
-    assert_eq!(s.timing().max_rate_for(6), 72_000_000 / (130 + 90 + 144));
+    assert_eq!(s.timing().max_rate_for(6), 72_000_000 / (150 + 108 + 144));
     s.set(0, 1.0, 3).unwrap();
-    assert_eq!(s.timing().max_rate_hz(), 327_272);
-    assert_eq!(s.timing().max_rate_for(6), 232_258);
+    assert_eq!(s.timing().max_rate_hz(), 248_275);
+    assert_eq!(s.timing().max_rate_for(6), 72_000_000 / (290 + 108));
     s.set(0, 0.5, 3).unwrap();
-    assert_eq!(s.timing().max_rate_hz(), 327_272);
+    assert_eq!(s.timing().max_rate_hz(), 248_275);
     assert!(s.set(0, 0.1, 3).is_err());
 }

@@ -164,3 +164,21 @@ fn laser_s_changes_do_not_stop_motion_and_g0_is_dark() {
     b.shared.set_hold(false);
     b.run_to_idle(10_000);
 }
+
+#[test]
+fn status_reports_spindle_speed_and_accessories() {
+    let mut b = Bench::<3>::with_defaults();
+    assert!(b.status().contains("|FS:0,0"));
+    b.line("M4 S500 M8");
+    let st = b.status();
+    assert!(st.contains("|FS:0,500"), "{st}");
+    // `A:` rides with `Ov:` (Grbl's refresh rule): within ten reports.
+    let reports: Vec<String> = (0..10).map(|_| b.status()).collect();
+    assert!(reports.iter().any(|r| r.contains("|Ov:100,100,100|A:CF>")), "{reports:?}");
+    // Above $30 the report shows $30, as Grbl's clamped speed.
+    b.line("S5000");
+    assert!(b.status().contains("|FS:0,1000"));
+    b.line("M5 M9");
+    let reports: Vec<String> = (0..10).map(|_| b.status()).collect();
+    assert!(reports.iter().all(|r| r.contains("|FS:0,0") && !r.contains("|A:")), "{reports:?}");
+}

@@ -171,6 +171,9 @@ mod app {
         let ctl = cx.local.controller;
         let tx_in = cx.local.tx_in;
         let rx_out = cx.local.rx_out;
+        // Spindle outputs last written: peripheral stores only on a change (each APB store can
+        // stall the step interrupt's first register access).
+        let mut spindle = ddastep::spindle::SpindleOut::default();
         ctl.welcome(tx_in);
         let mut life = ddastep::watchdog::Liveness::new(MILLIS.load(Relaxed), STEP_TIME.entries());
         loop {
@@ -206,7 +209,10 @@ mod app {
             if let Some(t) = act.pwm {
                 hw::set_pwm_timing(t);
             }
-            hw::set_spindle(act.spindle);
+            if act.spindle != spindle {
+                spindle = act.spindle;
+                hw::set_spindle(spindle);
+            }
             if act.save || act.restart {
                 hw::save_store(cx.local.flash, &ctl.image());
             }

@@ -698,7 +698,8 @@ impl<'a, const N: usize> Controller<'a, N> {
         if self.check {
             if let Some(a) = fx.arc {
                 // Check mode: only the position follows the arc.
-                self.planner.line(a.target(), None, &self.limits)?;
+                // (Infallible after `check_range`: nothing may fail once committed.)
+                let _ = self.planner.line(a.target(), None, &self.limits);
             }
             if fx.stop == Some(Stop::End) {
                 out.put(report::PROGRAM_END);

@@ -38,9 +38,9 @@ pub const CHECK_OFF: &[u8] = b"[MSG:Disabled]\r\n";
 /// `$SLP`.
 pub const SLEEPING: &[u8] = b"[MSG:Sleeping]\r\n";
 /// Longest status report for `n` axes: `<Hold:1|WPos:` + 13 per axis + `|Bf:15,128` +
-/// `|FS:1000000,0` + `|Pn:XYZ` + `|WCO:` + 13 per axis + `|Ov:100,100,100>\r\n`.
+/// `|FS:1000000,1000000` + `|Pn:XYZ` + `|WCO:` + 13 per axis + `|Ov:100,100,100|A:SFM>\r\n`.
 pub const fn status_len(n: usize) -> usize {
-    71 + 26 * n
+    83 + 26 * n
 }
 /// Longest `$#` line for `n` axes.
 pub const fn param_len(n: usize) -> usize {
@@ -61,6 +61,10 @@ pub struct Status<'a> {
     pub bf: Option<(u32, u32)>,
     /// Current feed, mm/min.
     pub feed: f64,
+    /// Spindle speed in force (0 when off; at most `$30`).
+    pub speed: f64,
+    /// `A:` accessories, shown with `Ov:`: spindle CW (`S`) or CCW (`C`), flood (`F`), mist (`M`).
+    pub acc: &'a [u8],
     /// `Pn:` input pins active (bit i = axis i's limit), shown when not 0.
     pub pins: u8,
     /// `WCO:` when due.
@@ -69,7 +73,7 @@ pub struct Status<'a> {
     pub ov: Option<Overrides>,
 }
 
-/// `<State|MPos:x,y,z|Bf:15,128|FS:feed,0|Pn:XZ|WCO:x,y,z|Ov:100,100,100>`.
+/// `<State|MPos:x,y,z|Bf:15,128|FS:feed,speed|Pn:XZ|WCO:x,y,z|Ov:100,100,100|A:SF>`.
 pub fn status(out: &mut impl Out, s: &Status) {
     out.put(b"<");
     out.put(s.state);
@@ -83,7 +87,8 @@ pub fn status(out: &mut impl Out, s: &Status) {
     }
     out.put(b"|FS:");
     put_fixed(out, s.feed, 0);
-    out.put(b",0");
+    out.put(b",");
+    put_fixed(out, s.speed, 0);
     if s.pins != 0 {
         out.put(b"|Pn:");
         for (i, &letter) in b"XYZ".iter().enumerate() {
@@ -103,6 +108,10 @@ pub fn status(out: &mut impl Out, s: &Status) {
         put_u32(out, o.rapid as u32);
         out.put(b",");
         put_u32(out, o.spindle as u32);
+        if !s.acc.is_empty() {
+            out.put(b"|A:");
+            out.put(s.acc);
+        }
     }
     out.put(b">\r\n");
 }
@@ -259,7 +268,7 @@ mod tests {
 
     #[test]
     fn formats_match_grbl() {
-        let st = Status { state: b"Idle", pos: &[0.0; 3], mpos: true, bf: None, feed: 0.0, pins: 0, wco: None, ov: None };
+        let st = Status { state: b"Idle", pos: &[0.0; 3], mpos: true, bf: None, feed: 0.0, speed: 0.0, acc: b"", pins: 0, wco: None, ov: None };
         assert_eq!(text(|o| status(o, &st)), "<Idle|MPos:0.000,0.000,0.000|FS:0,0>\r\n");
         let st = Status { state: b"Run", pos: &[-1.2345, 0.0005, 12.0], feed: 2999.6, ..st };
         assert_eq!(text(|o| status(o, &st)), "<Run|MPos:-1.235,0.001,12.000|FS:3000,0>\r\n");
@@ -303,7 +312,18 @@ mod tests {
     fn worst_case_lines_fit_their_budgets() {
         let far = [-1_000_000.0; 7];
         let ov = Some(Overrides { feed: 200, rapid: 100, spindle: 200 });
-        let st = Status { state: b"Hold:1", pos: &far, mpos: false, bf: Some((16, 128)), feed: 999_999.0, pins: 7, wco: Some(&far), ov };
+        let st = Status {
+            state: b"Hold:1",
+            pos: &far,
+            mpos: false,
+            bf: Some((16, 128)),
+            feed: 999_999.0,
+            speed: 1e6,
+            acc: b"SFM",
+            pins: 7,
+            wco: Some(&far),
+            ov,
+        };
         assert!(text(|o| status(o, &st)).len() <= status_len(7));
         let mut off = Offsets::<7>::default();
         off.g92 = far;

@@ -94,16 +94,18 @@ impl Timing {
     }
 }
 
-/// Step-handler cost per master step, timer ticks: the virtual bench measures ≈ 190 + 14.4 per
-/// slave modeled cycles (bench/RESULTS.md, firmware 9e80f71), and the CPU stays ≤ 95 % busy
-/// up to 331 kHz with one axis and 235 kHz with seven; these keep every move inside that.
-pub const HANDLER_BASE_TICKS: u32 = 220;
+/// Step-handler cost per master step, timer ticks: the virtual bench measures ≈ 250 + 16.9 per
+/// slave modeled cycles with its silicon-checked memory model (bench/RESULTS.md: flash
+/// refills, APB bridge stalls, the DWT self-measurement), and the CPU stays ≤ 95 % busy up to
+/// 248 kHz with one axis, 224 kHz with three and 191 kHz with six; these keep every move
+/// inside that.
+pub const HANDLER_BASE_TICKS: u32 = 290;
 /// Extra handler ticks per slave axis (see [`HANDLER_BASE_TICKS`]).
-pub const HANDLER_PER_SLAVE_TICKS: u32 = 15;
+pub const HANDLER_PER_SLAVE_TICKS: u32 = 18;
 /// Where a short pulse's falling edge lands after its rising edge when the compare event is
-/// already pending at the end of the update handler (measured high time ≈ 122 + 12 per slave
+/// already pending at the end of the update handler (measured high time ≈ 142 + 12 per slave
 /// modeled cycles), rounded up.
-pub const HANDLER_FALL_TICKS: u32 = 130;
+pub const HANDLER_FALL_TICKS: u32 = 150;
 
 /// Timer ticks from an update event to the step handler's BSRR store: 57..71 modeled cycles
 /// on the virtual bench with its silicon-checked memory model (bench/golden/paper_532.json,

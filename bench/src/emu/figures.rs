@@ -34,6 +34,7 @@ pub fn readme_rows(s: &Sweep, flash_bytes: u64, ram_bytes: u64) -> Vec<(String, 
     if let Some(r7) = row(7) {
         let load = |hz: u32| match r7.at(hz) {
             Some(p) if matches!(p.isr_verdict, Verdict::Ok | Verdict::Load(_)) => format!("{:.0} %", p.load_max * 100.0),
+            Some(p) if p.windows > 0 => format!("{:.0} % (not sustained: {})", p.load_max * 100.0, super::sweep::verdict_text(&p.verdict)),
             _ => "not sustained".into(),
         };
         push("modeled CPU load at 50 / 200 kHz, 7 axes", format!("{} / {}", load(50_000), load(200_000)), "same");

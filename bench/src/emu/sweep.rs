@@ -694,7 +694,8 @@ const NOTES: &str = "\
   falling edge comes at the compare event (`$0` + 72 ticks, `STORE_LATENCY_TICKS`, after the
   update) or at the end of the update handler, whichever is later: with the sweep's short pulse
   it is the handler's end (the X high times in the point list); with a pulse longer
-  than the handler an offset above 48 ticks makes the high time shorter than `$0`.
+  than the handler the high time is `$0` + 48 ticks + the falling store's latency − the rising
+  store's, at least `$0` while the BSRR offsets spread by less than 48 ticks.
 - Peripheral bridge stalls are modeled (TIM2 reads on APB1 5 cycles, GPIO on APB2 3, writes
   buffered); the APB2 figure is fitted to a silicon measurement, the APB1 one extrapolated.
 - The step interrupt includes its own DWT self-measurement (about 25 cycles per entry; `$I`).

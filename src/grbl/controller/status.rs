@@ -78,6 +78,7 @@ impl<const N: usize> Controller<'_, N> {
         let rate = self.shared.rate_hz() as f64;
         let per_step = self.feed_ring[self.shared.moves_done() as usize % FEED_RING] as f64;
         let blocks = (self.feeder.capacity() as u32).saturating_sub(self.feeder.pending());
+        let (speed, acc, n_acc) = self.accessories();
         report::status(
             out,
             &Status {
@@ -86,6 +87,8 @@ impl<const N: usize> Controller<'_, N> {
                 mpos: mpos_only,
                 bf: (self.settings.status_mask & 2 != 0).then_some((blocks, self.rx_free)),
                 feed: rate * per_step * 60.0,
+                speed,
+                acc: &acc[..n_acc],
                 pins: self.limit_pins,
                 wco: show_wco.then_some(&wco[..n]),
                 ov: show_ov.then_some(ov),

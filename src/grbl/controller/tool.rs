@@ -36,10 +36,42 @@ impl<const N: usize> Controller<'_, N> {
         (stage, power)
     }
 
+    /// For status reports: the spindle speed in force (S with the override, within `$31..=$30`
+    /// as Grbl reports it; 0 when off) and the `A:` letters (S/C spindle, F flood, M mist).
+    pub(super) fn accessories(&self) -> (f64, [u8; 3], usize) {
+        let (dir, speed, coolant) = self.tool;
+        let mut acc = [0u8; 3];
+        let mut n = 0;
+        let mut push = |c: u8| {
+            acc[n] = c;
+            n += 1;
+        };
+        let speed = match dir {
+            SpindleDir::Off => 0.0,
+            _ => {
+                push(if dir == SpindleDir::Cw { b'S' } else { b'C' });
+                let s = &self.settings;
+                let v = speed * self.shared.overrides().spindle as f64 / 100.0;
+                if v > 0.0 { v.max(s.spindle_min as f64).min(s.spindle_max as f64) } else { 0.0 }
+            }
+        };
+        if coolant & FLOOD != 0 {
+            push(b'F');
+        }
+        if coolant & MIST != 0 {
+            push(b'M');
+        }
+        (speed, acc, n)
+    }
+
     /// The spindle PWM and pins now (spindle override applied).
     pub(super) fn spindle_out(&self) -> SpindleOut {
         let s = &self.settings;
         let (dir, speed, coolant) = self.tool;
+        if dir == SpindleDir::Off {
+            // Nothing to compute (the common case, once per poll).
+            return SpindleOut { mist: coolant & MIST != 0, flood: coolant & FLOOD != 0, ..SpindleOut::default() };
+        }
         let state = self.shared.state();
         let speed = if !s.laser_mode {
             speed
@@ -54,12 +86,11 @@ impl<const N: usize> Controller<'_, N> {
         } else {
             0.0
         };
-        let speed = if dir == SpindleDir::Off { 0.0 } else { speed };
         let ov = self.shared.overrides().spindle as f64 / 100.0;
         let arr = crate::spindle::PwmTiming::new(s.spindle_pwm_hz).arr;
         SpindleOut {
             ccr: duty(speed * ov, s.spindle_min as f64, s.spindle_max as f64, arr),
-            enable: dir != SpindleDir::Off,
+            enable: true,
             ccw: dir == SpindleDir::Ccw,
             mist: coolant & MIST != 0,
             flood: coolant & FLOOD != 0,
