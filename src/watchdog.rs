@@ -29,9 +29,10 @@ impl Liveness {
     }
 
     /// True (feed now) when both the millisecond clock and the step interrupt's entry count
-    /// moved since the last time this returned true.
-    pub fn alive(&mut self, millis: u32, step_entries: u32) -> bool {
-        let ok = millis != self.millis && step_entries != self.step_entries;
+    /// moved since the last time this returned true. `halted`: a hard limit stopped the step
+    /// timer on purpose, so only the clock counts.
+    pub fn alive(&mut self, millis: u32, step_entries: u32, halted: bool) -> bool {
+        let ok = millis != self.millis && (halted || step_entries != self.step_entries);
         if ok {
             *self = Liveness { millis, step_entries };
         }
@@ -46,12 +47,14 @@ mod tests {
     #[test]
     fn feeds_only_when_both_moved() {
         let mut l = Liveness::new(10, 100);
-        assert!(!l.alive(10, 100));
-        assert!(!l.alive(11, 100), "step interrupt dead");
-        assert!(!l.alive(10, 105), "clock dead");
-        assert!(l.alive(11, 101));
-        assert!(!l.alive(11, 140), "the clock has not moved since the feed");
-        assert!(l.alive(12, 140));
+        assert!(!l.alive(10, 100, false));
+        assert!(!l.alive(11, 100, false), "step interrupt dead");
+        assert!(!l.alive(10, 105, false), "clock dead");
+        assert!(l.alive(11, 101, false));
+        assert!(!l.alive(11, 140, false), "the clock has not moved since the feed");
+        assert!(l.alive(12, 140, false));
+        assert!(l.alive(13, 140, true), "step timer halted by a hard limit");
+        assert!(!l.alive(13, 140, true));
         assert_eq!(TIMEOUT_MS, 250);
     }
 }

@@ -131,7 +131,7 @@ proptest! {
     fn settings_round_trip_through_flash(
         pulse in 1.0f32..100.0,
         dir in 0.0f32..1000.0,
-        idle: u8, step_inv: u8, dir_inv: u8, flags in 0u8..32, scurve: bool,
+        idle: u8, step_inv: u8, dir_inv: u8, flags in 0u8..64, scurve: bool,
         start in 1u32..=1_000_000,
         arc_tol in 1e-4f32..1000.0,
         spindle in (0.0f32..1e6, 0.0f32..1e6, any::<bool>(), 1u32..=100_000),
@@ -150,6 +150,7 @@ proptest! {
             // `$20` only with `$22` (else the image is not a valid one).
             soft_limits: flags & 24 == 24,
             homing: flags & 16 != 0,
+            hard_limits: flags & 32 != 0,
             arc_tolerance: arc_tol,
             spindle_max: spindle.0,
             spindle_min: spindle.1,

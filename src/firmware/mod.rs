@@ -2,6 +2,7 @@
 
 mod boot;
 mod hw;
+mod limits;
 mod panic;
 mod watchdog;
 
@@ -22,7 +23,7 @@ mod app {
     use stm32f1xx_hal::pac;
     use stm32f1xx_hal::serial::{Rx, Tx};
 
-    use super::{hw, watchdog};
+    use super::{hw, limits, watchdog};
 
     /// Axes the firmware drives: X Y Z A B C U.
     pub const AXES: usize = ddastep::MAX_AXES;
@@ -84,6 +85,10 @@ mod app {
         if by_watchdog {
             controller.watchdog_reset();
         }
+        if limits::take_lost_marker() {
+            controller.position_lost();
+        }
+        limits::setup();
         defmt::info!("ddastep up: 72 MHz, {} axes", AXES);
         hw::start_step_timer();
         watchdog::start();
@@ -121,6 +126,22 @@ mod app {
             hw::tim2().sr().write(|w| unsafe { w.bits(!hw::SR_CC1IF) });
         }
         STEP_TIME.record(hw::cycles().wrapping_sub(t0));
+    }
+
+    /// Limit inputs X, Y, Z (hard limits, `$21`): at the step interrupt's priority.
+    #[task(binds = EXTI0, priority = 3)]
+    fn limit_x(_: limit_x::Context) {
+        limits::on_edge();
+    }
+
+    #[task(binds = EXTI1, priority = 3)]
+    fn limit_y(_: limit_y::Context) {
+        limits::on_edge();
+    }
+
+    #[task(binds = EXTI2, priority = 3)]
+    fn limit_z(_: limit_z::Context) {
+        limits::on_edge();
     }
 
     /// USART1: realtime bytes act at once, line bytes go to the RX ring, the TX ring drains.
@@ -182,6 +203,13 @@ mod app {
                 continue;
             }
             let now = MILLIS.load(Relaxed);
+            let halted = limits::HALTED.load(Relaxed);
+            if halted && RESET_REQ.load(Relaxed) {
+                limits::restart_lost();
+            }
+            if halted && !ctl.tripped() {
+                ctl.hard_limit(tx_in);
+            }
             if RESET_REQ.swap(false, Relaxed) {
                 // Bytes before the Ctrl-X belong to the old stream.
                 while rx_out.dequeue().is_some() {}
@@ -200,7 +228,10 @@ mod app {
                 rx_out.dequeue();
             }
             ctl.set_rx_free(rx_out.capacity() - rx_out.len());
-            ctl.set_limit_inputs(hw::gpioa_idr());
+            let idr = hw::gpioa_idr();
+            ctl.set_limit_inputs(idr);
+            let invert = ctl.settings().limit_invert;
+            limits::arm(ctl.settings().hard_limits, invert, ddastep::limits::active_pins(idr, invert));
             let act = ctl.poll(now, tx_in);
             hw::set_enable(act.enable_pin_high);
             if let Some(ticks) = act.pulse_ticks {
@@ -218,7 +249,7 @@ mod app {
             }
             hw::heartbeat(now);
             watchdog::stall_hook();
-            if life.alive(MILLIS.load(Relaxed), STEP_TIME.entries()) {
+            if life.alive(MILLIS.load(Relaxed), STEP_TIME.entries(), halted) {
                 watchdog::feed();
             }
             if tx_in.len() > 0 {

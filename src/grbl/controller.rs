@@ -336,6 +336,13 @@ impl<'a, const N: usize> Controller<'a, N> {
     /// position is not known to be right; no startup lines run).
     pub fn watchdog_reset(&mut self) {
         self.watchdog_note = true;
+        self.position_lost();
+    }
+
+    /// The position is not known to be right (a hard limit stopped the steps mid-move, or the
+    /// watchdog reset the MCU): the alarm state, and no startup lines (call before
+    /// [`Self::welcome`]).
+    pub fn position_lost(&mut self) {
         self.alarm = true;
         self.startup_next = STARTUP_LINES;
     }

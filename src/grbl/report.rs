@@ -24,6 +24,8 @@ pub const UNLOCKED: &[u8] = b"[MSG:Caution: Unlocked]\r\n";
 pub const ALARM_RESET: &[u8] = b"ALARM:3\r\n";
 /// Boot after an independent-watchdog reset (the controller starts in the alarm state).
 pub const WATCHDOG_RESET: &[u8] = b"[MSG:Reset by watchdog]\r\n";
+/// A limit switch hit with hard limits on (Grbl's ALARM:1), then the critical-event message.
+pub const ALARM_HARD_LIMIT: &[u8] = b"ALARM:1\r\n[MSG:Reset to continue]\r\n";
 /// A G-code target outside the travel box (Grbl's ALARM:2, "Soft limit"), then Grbl's
 /// critical-event message: nothing is read until Ctrl-X.
 pub const ALARM_SOFT_LIMIT: &[u8] = b"ALARM:2\r\n[MSG:Reset to continue]\r\n";

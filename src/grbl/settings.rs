@@ -39,10 +39,9 @@ pub const STATUS_MASK: u16 = 10;
 pub const SPINDLE_PWM_HZ: u16 = 33; // grblHAL's number for the spindle PWM frequency
 
 /// Grbl settings we report but do not implement, with the only value they accept.
-const FIXED: [(u16, f32, u8); 8] = [
+const FIXED: [(u16, f32, u8); 7] = [
     (11, 0.010, 3),  // junction deviation: every move stops (no look-ahead)
     (13, 0.0, 0),    // report inches: no
-    (21, 0.0, 0),    // hard limits: not implemented
     (23, 0.0, 0),    // homing direction mask
     (24, 25.0, 3),   // homing feed
     (25, 500.0, 3),  // homing seek
@@ -78,6 +77,8 @@ pub struct Settings {
     pub probe_invert: bool,
     /// `$20` soft limits: moves outside the travel box (`$130+i`) are refused. Needs `$22`.
     pub soft_limits: bool,
+    /// `$21` hard limits: a limit input going active stops all step output (ALARM:1).
+    pub hard_limits: bool,
     /// `$22` homing enabled: the controller boots in the alarm state (Grbl's homing lock).
     pub homing: bool,
     /// `$12` arc tolerance: largest distance of a chord from its arc, mm.
@@ -160,6 +161,7 @@ impl Settings {
         limit_invert: false,
         probe_invert: false,
         soft_limits: false,
+        hard_limits: false,
         homing: false,
         arc_tolerance: 0.002,
         spindle_max: 1000.0,
@@ -221,6 +223,7 @@ impl Settings {
             6 => (self.probe_invert as u8 as f64, 0),
             12 => (self.arc_tolerance as f64, 3),
             20 => (self.soft_limits as u8 as f64, 0),
+            21 => (self.hard_limits as u8 as f64, 0),
             22 => (self.homing as u8 as f64, 0),
             30 => (self.spindle_max as f64, 0),
             31 => (self.spindle_min as f64, 0),
@@ -304,6 +307,10 @@ impl Settings {
                     return Err(Error::SoftLimitNeedsHoming);
                 }
                 self.soft_limits = int != 0.0;
+                Ok(Change::Shell)
+            }
+            21 => {
+                self.hard_limits = int != 0.0;
                 Ok(Change::Shell)
             }
             22 => {
@@ -466,7 +473,8 @@ impl Settings {
             | (self.limit_invert as u8) << 1
             | (self.probe_invert as u8) << 2
             | (self.soft_limits as u8) << 3
-            | (self.homing as u8) << 4;
+            | (self.homing as u8) << 4
+            | (self.hard_limits as u8) << 5;
         b[20] = (self.shape == Shape::SCurve) as u8;
         b[21] = self.axes;
         b[22] = self.status_mask;
@@ -517,6 +525,7 @@ impl Settings {
             probe_invert: b[19] & 4 != 0,
             soft_limits: b[19] & 8 != 0,
             homing: b[19] & 16 != 0,
+            hard_limits: b[19] & 32 != 0,
             shape: match b[20] {
                 0 => Shape::Trapezoid,
                 1 => Shape::SCurve,
@@ -558,7 +567,7 @@ mod tests {
     #[test]
     fn low_ids_are_ours_and_every_fixed_one() {
         let ours = [
-            0, 1, 2, 3, 4, 5, 6, STATUS_MASK, 12, 20, 22, 30, 31, 32, SPINDLE_PWM_HZ, DIR_SETUP, RAMP_START, RAMP_SHAPE,
+            0, 1, 2, 3, 4, 5, 6, STATUS_MASK, 12, 20, 21, 22, 30, 31, 32, SPINDLE_PWM_HZ, DIR_SETUP, RAMP_START, RAMP_SHAPE,
             AXIS_COUNT,
         ];
         assert_eq!(LOW_IDS.len(), ours.len() + FIXED.len());

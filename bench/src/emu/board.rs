@@ -59,6 +59,8 @@ pub struct Board {
     fault: Option<String>,
     /// Cycles of the resets by the independent watchdog so far.
     watchdogs: Vec<u64>,
+    /// Cycles of the resets the firmware requested.
+    soft_resets: Vec<u64>,
 }
 
 impl Board {
@@ -83,6 +85,7 @@ impl Board {
             inputs: Vec::new(),
             fault: None,
             watchdogs: Vec::new(),
+            soft_resets: Vec::new(),
         })
     }
 
@@ -238,13 +241,16 @@ impl Board {
 
     // drive an input pin now (port A limit inputs, ...)
     pub fn set_input(&mut self, port: Port, pin: u8, level: bool) {
-        let p = &mut self.cpu.get_data_mut().ports[port as usize];
+        let m = self.cpu.get_data_mut();
+        let before = m.ports[port as usize].idr() & 1 << pin != 0;
+        let p = &mut m.ports[port as usize];
         p.ext_driven |= 1 << pin;
         if level {
             p.ext_level |= 1 << pin;
         } else {
             p.ext_level &= !(1 << pin);
         }
+        m.input_edge(port as usize, pin, before);
     }
 
     // wire a machine model to the pins (replaces any previous one); its power-on input levels
@@ -391,8 +397,8 @@ impl Board {
             self.set_input(f.port, f.pin, f.level);
         }
         self.cpu.get_data_mut().sync(now);
-        if self.cpu.get_data().reset_due {
-            self.watchdog_reset();
+        if let Some(flag) = self.cpu.get_data().reset_due {
+            self.system_reset(flag);
             return Ok(());
         }
         let basepri = self.reg(RegisterARM::BASEPRI);
@@ -529,12 +535,16 @@ impl Board {
         self.cpu.get_data_mut().now += return_cycles;
     }
 
-    // the IWDG expired: peripherals to reset (RCC_CSR.IWDGRSTF set), the core restarts at the
-    // reset vector with the initial SP; RAM keeps its contents (the firmware's startup code
-    // zeroes .bss and copies .data, as after any reset)
-    fn watchdog_reset(&mut self) {
-        self.cpu.get_data_mut().system_reset(super::iwdg::CSR_IWDGRSTF);
-        self.watchdogs.push(self.cycles());
+    // the IWDG expired or the firmware asked (AIRCR): peripherals to reset (RCC_CSR `flag`
+    // set), the core restarts at the reset vector with the initial SP; RAM keeps its contents
+    // (the firmware's startup code zeroes .bss and copies .data, as after any reset)
+    fn system_reset(&mut self, flag: u32) {
+        self.cpu.get_data_mut().system_reset(flag);
+        if flag == super::iwdg::CSR_IWDGRSTF {
+            self.watchdogs.push(self.cycles());
+        } else {
+            self.soft_resets.push(self.cycles());
+        }
         let regs = [
             (RegisterARM::PRIMASK, 0),
             (RegisterARM::BASEPRI, 0),
@@ -553,6 +563,11 @@ impl Board {
         self.sleep_on_exit = None;
         self.split = None;
         self.stats.isr = None;
+    }
+
+    // modeled cycles at which the firmware reset the MCU (AIRCR.SYSRESETREQ)
+    pub fn system_resets(&self) -> &[u64] {
+        &self.soft_resets
     }
 
     // modeled cycles at which the independent watchdog reset the MCU

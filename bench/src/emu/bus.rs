@@ -13,6 +13,7 @@ use std::collections::{BTreeMap, HashMap, HashSet};
 
 use super::cost::{Block, BlockCache};
 use super::gpio::{PinEdge, Port};
+use super::exti::{self, Exti};
 use super::iwdg::{self, Iwdg};
 use super::memory::{apb_divider, bridge_cycles, bus_of, Bus, FlashConfig};
 use super::nvic::{Nvic, IRQ0};
@@ -33,6 +34,8 @@ const USART1: u32 = 0x4001_3800;
 const GPIOA: u32 = 0x4001_0800;
 const RCC: u32 = 0x4002_1000;
 const IWDG: u32 = 0x4000_3000;
+const EXTI: u32 = 0x4001_0400;
+const AFIO_EXTICR1: u32 = 0x4001_0008;
 const RCC_CSR: u32 = 0x4002_1024;
 const FLASH_IF: u32 = 0x4002_2000;
 const RCC_CFGR: u32 = 0x4002_1004;
@@ -131,7 +134,9 @@ pub struct Machine {
     pub flash_pending: Option<FlashConfig>,
     /// Independent watchdog; `reset_due` is set when it expires (the board resets the MCU).
     pub iwdg: Iwdg,
-    pub reset_due: bool,
+    /// A reset is due, with the RCC_CSR flag it leaves (IWDGRSTF, SFTRSTF).
+    pub reset_due: Option<u32>,
+    pub exti: Exti,
     /// The machine wired to the pins, and the input changes it scheduled (board applies them).
     pub plant: Option<Box<dyn super::plant::Plant>>,
     pub plant_flips: Vec<super::board::InputFlip>,
@@ -174,7 +179,8 @@ impl Machine {
             bridge_free: 0,
             flash_pending: None,
             iwdg: Iwdg::default(),
-            reset_due: false,
+            reset_due: None,
+            exti: Exti::default(),
             plant: None,
             plant_flips: Vec::new(),
         }
@@ -276,9 +282,12 @@ impl Machine {
             self.nvic.pending[super::nvic::SYSTICK as usize] = true;
         }
         if self.iwdg.expires_at(super::board::HZ).is_some_and(|e| e <= t) {
-            self.reset_due = true;
+            self.reset_due = Some(iwdg::CSR_IWDGRSTF);
         }
         self.nvic.level[(IRQ0 + TIM2_IRQ) as usize] = self.tim2.irq();
+        for line in 0..exti::LINES {
+            self.nvic.level[(IRQ0 + exti::EXTI0_IRQ + line) as usize] = self.exti.irq(line);
+        }
         self.nvic.level[(IRQ0 + USART1_IRQ) as usize] = self.usart1.irq();
         self.pending = self.nvic.any_pending();
     }
@@ -311,6 +320,7 @@ impl Machine {
             TIM1..=0x4001_2FFF => self.tim1.read(word - TIM1),
             USART1..=0x4001_3BFF => self.usart1.read(word - USART1, t),
             IWDG..=0x4000_33FF => self.iwdg.read(word - IWDG),
+            EXTI..=0x4001_07FF => self.exti.read(word - EXTI),
             GPIOA..=0x4001_1BFF => {
                 let p = ((word - GPIOA) / 0x400) as usize;
                 self.ports[p].read((word - GPIOA) % 0x400)
@@ -353,6 +363,10 @@ impl Machine {
             }
             USART1..=0x4001_3BFF => self.usart1.write(word - USART1, v, t),
             IWDG..=0x4000_33FF => self.iwdg.write(word - IWDG, v, t),
+            EXTI..=0x4001_07FF => {
+                let merged = if word - EXTI == 0x14 { v } else { (self.exti.read(word - EXTI) & !mask) | v };
+                self.exti.write(word - EXTI, merged)
+            }
             GPIOA..=0x4001_1BFF => self.gpio_write(word, v, mask, lands),
             0xE000_E010..=0xE000_E01F => self.systick.write(word - 0xE000_E010, v, t),
             DWT_CTRL => {
@@ -374,10 +388,30 @@ impl Machine {
                     _ => v,
                 };
                 self.nvic.write(word - SCS, merged);
+                // AIRCR.SYSRESETREQ (with the key): a system reset.
+                if word == SCS + 0xD0C && v >> 16 == 0x05FA && v & 4 != 0 {
+                    self.reset_due = Some(iwdg::CSR_SFTRSTF);
+                    self.deadline = 0; // stop at the next block
+
+                }
             }
             _ => self.plain_write(word, v, mask),
         }
         self.sync(t);
+    }
+
+    // an external level change of input `pin` on port `port` (index): EXTI edge detection
+    pub fn input_edge(&mut self, port: usize, pin: u8, before: bool) {
+        let after = self.ports[port].idr() & 1 << pin != 0;
+        if pin as u32 >= exti::LINES || before == after {
+            return;
+        }
+        let cr = self.regs.get(&(AFIO_EXTICR1 + 4 * (pin as u32 / 4))).copied().unwrap_or(0);
+        if (cr >> (4 * (pin as u32 % 4))) & 0xF == port as u32 {
+            self.exti.edge(pin as u32, after);
+            let now = self.now;
+            self.sync(now);
+        }
     }
 
     fn gpio_write(&mut self, word: u32, v: u32, mask: u32, t: u64) {

@@ -1,4 +1,5 @@
-//! Independent watchdog (RM0008 §19) and the system reset it causes. For the bus and the board.
+//! Independent watchdog (RM0008 §19) and the system reset it causes (AIRCR.SYSRESETREQ
+//! causes one too, flagged SFTRSTF). For the bus and the board.
 //!
 //! KR: 0xCCCC starts the watchdog (and reloads it), 0xAAAA reloads, 0x5555 unlocks PR and RLR
 //! until the next other key. The counter runs from the LSI, modeled at its nominal 40 kHz
@@ -10,6 +11,7 @@
 pub const LSI_HZ: u64 = 40_000;
 /// RCC_CSR reset flags: IWDG reset, power-on reset, pin reset; RMVF clears them.
 pub const CSR_IWDGRSTF: u32 = 1 << 29;
+pub const CSR_SFTRSTF: u32 = 1 << 28;
 pub const CSR_PORRSTF: u32 = 1 << 27;
 pub const CSR_PINRSTF: u32 = 1 << 26;
 pub const CSR_RMVF: u32 = 1 << 24;

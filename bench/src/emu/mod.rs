@@ -19,6 +19,7 @@ mod bus;
 pub mod cost;
 mod cpu;
 mod exception;
+mod exti;
 pub mod figures;
 mod firmware;
 mod gpio;

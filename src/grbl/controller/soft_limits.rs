@@ -4,6 +4,11 @@
 //! `[MSG:Reset to continue]` and reads nothing more until Ctrl-X, after which the controller
 //! is in the alarm state (`$X` unlocks). The offending line gets no reply and moves nothing.
 //! Jogs are checked separately (`error:15`, in `jogging.rs`).
+//!
+//! A hard limit (`$21`, [`Controller::hard_limit`]) takes the same locked state at once: the
+//! firmware's limit interrupt has already stopped the step timer, so the queue is dropped
+//! without a hold, ALARM:1 is reported, and the position is lost (the shell restarts the MCU
+//! at the Ctrl-X, which boots in the alarm state).
 
 use super::Controller;
 use crate::limits;
@@ -36,8 +41,21 @@ impl<const N: usize> Controller<'_, N> {
         self.soft_limit = SoftLimit::Stopping;
     }
 
-    /// True from a trip until the reset.
-    pub(super) fn tripped(&self) -> bool {
+    /// A limit switch stopped the step output (the shell already halted the step timer):
+    /// drop everything, ALARM:1 and `[MSG:Reset to continue]`, read nothing until Ctrl-X.
+    pub fn hard_limit(&mut self, out: &mut impl Out) {
+        self.job = None;
+        self.lines.clear();
+        self.alarm = true;
+        self.feeder.abort();
+        self.pushed = self.shared.moves_done();
+        self.planner.sync(self.shared.positions(), &self.limits);
+        out.put(report::ALARM_HARD_LIMIT);
+        self.soft_limit = SoftLimit::Locked;
+    }
+
+    /// True from a soft- or hard-limit trip until the reset.
+    pub fn tripped(&self) -> bool {
         self.soft_limit != SoftLimit::Off
     }
 
