@@ -197,3 +197,25 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn hard_limit_drops_the_queue_and_locks_until_reset() {
+    let mut b = Bench::<3>::with_defaults();
+    b.take();
+    assert_eq!(b.line("G1 X50 F30000"), "ok\r\n");
+    assert_eq!(b.line("G1 X0"), "ok\r\n");
+    b.run_ms(50);
+    // The firmware's limit interrupt halted the step timer; the idle loop tells the controller.
+    b.ctl.hard_limit(&mut b.tx);
+    assert_eq!(b.take(), "ALARM:1\r\n[MSG:Reset to continue]\r\n");
+    b.run_ms(100);
+    let at = b.shared.positions();
+    b.run_ms(100);
+    assert_eq!(b.shared.positions(), at, "queue dropped");
+    assert_eq!(b.ctl.pending_moves(), 0);
+    assert!(!b.ctl.byte(b'G', &mut b.tx), "nothing read until Ctrl-X");
+    assert!(b.status().starts_with("<Alarm|"));
+    b.byte(0x18);
+    assert!(b.take().ends_with("[MSG:'$H'|'$X' to unlock]\r\n"));
+    assert_eq!(b.line("G0 X1"), "error:9\r\n");
+}

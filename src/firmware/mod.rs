@@ -197,6 +197,7 @@ mod app {
         let mut spindle = ddastep::spindle::SpindleOut::default();
         ctl.welcome(tx_in);
         let mut life = ddastep::watchdog::Liveness::new(MILLIS.load(Relaxed), STEP_TIME.entries());
+        let mut hard_reported = false;
         loop {
             if !POLL.swap(false, Relaxed) {
                 cortex_m::asm::wfi();
@@ -207,7 +208,8 @@ mod app {
             if halted && RESET_REQ.load(Relaxed) {
                 limits::restart_lost();
             }
-            if halted && !ctl.tripped() {
+            if halted && !hard_reported {
+                hard_reported = true;
                 ctl.hard_limit(tx_in);
             }
             if RESET_REQ.swap(false, Relaxed) {

@@ -55,7 +55,7 @@ impl<const N: usize> Controller<'_, N> {
     }
 
     /// True from a soft- or hard-limit trip until the reset.
-    pub fn tripped(&self) -> bool {
+    pub(super) fn tripped(&self) -> bool {
         self.soft_limit != SoftLimit::Off
     }
 
