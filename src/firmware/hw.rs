@@ -81,6 +81,10 @@ pub fn save_store(parts: &mut flash::Parts, image: &[u8; IMAGE_LEN]) {
     }
 }
 
+/// The enable pin's level that turns the drivers off (`$4`): what the panic and fault handlers
+/// drive. High until `init` reads the settings (the board's enable is active low).
+pub static ENABLE_OFF_HIGH: core::sync::atomic::AtomicBool = core::sync::atomic::AtomicBool::new(true);
+
 /// Drives the shared enable pin.
 pub fn set_enable(high: bool) {
     let bit = 1u32 << board::ENABLE_PIN;

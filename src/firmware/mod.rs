@@ -81,6 +81,7 @@ mod app {
         let engine = Engine::new(&SHARED, mv_out, &PROFILE, pins);
         let mut controller = Controller::new(Feeder::new(mv_in, &SHARED), &SHARED, &PROFILE, stored);
         // Drivers off at the level `$4` asks for (`boot.rs` assumed active low).
+        hw::ENABLE_OFF_HIGH.store(!settings.enable_invert, Relaxed);
         hw::set_enable(!settings.enable_invert);
         if by_watchdog {
             controller.watchdog_reset();
@@ -235,6 +236,7 @@ mod app {
             let invert = ctl.settings().limit_invert;
             limits::arm(ctl.settings().hard_limits, invert, ddastep::limits::active_pins(idr, invert));
             let act = ctl.poll(now, tx_in);
+            hw::ENABLE_OFF_HIGH.store(!ctl.settings().enable_invert, Relaxed);
             hw::set_enable(act.enable_pin_high);
             if let Some(ticks) = act.pulse_ticks {
                 hw::set_pulse_ticks(ticks);
