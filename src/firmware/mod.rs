@@ -156,7 +156,7 @@ mod app {
                 Some(Realtime::Status) => STATUS_REQ.store(true, Relaxed),
                 Some(Realtime::Reset) => RESET_REQ.store(true, Relaxed),
                 Some(Realtime::JogCancel) => JOG_CANCEL_REQ.store(true, Relaxed),
-                Some(Realtime::Extended(_)) => {}
+                Some(Realtime::Extended(x)) => SHARED.set_overrides(SHARED.overrides().apply(x)),
                 // A full ring drops the byte: a character-counting sender never fills it.
                 None => {
                     let _ = cx.local.rx_in.enqueue(b);

@@ -30,6 +30,11 @@ pub struct Limits<const N: usize> {
     pub vmax_hz: u32,
     /// Step timing: a move with more slave axes has a lower ceiling (`Timing::max_rate_for`).
     pub timing: Timing,
+    /// Feed override (Grbl's 0x90–0x94, 0.1–2.0): scales a G1/G2/G3 feed; the axes' max rates
+    /// still bind.
+    pub feed_ovr: f64,
+    /// Rapid override (0x95–0x97: 1.0, 0.5, 0.25): scales a G0's axis-limited speed.
+    pub rapid_ovr: f64,
 }
 
 impl<const N: usize> Limits<N> {
@@ -40,6 +45,8 @@ impl<const N: usize> Limits<N> {
             max_rate: core::array::from_fn(|i| s.max_rate[i] as f64),
             vmax_hz: vmax_hz.max(1),
             timing: s.timing(),
+            feed_ovr: 1.0,
+            rapid_ovr: 1.0,
         }
     }
 }
@@ -129,9 +136,10 @@ impl<const N: usize> Planner<N> {
             }
         }
         let len = sqrt(len2);
-        if let Some(f) = feed {
-            minutes = minutes.max(len / f);
-        }
+        minutes = match feed {
+            Some(f) => minutes.max(len / (f * lim.feed_ovr)),
+            None => minutes / lim.rapid_ovr,
+        };
         let wanted_hz = master_steps as f64 / (minutes * 60.0);
         // The step handler's ceiling for this many slave axes, and the ramp table's top.
         let slaves = delta.iter().filter(|d| **d != 0).count() as u32 - 1;

@@ -123,7 +123,7 @@ impl<const N: usize> Bench<N> {
                 self.drain();
             }
             Some(Realtime::JogCancel) => self.ctl.jog_cancel(),
-            Some(Realtime::Extended(_)) => {}
+            Some(Realtime::Extended(x)) => self.shared.set_overrides(self.shared.overrides().apply(x)),
             None => {
                 let mut waited = 0;
                 while !self.ctl.byte(b, &mut self.tx) {
