@@ -7,23 +7,13 @@ mod fil;
 
 use ddastep::board::STEP_PINS;
 use ddastep::settings::Settings;
-use ddastep::store::Stored;
-use ddastep_bench::emu::{firmware_elf, Board, HZ};
-use ddastep_bench::machine::{MachineSpec, VirtualMachine};
+use ddastep_bench::emu::{Board, HZ};
+use ddastep_bench::machine::VirtualMachine;
 use fil::*;
 
 /// The firmware with gantry300's steps/mm and `$21=1`, wired to the virtual gantry.
 fn gantry(hard: bool, pulse_us: f32) -> Board {
-    let spec = MachineSpec::load(&ddastep_bench::emu::repo_root().join("bench/demo/gantry300.toml")).unwrap();
-    let mut s = Settings { hard_limits: hard, pulse_us, ..Settings::BENCH };
-    for (i, a) in spec.axis.iter().enumerate() {
-        s.steps_per_mm[i] = a.steps_per_mm as f32;
-    }
-    let mut b = Board::load(firmware_elf().unwrap()).unwrap();
-    b.attach_plant(Box::new(VirtualMachine::new(&spec)));
-    b.write_mem(STORE_ADDR, &Stored::from(s).to_bytes()).unwrap();
-    assert!(b.run_until(HZ / 2, |b| b.serial_output().contains("Grbl")).unwrap());
-    b
+    boot_gantry(Settings { hard_limits: hard, pulse_us, ..Settings::BENCH })
 }
 
 /// Rising edges of X's step pin.

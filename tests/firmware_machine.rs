@@ -5,23 +5,13 @@
 mod fil;
 
 use ddastep::settings::Settings;
-use ddastep::store::Stored;
-use ddastep_bench::emu::{firmware_elf, Board, HZ};
-use ddastep_bench::machine::{MachineSpec, VirtualMachine};
+use ddastep_bench::emu::Board;
+use ddastep_bench::machine::VirtualMachine;
 use fil::*;
 
 /// The firmware with gantry300's steps/mm, fast rates, wired to the virtual gantry.
 fn gantry() -> Board {
-    let spec = MachineSpec::load(&ddastep_bench::emu::repo_root().join("bench/demo/gantry300.toml")).unwrap();
-    let mut s = Settings::BENCH;
-    for (i, a) in spec.axis.iter().enumerate() {
-        s.steps_per_mm[i] = a.steps_per_mm as f32;
-    }
-    let mut b = Board::load(firmware_elf().unwrap()).unwrap();
-    b.attach_plant(Box::new(VirtualMachine::new(&spec)));
-    b.write_mem(STORE_ADDR, &Stored::from(s).to_bytes()).unwrap();
-    assert!(b.run_until(HZ / 2, |b| b.serial_output().contains("Grbl")).unwrap());
-    b
+    boot_gantry(Settings::BENCH)
 }
 
 fn vm(b: &Board) -> &VirtualMachine {
