@@ -22,8 +22,9 @@ pub mod grbl;
 pub mod motion;
 pub mod planning;
 pub mod steptime;
+pub mod watchdog;
 
-pub use grbl::{controller, coords, gcode, jog, protocol, report, settings, shell, spindle, store};
+pub use grbl::{controller, coords, gcode, jog, limits, protocol, report, settings, shell, spindle, store};
 pub use motion::{control, engine, interp, prepared, queue, ramp, ring, sim, timing, walk};
 pub use planning::{arc, feeder, inverse_time, lookahead, planner};
 

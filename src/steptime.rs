@@ -102,6 +102,11 @@ impl StepTime {
         }
     }
 
+    /// Step interrupt entries so far (wrapping): the watchdog's sign of engine life.
+    pub fn entries(&self) -> u32 {
+        self.count.load(Relaxed)
+    }
+
     /// Every millisecond (one context only): extend the counters to 64 bits, fold the min /
     /// max into the window, track the busiest millisecond.
     pub fn tick_ms(&self) {

@@ -137,7 +137,7 @@ proptest! {
     fn settings_round_trip_through_flash(
         pulse in 1.0f32..100.0,
         dir in 0.0f32..1000.0,
-        idle: u8, step_inv: u8, dir_inv: u8, flags in 0u8..8, scurve: bool,
+        idle: u8, step_inv: u8, dir_inv: u8, flags in 0u8..64, scurve: bool,
         start in 1u32..=1_000_000,
         arc_tol in 1e-4f32..1000.0,
         spindle in (0.0f32..1e6, 0.0f32..1e6, any::<bool>(), 1u32..=100_000),
@@ -153,6 +153,10 @@ proptest! {
             enable_invert: flags & 1 != 0,
             limit_invert: flags & 2 != 0,
             probe_invert: flags & 4 != 0,
+            // `$20` only with `$22` (else the image is not a valid one).
+            soft_limits: flags & 24 == 24,
+            homing: flags & 16 != 0,
+            hard_limits: flags & 32 != 0,
             arc_tolerance: arc_tol,
             spindle_max: spindle.0,
             spindle_min: spindle.1,

@@ -33,7 +33,9 @@ fn set_follows_grbl_rules() {
     assert_eq!(s.step_invert, 5);
     assert_eq!(s.set(2, 256.0, 3), Err(Error::InvalidStatement));
     assert_eq!(s.set(20, 1.0, 3), Err(Error::SoftLimitNeedsHoming));
-    assert_eq!(s.set(20, 0.0, 3), Ok(Change::None));
+    assert_eq!(s.set(20, 0.0, 3), Ok(Change::Shell)); // stored (issue 13)
+    assert_eq!(s.set(21, 1.0, 3), Ok(Change::Shell)); // hard limits (issue 13)
+    assert!(s.hard_limits);
     assert_eq!(s.set(7, 0.0, 3), Err(Error::InvalidStatement));
     assert_eq!(s.set(RAMP_SHAPE, 2.0, 3), Err(Error::InvalidStatement));
     assert_eq!(s.set(110, f64::NAN, 3), Err(Error::BadNumberFormat));

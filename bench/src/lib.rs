@@ -3,4 +3,5 @@
 //! checker is its own crate (`bench/la`, `ddastep-la`), re-exported here as `la`.
 pub use ddastep_la as la;
 pub mod emu;
+pub mod machine;
 pub mod serve;

@@ -81,6 +81,10 @@ pub fn save_store(parts: &mut flash::Parts, image: &[u8; IMAGE_LEN]) {
     }
 }
 
+/// The enable pin's level that turns the drivers off (`$4`): what the panic and fault handlers
+/// drive. High until `init` reads the settings (the board's enable is active low).
+pub static ENABLE_OFF_HIGH: core::sync::atomic::AtomicBool = core::sync::atomic::AtomicBool::new(true);
+
 /// Drives the shared enable pin.
 pub fn set_enable(high: bool) {
     let bit = 1u32 << board::ENABLE_PIN;
@@ -125,6 +129,12 @@ pub fn set_spindle(o: SpindleOut) {
     gpioa.bsrr().write(|w| unsafe { w.bits(word) });
 }
 
+/// GPIOA's input register (the limit inputs).
+pub fn gpioa_idr() -> u32 {
+    // SAFETY: a read of the input data register, no side effects.
+    unsafe { &*pac::GPIOA::ptr() }.idr().read().bits()
+}
+
 /// PC13 LED (active low): on for 100 ms of every second.
 pub fn heartbeat(now_ms: u32) {
     let on = now_ms % 1000 < 100;
@@ -144,7 +154,9 @@ impl Board {
         );
         let mut afio = dp.AFIO.constrain(&mut rcc);
         let mut gpioa = dp.GPIOA.split(&mut rcc);
-        let gpiob = dp.GPIOB.split(&mut rcc);
+        // SAFETY: `boot.rs` already drives GPIOB; a reset here would float the step and
+        // enable pins. Of its HAL pins only PB3/PB4 are used, by `disable_jtag` (AFIO only).
+        let gpiob = unsafe { dp.GPIOB.split_without_reset(&mut rcc) };
         let _gpioc = dp.GPIOC.split(&mut rcc);
         let _ = afio.mapr.disable_jtag(gpioa.pa15, gpiob.pb3, gpiob.pb4);
         setup_pins();
@@ -175,18 +187,12 @@ impl Board {
     }
 }
 
-/// Step/dir/enable outputs, limit inputs and the LED, written as whole CRL/CRH words (one
-/// nibble per pin: 0x3 push-pull 50 MHz, 0x2 push-pull 2 MHz, 0x8 input with pull, 0x4 input
+/// Limit inputs, spindle and coolant outputs and the LED (GPIOB is set up by `boot.rs`),
+/// written as whole CRL/CRH words (one nibble per pin: 0x3 push-pull 50 MHz, 0x2 push-pull 2 MHz, 0x8 input with pull, 0x4 input
 /// floating). The HAL's per-pin calls cost ~1 KiB of flash for the same result.
 fn setup_pins() {
     // SAFETY: init owns the GPIO ports; the HAL configured only PA9/PA10 (USART1).
     let (a, c) = unsafe { (&*pac::GPIOA::ptr(), &*pac::GPIOC::ptr()) };
-    let b = gpiob();
-    // Outputs start low, but EN high (drivers off, active low).
-    b.bsrr().write(|w| unsafe { w.bits((0xFFFF & !(1 << board::ENABLE_PIN)) << 16 | 1 << board::ENABLE_PIN) });
-    // PB0,1,3..7 dir (PB2 = BOOT1 stays an input), PB8 EN, PB9..15 step.
-    b.crl().write(|w| unsafe { w.bits(0x3333_3433) });
-    b.crh().write(|w| unsafe { w.bits(0x3333_3333) });
     // Limits PA0..PA2 pulled up; PA3/PA4/PA5 mist, flood, spindle direction (outputs, low);
     // PA6/PA7 (encoder, later) floating; PA8 TIM1_CH1 (alternate function push-pull 50 MHz,
     // 0xB); PA9/PA10 as the HAL left them; PA11..PA14 untouched (USB, SWD); PA15 spindle

@@ -1,7 +1,10 @@
 //! The RTIC application and its hardware glue (MCU only).
 
+mod boot;
 mod hw;
+mod limits;
 mod panic;
+mod watchdog;
 
 use defmt_rtt as _;
 
@@ -22,7 +25,7 @@ mod app {
     use stm32f1xx_hal::pac;
     use stm32f1xx_hal::serial::{Rx, Tx};
 
-    use super::hw;
+    use super::{hw, limits, watchdog};
 
     /// Axes the firmware drives: X Y Z A B C U.
     pub const AXES: usize = ddastep::MAX_AXES;
@@ -63,6 +66,8 @@ mod app {
         txq: Queue<u8, 512> = Queue::new(),
     ])]
     fn init(cx: init::Context) -> (SharedRes, Local) {
+        // (Step pins low and drivers off came first: `boot.rs`.)
+        let by_watchdog = watchdog::take_reset_cause();
         let mut core = cx.core;
         hw::start_cycle_counter(&mut core.DCB, &mut core.DWT);
         let board = hw::Board::setup(cx.device, core.SYST);
@@ -73,9 +78,20 @@ mod app {
         let (tx_in, tx_out) = cx.local.txq.split();
         let pins = board::pin_map::<AXES>(settings.step_invert, settings.dir_invert);
         let engine = Engine::new(&SHARED, mv_out, &PROFILE, pins);
-        let controller = Controller::new(Feeder::new(mv_in, cx.local.plans, &SHARED, &PROFILE, pins), &SHARED, &PROFILE, stored);
+        let mut controller = Controller::new(Feeder::new(mv_in, cx.local.plans, &SHARED, &PROFILE, pins), &SHARED, &PROFILE, stored);
+        // Drivers off at the level `$4` asks for (`boot.rs` assumed active low).
+        hw::ENABLE_OFF_HIGH.store(!settings.enable_invert, Relaxed);
+        hw::set_enable(!settings.enable_invert);
+        if by_watchdog {
+            controller.watchdog_reset();
+        }
+        if limits::take_lost_marker() {
+            controller.position_lost();
+        }
+        limits::setup();
         defmt::info!("ddastep up: 72 MHz, {} axes", AXES);
         hw::start_step_timer();
+        watchdog::start();
         (
             SharedRes { tx: board.tx },
             Local {
@@ -110,6 +126,22 @@ mod app {
             hw::tim2().sr().write(|w| unsafe { w.bits(!hw::SR_CC1IF) });
         }
         STEP_TIME.record(hw::cycles().wrapping_sub(t0));
+    }
+
+    /// Limit inputs X, Y, Z (hard limits, `$21`): at the step interrupt's priority.
+    #[task(binds = EXTI0, priority = 3)]
+    fn limit_x(_: limit_x::Context) {
+        limits::on_edge();
+    }
+
+    #[task(binds = EXTI1, priority = 3)]
+    fn limit_y(_: limit_y::Context) {
+        limits::on_edge();
+    }
+
+    #[task(binds = EXTI2, priority = 3)]
+    fn limit_z(_: limit_z::Context) {
+        limits::on_edge();
     }
 
     /// USART1: realtime bytes act at once, line bytes go to the RX ring, the TX ring drains.
@@ -156,13 +188,28 @@ mod app {
         // stall the step interrupt's first register access).
         let mut spindle = ddastep::spindle::SpindleOut::default();
         ctl.welcome(tx_in);
+        let mut life = ddastep::watchdog::Liveness::new(MILLIS.load(Relaxed), STEP_TIME.entries());
+        let mut hard_reported = false;
         loop {
             if !POLL.swap(false, Relaxed) {
                 cortex_m::asm::wfi();
                 continue;
             }
             let now = MILLIS.load(Relaxed);
+            let halted = limits::HALTED.load(Relaxed);
+            if halted && REQUESTS.reset_pending() {
+                limits::restart_lost();
+            }
+            if halted && !hard_reported {
+                hard_reported = true;
+                ctl.hard_limit(tx_in);
+            }
+            let idr = hw::gpioa_idr();
+            ctl.set_limit_inputs(idr);
+            let invert = ctl.settings().limit_invert;
+            limits::arm(ctl.settings().hard_limits, invert, ddastep::limits::active_pins(idr, invert));
             let act = idle_step(ctl, rx_out, tx_in, now, &REQUESTS);
+            hw::ENABLE_OFF_HIGH.store(!ctl.settings().enable_invert, Relaxed);
             hw::set_enable(act.enable_pin_high);
             if let Some(ticks) = act.pulse_ticks {
                 hw::set_pulse_ticks(ticks);
@@ -178,6 +225,10 @@ mod app {
                 hw::save_store(cx.local.flash, &ctl.image());
             }
             hw::heartbeat(now);
+            watchdog::stall_hook();
+            if life.alive(MILLIS.load(Relaxed), STEP_TIME.entries(), halted) {
+                watchdog::feed();
+            }
             if tx_in.len() > 0 {
                 cx.shared.tx.lock(|tx| tx.listen());
             }

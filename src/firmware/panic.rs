@@ -4,9 +4,12 @@ use core::panic::PanicInfo;
 
 use ddastep::board;
 
-/// Disables the drivers (EN high) and drives every step pin low: one BSRR store.
+/// Disables the drivers (EN at the level `$4` makes "off": high unless inverted) and drives
+/// every step pin low: one BSRR store.
 fn safe_outputs() {
-    let mut word = 1u32 << board::ENABLE_PIN;
+    let en = 1u32 << board::ENABLE_PIN;
+    let off_high = super::hw::ENABLE_OFF_HIGH.load(core::sync::atomic::Ordering::Relaxed);
+    let mut word = if off_high { en } else { en << 16 };
     for p in board::STEP_PINS {
         word |= 1 << (p + 16);
     }

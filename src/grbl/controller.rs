@@ -18,6 +18,7 @@
 //! program coordinates into machine ones in the interpreter, and reports subtract them again.
 
 mod jogging;
+mod soft_limits;
 mod status;
 mod system;
 mod tool;
@@ -34,6 +35,7 @@ use crate::report;
 use crate::settings::{Ramped, Settings};
 use crate::spindle::{Power, PwmTiming, SpindleDir, SpindleOut};
 use crate::store::{Stored, IMAGE_LEN, STARTUP_LINES};
+use soft_limits::SoftLimit;
 
 /// Time from enabling the drivers to the first step, in poll milliseconds (2 ≥ 1 ms real).
 pub const ENABLE_SETTLE_MS: u32 = 2;
@@ -183,6 +185,12 @@ pub struct Controller<'a, const N: usize> {
     reset_after: bool,
     /// After a soft reset: take the engine's position once it has stopped.
     resync: bool,
+    /// A soft-limit trip in progress (see `soft_limits.rs`).
+    soft_limit: SoftLimit,
+    /// The MCU was reset by the watchdog: say so after the next banner.
+    watchdog_note: bool,
+    /// Limit pins active (bit i = axis i), for `Pn:`.
+    limit_pins: u8,
 }
 
 impl<'a, const N: usize> Controller<'a, N> {
@@ -211,7 +219,8 @@ impl<'a, const N: usize> Controller<'a, N> {
             offsets: Offsets::new(stored.coords),
             planner: Planner::new(),
             job: None,
-            alarm: false,
+            // Grbl's homing lock: with homing enabled, power-up is in the alarm state.
+            alarm: settings.homing,
             check: false,
             sleep: false,
             jog: Jogging::Off,
@@ -236,6 +245,9 @@ impl<'a, const N: usize> Controller<'a, N> {
             pwm_hz: 0,
             reset_after: false,
             resync: false,
+            soft_limit: SoftLimit::Off,
+            watchdog_note: false,
+            limit_pins: 0,
         };
         c.startup_next = c.next_startup(0);
         c.apply_profile();
@@ -296,7 +308,7 @@ impl<'a, const N: usize> Controller<'a, N> {
     /// True while a line (or a startup line) is being carried out: [`Self::byte`] takes
     /// nothing until it is done (nor while asleep).
     pub fn busy(&self) -> bool {
-        self.job.is_some() || self.startup_next < STARTUP_LINES
+        self.job.is_some() || self.startup_next < STARTUP_LINES || self.tripped()
     }
 
     /// Free bytes in the shell's RX ring, for `Bf:` in status reports (at most the announced
@@ -305,12 +317,37 @@ impl<'a, const N: usize> Controller<'a, N> {
         self.rx_free = n.min(RX_BUFFER_LEN) as u32;
     }
 
+    /// The limit inputs as the shell read them (GPIOA's input register), for `Pn:` in status
+    /// reports; `$5` applies here.
+    pub fn set_limit_inputs(&mut self, gpioa_idr: u32) {
+        self.limit_pins = crate::limits::active_pins(gpioa_idr, self.settings.limit_invert);
+    }
+
     /// The start-up banner (also after a soft reset).
     pub fn welcome(&mut self, out: &mut impl Out) {
         out.put(report::BANNER);
+        if core::mem::take(&mut self.watchdog_note) {
+            out.put(report::WATCHDOG_RESET);
+        }
         if self.alarm {
             out.put(report::UNLOCK_HINT);
         }
+    }
+
+    /// The MCU came up from a watchdog reset (call before [`Self::welcome`]): the banner is
+    /// followed by `[MSG:Reset by watchdog]`, and the controller is in the alarm state (the
+    /// position is not known to be right; no startup lines run).
+    pub fn watchdog_reset(&mut self) {
+        self.watchdog_note = true;
+        self.position_lost();
+    }
+
+    /// The position is not known to be right (a hard limit stopped the steps mid-move, or the
+    /// watchdog reset the MCU): the alarm state, and no startup lines (call before
+    /// [`Self::welcome`]).
+    pub fn position_lost(&mut self) {
+        self.alarm = true;
+        self.startup_next = STARTUP_LINES;
     }
 
     /// Takes one line byte; `false` when it cannot yet (a line is held, or fewer than
@@ -364,6 +401,7 @@ impl<'a, const N: usize> Controller<'a, N> {
         self.offsets = Offsets::new(self.stored.coords);
         self.jog = Jogging::Off;
         self.check = false;
+        self.soft_limit = SoftLimit::Off;
         self.pushed = self.shared.moves_done();
         // The engine stops at its next tick; its position is final only then (see `poll`).
         self.resync = true;
@@ -391,6 +429,7 @@ impl<'a, const N: usize> Controller<'a, N> {
         }
         self.feeder.service();
         self.jog_poll(out);
+        self.soft_limit_poll(out);
         self.drive_enable();
         if self.job.is_some() && out.room() >= POLL_REPLY_ROOM && self.advance(true, out) {
             self.ok(out);
@@ -418,6 +457,9 @@ impl<'a, const N: usize> Controller<'a, N> {
 
     /// A line's `ok`, and the reset `$C`/`$RST` asked to follow it.
     fn ok(&mut self, out: &mut impl Out) {
+        if self.tripped() {
+            return; // a soft-limit trip: the line gets no reply (Grbl)
+        }
         put_ok(out);
         if core::mem::take(&mut self.reset_after) {
             self.soft_reset(out);
@@ -430,6 +472,13 @@ impl<'a, const N: usize> Controller<'a, N> {
             self.planner.sync(self.shared.positions(), &self.limits);
             self.resync = false;
         }
+    }
+
+    /// The limits a program move is planned with: the feed and rapid overrides in force (a jog
+    /// uses `self.limits`: overrides do not apply to jogs, as in Grbl).
+    fn move_limits(&self) -> Limits<N> {
+        let o = self.shared.overrides();
+        Limits { feed_ovr: o.feed as f64 / 100.0, rapid_ovr: o.rapid as f64 / 100.0, ..self.limits }
     }
 
     /// Queue empty and engine idle (not held): G4, flash writes, `$` settings may act.
@@ -451,7 +500,7 @@ impl<'a, const N: usize> Controller<'a, N> {
             out.put(b":");
             match self.gcode(line, out) {
                 Err(e) => put_error(out, e),
-                Ok(()) if self.job.is_none() => put_ok(out),
+                Ok(()) if self.job.is_none() && !self.tripped() => put_ok(out),
                 Ok(()) => {}
             }
         }
@@ -570,7 +619,8 @@ impl<'a, const N: usize> Controller<'a, N> {
                     job.arc = None;
                     break;
                 };
-                job.mv = plan(&mut self.planner, &p, job.rate, &self.limits, &self.ramped.cfg).unwrap_or(None);
+                let lim = self.move_limits();
+                job.mv = plan(&mut self.planner, &p, job.rate, &lim, &self.ramped.cfg).unwrap_or(None);
                 if let Some(pl) = job.mv {
                     if !self.push(pl, false, job.power) {
                         break 'run false;
@@ -622,19 +672,17 @@ impl<'a, const N: usize> Controller<'a, N> {
         }
         let (modal, fx) = self.modal.interpret_with(&block, self.planner.position_mm(), &self.offsets)?;
         let mut planner = self.planner;
-        let ovr = self.shared.overrides();
-        self.limits.feed_ovr = ovr.feed as f64 / 100.0;
-        self.limits.rapid_ovr = ovr.rapid as f64 / 100.0;
         let mut offsets = self.offsets;
         // G93: F is 1/minutes (checked positive where a motion needs it).
         let rate = if modal.inverse_time { Rate::Minutes(1.0 / modal.feed) } else { Rate::Feed(modal.feed) };
         let cfg = self.ramped.cfg;
+        let lim = self.move_limits();
         let mv = match fx.motion {
-            Some((t, rapid)) => plan(&mut planner, &t, if rapid { Rate::Rapid } else { rate }, &self.limits, &cfg)?,
+            Some((t, rapid)) => plan(&mut planner, &t, if rapid { Rate::Rapid } else { rate }, &lim, &cfg)?,
             None => None,
         };
         let mv2 = match fx.home {
-            Some(t) => planner.line(&t, None, &self.limits)?,
+            Some(t) => planner.line(&t, None, &lim)?,
             None => None,
         };
         let (arc, rate) = match fx.arc {
@@ -650,6 +698,14 @@ impl<'a, const N: usize> Controller<'a, N> {
             }
             None => (None, Rate::Rapid),
         };
+        // Soft limits: every target this line moves to, arc chord ends included (a chord
+        // between two points in the box stays in it).
+        let arc_out = arc.is_some_and(|mut seg| seg.any(|p| self.beyond_travel(&p)));
+        let home_out = fx.home.is_some_and(|t| self.beyond_travel(&t));
+        if arc_out || home_out || fx.motion.is_some_and(|(t, _)| self.beyond_travel(&t)) {
+            self.soft_limit_trip();
+            return Ok(());
+        }
         let mut store = false;
         if let Some((slot, v)) = fx.coord_write {
             offsets.stored.set(slot, &v);

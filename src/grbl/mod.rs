@@ -5,6 +5,7 @@ pub mod controller;
 pub mod coords;
 pub mod gcode;
 pub mod jog;
+pub mod limits;
 pub mod protocol;
 pub mod report;
 pub mod settings;

@@ -22,6 +22,13 @@ pub const UNLOCK_HINT: &[u8] = b"[MSG:'$H'|'$X' to unlock]\r\n";
 pub const UNLOCKED: &[u8] = b"[MSG:Caution: Unlocked]\r\n";
 /// Soft reset during motion (Grbl's ALARM:3, "Reset while in motion").
 pub const ALARM_RESET: &[u8] = b"ALARM:3\r\n";
+/// Boot after an independent-watchdog reset (the controller starts in the alarm state).
+pub const WATCHDOG_RESET: &[u8] = b"[MSG:Reset by watchdog]\r\n";
+/// A limit switch hit with hard limits on (Grbl's ALARM:1), then the critical-event message.
+pub const ALARM_HARD_LIMIT: &[u8] = b"ALARM:1\r\n[MSG:Reset to continue]\r\n";
+/// A G-code target outside the travel box (Grbl's ALARM:2, "Soft limit"), then Grbl's
+/// critical-event message: nothing is read until Ctrl-X.
+pub const ALARM_SOFT_LIMIT: &[u8] = b"ALARM:2\r\n[MSG:Reset to continue]\r\n";
 /// M2 / M30.
 pub const PROGRAM_END: &[u8] = b"[MSG:Pgm End]\r\n";
 /// `$RST=`.
@@ -33,9 +40,9 @@ pub const CHECK_OFF: &[u8] = b"[MSG:Disabled]\r\n";
 /// `$SLP`.
 pub const SLEEPING: &[u8] = b"[MSG:Sleeping]\r\n";
 /// Longest status report for `n` axes: `<Hold:1|WPos:` + 13 per axis + `|Bf:15,128` +
-/// `|FS:1000000,1000000` + `|WCO:` + 13 per axis + `|Ov:100,100,100|A:SFM>\r\n`.
+/// `|FS:1000000,1000000` + `|Pn:XYZ` + `|WCO:` + 13 per axis + `|Ov:100,100,100|A:SFM>\r\n`.
 pub const fn status_len(n: usize) -> usize {
-    76 + 26 * n
+    83 + 26 * n
 }
 /// Longest `$#` line for `n` axes.
 pub const fn param_len(n: usize) -> usize {
@@ -60,13 +67,15 @@ pub struct Status<'a> {
     pub speed: f64,
     /// `A:` accessories, shown with `Ov:`: spindle CW (`S`) or CCW (`C`), flood (`F`), mist (`M`).
     pub acc: &'a [u8],
+    /// `Pn:` input pins active (bit i = axis i's limit), shown when not 0.
+    pub pins: u8,
     /// `WCO:` when due.
     pub wco: Option<&'a [f64]>,
     /// `Ov:` when due.
     pub ov: Option<Overrides>,
 }
 
-/// `<State|MPos:x,y,z|Bf:15,128|FS:feed,speed|WCO:x,y,z|Ov:100,100,100|A:SF>`.
+/// `<State|MPos:x,y,z|Bf:15,128|FS:feed,speed|Pn:XZ|WCO:x,y,z|Ov:100,100,100|A:SF>`.
 pub fn status(out: &mut impl Out, s: &Status) {
     out.put(b"<");
     out.put(s.state);
@@ -82,6 +91,14 @@ pub fn status(out: &mut impl Out, s: &Status) {
     put_fixed(out, s.feed, 0);
     out.put(b",");
     put_fixed(out, s.speed, 0);
+    if s.pins != 0 {
+        out.put(b"|Pn:");
+        for (i, &letter) in b"XYZ".iter().enumerate() {
+            if s.pins & 1 << i != 0 {
+                out.put(&[letter]);
+            }
+        }
+    }
     if let Some(w) = s.wco {
         out.put(b"|WCO:");
         axes(out, w);
@@ -253,7 +270,7 @@ mod tests {
 
     #[test]
     fn formats_match_grbl() {
-        let st = Status { state: b"Idle", pos: &[0.0; 3], mpos: true, bf: None, feed: 0.0, speed: 0.0, acc: b"", wco: None, ov: None };
+        let st = Status { state: b"Idle", pos: &[0.0; 3], mpos: true, bf: None, feed: 0.0, speed: 0.0, acc: b"", pins: 0, wco: None, ov: None };
         assert_eq!(text(|o| status(o, &st)), "<Idle|MPos:0.000,0.000,0.000|FS:0,0>\r\n");
         let st = Status { state: b"Run", pos: &[-1.2345, 0.0005, 12.0], feed: 2999.6, ..st };
         assert_eq!(text(|o| status(o, &st)), "<Run|MPos:-1.235,0.001,12.000|FS:3000,0>\r\n");
@@ -305,6 +322,7 @@ mod tests {
             feed: 999_999.0,
             speed: 1e6,
             acc: b"SFM",
+            pins: 7,
             wco: Some(&far),
             ov,
         };

@@ -41,12 +41,9 @@ pub const STATUS_MASK: u16 = 10;
 pub const SPINDLE_PWM_HZ: u16 = 33; // grblHAL's number for the spindle PWM frequency
 
 /// Grbl settings we report but do not implement, with the only value they accept.
-const FIXED: [(u16, f32, u8); 10] = [
+const FIXED: [(u16, f32, u8); 7] = [
     (11, 0.010, 3),  // junction deviation: every move stops (no look-ahead)
     (13, 0.0, 0),    // report inches: no
-    (20, 0.0, 0),    // soft limits: not implemented
-    (21, 0.0, 0),    // hard limits: not implemented
-    (22, 0.0, 0),    // homing: not implemented
     (23, 0.0, 0),    // homing direction mask
     (24, 25.0, 3),   // homing feed
     (25, 500.0, 3),  // homing seek
@@ -80,6 +77,12 @@ pub struct Settings {
     pub limit_invert: bool,
     /// `$6` probe pin invert (stored only).
     pub probe_invert: bool,
+    /// `$20` soft limits: moves outside the travel box (`$130+i`) are refused. Needs `$22`.
+    pub soft_limits: bool,
+    /// `$21` hard limits: a limit input going active stops all step output (ALARM:1).
+    pub hard_limits: bool,
+    /// `$22` homing enabled: the controller boots in the alarm state (Grbl's homing lock).
+    pub homing: bool,
     /// `$12` arc tolerance: largest distance of a chord from its arc, mm.
     pub arc_tolerance: f32,
     /// `$30` spindle speed at full PWM duty (rpm, or laser power units).
@@ -102,7 +105,7 @@ pub struct Settings {
     pub max_rate: [f32; MAX_AXES],
     /// `$120+i` acceleration, unit/s².
     pub accel: [f32; MAX_AXES],
-    /// `$130+i` max travel, unit (stored only: no soft limits).
+    /// `$130+i` max travel, unit: the machine box is `-$130+i ..= 0` (soft limits, `$20`).
     pub max_travel: [f32; MAX_AXES],
     /// `$10` status report mask: bit 0 MPos (else WPos), bit 1 buffer state.
     pub status_mask: u8,
@@ -159,6 +162,9 @@ impl Settings {
         enable_invert: false,
         limit_invert: false,
         probe_invert: false,
+        soft_limits: false,
+        hard_limits: false,
+        homing: false,
         arc_tolerance: 0.002,
         spindle_max: 1000.0,
         spindle_min: 0.0,
@@ -218,6 +224,9 @@ impl Settings {
             5 => (self.limit_invert as u8 as f64, 0),
             6 => (self.probe_invert as u8 as f64, 0),
             12 => (self.arc_tolerance as f64, 3),
+            20 => (self.soft_limits as u8 as f64, 0),
+            21 => (self.hard_limits as u8 as f64, 0),
+            22 => (self.homing as u8 as f64, 0),
             30 => (self.spindle_max as f64, 0),
             31 => (self.spindle_min as f64, 0),
             32 => (self.laser_mode as u8 as f64, 0),
@@ -294,6 +303,24 @@ impl Settings {
                 self.probe_invert = int != 0.0;
                 Ok(Change::Shell)
             }
+            20 => {
+                // Grbl's rule: soft limits need homing (a known machine position).
+                if int != 0.0 && !self.homing {
+                    return Err(Error::SoftLimitNeedsHoming);
+                }
+                self.soft_limits = int != 0.0;
+                Ok(Change::Shell)
+            }
+            21 => {
+                self.hard_limits = int != 0.0;
+                Ok(Change::Shell)
+            }
+            22 => {
+                // Turning homing off turns soft limits off too (Grbl).
+                self.homing = int != 0.0;
+                self.soft_limits &= self.homing;
+                Ok(Change::Shell)
+            }
             12 => {
                 // Grbl takes any positive value; below 0.1 µm a chord is far below a step.
                 self.arc_tolerance = range(1e-4, 1000.0)?;
@@ -359,8 +386,6 @@ impl Settings {
                 let f = FIXED.iter().find(|f| f.0 == id).ok_or(Error::InvalidStatement)?;
                 if libm::fabs(value - f.1 as f64) < 1e-6 {
                     Ok(Change::None)
-                } else if id == 20 {
-                    Err(Error::SoftLimitNeedsHoming)
                 } else {
                     Err(Error::InvalidStatement)
                 }
@@ -466,7 +491,12 @@ impl Settings {
         b[16] = self.idle_delay_ms;
         b[17] = self.step_invert;
         b[18] = self.dir_invert;
-        b[19] = self.enable_invert as u8 | (self.limit_invert as u8) << 1 | (self.probe_invert as u8) << 2;
+        b[19] = self.enable_invert as u8
+            | (self.limit_invert as u8) << 1
+            | (self.probe_invert as u8) << 2
+            | (self.soft_limits as u8) << 3
+            | (self.homing as u8) << 4
+            | (self.hard_limits as u8) << 5;
         b[20] = (self.shape == Shape::SCurve) as u8;
         b[21] = self.axes;
         b[22] = self.status_mask;
@@ -515,6 +545,9 @@ impl Settings {
             enable_invert: b[19] & 1 != 0,
             limit_invert: b[19] & 2 != 0,
             probe_invert: b[19] & 4 != 0,
+            soft_limits: b[19] & 8 != 0,
+            homing: b[19] & 16 != 0,
+            hard_limits: b[19] & 32 != 0,
             shape: match b[20] {
                 0 => Shape::Trapezoid,
                 1 => Shape::SCurve,
@@ -556,7 +589,7 @@ mod tests {
     #[test]
     fn low_ids_are_ours_and_every_fixed_one() {
         let ours = [
-            0, 1, 2, 3, 4, 5, 6, STATUS_MASK, 12, 30, 31, 32, SPINDLE_PWM_HZ, DIR_SETUP, RAMP_START, RAMP_SHAPE,
+            0, 1, 2, 3, 4, 5, 6, STATUS_MASK, 12, 20, 21, 22, 30, 31, 32, SPINDLE_PWM_HZ, DIR_SETUP, RAMP_START, RAMP_SHAPE,
             AXIS_COUNT,
         ];
         assert_eq!(LOW_IDS.len(), ours.len() + FIXED.len());

@@ -28,6 +28,11 @@ impl Requests {
     pub const fn new() -> Self {
         Requests { status: AtomicBool::new(false), reset: AtomicBool::new(false), jog_cancel: AtomicBool::new(false) }
     }
+
+    /// A Ctrl-X is waiting for the idle loop (the firmware restarts after a hard limit on it).
+    pub fn reset_pending(&self) -> bool {
+        self.reset.load(Relaxed)
+    }
 }
 
 /// One received byte in the RX interrupt: realtime bytes act at once (feed hold, resume,

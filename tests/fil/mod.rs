@@ -105,3 +105,19 @@ pub fn stored(b: &mut Board) -> Option<Stored> {
     let c = b.read_mem(STORE_ADDR + PAGE_LEN as u32, PAGE_LEN);
     Stored::decode(&a).into_iter().chain(Stored::decode(&c)).max_by_key(|s| s.seq)
 }
+
+/// A booted board with `base` plus the sample gantry's steps/mm (`bench/demo/gantry300.toml`)
+/// in flash, wired to that virtual machine (carriages, limit switches): banner seen.
+pub fn boot_gantry(base: Settings) -> Board {
+    use ddastep_bench::machine::{MachineSpec, VirtualMachine};
+    let spec = MachineSpec::load(&ddastep_bench::emu::repo_root().join("bench/demo/gantry300.toml")).unwrap();
+    let mut s = base;
+    for (i, a) in spec.axis.iter().enumerate() {
+        s.steps_per_mm[i] = a.steps_per_mm as f32;
+    }
+    let mut b = Board::load(firmware_elf().unwrap()).unwrap();
+    b.attach_plant(Box::new(VirtualMachine::new(&spec)));
+    b.write_mem(STORE_ADDR, &Stored::from(s).to_bytes()).unwrap();
+    assert!(b.run_until(HZ / 2, |b| b.serial_output().contains("Grbl")).unwrap());
+    b
+}

@@ -7,6 +7,7 @@ use std::path::PathBuf;
 use anyhow::{bail, Context, Result};
 use clap::Parser;
 use ddastep_bench::emu::{firmware_elf, gcode_lines, isr_profile, sweep, Board, InputFlip, Port, HZ};
+use ddastep_bench::machine::{MachineSpec, VirtualMachine};
 use ddastep_bench::serve;
 
 #[derive(Parser)]
@@ -40,6 +41,10 @@ struct Args {
     /// Input flips, e.g. PA0@0.25=0 (pin PA0 low at 0.25 s simulated).
     #[arg(long)]
     pin: Vec<String>,
+    /// Wire a virtual machine to the pins: carriages that follow the steps and limit switches
+    /// on PA0-PA2 (TOML; sample bench/demo/gantry300.toml, format in bench/src/machine.rs).
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["sweep", "point"])]
+    machine: Option<PathBuf>,
     /// Print where the step interrupt's modeled cycles go (per function and per block).
     #[arg(long)]
     profile: bool,
@@ -102,6 +107,7 @@ fn run(args: Args) -> Result<()> {
     if args.sweep {
         return run_sweep(&args, &elf);
     }
+    let machine = args.machine.as_deref().map(MachineSpec::load).transpose()?;
     if args.serve {
         let opts = serve::Options {
             elf,
@@ -111,6 +117,7 @@ fn run(args: Args) -> Result<()> {
             vcd: args.vcd.clone(),
             json: args.json.clone(),
             inputs: args.pin.iter().map(|p| parse_pin(p)).collect::<Result<_>>()?,
+            machine,
         };
         let s = serve::run(&opts)?;
         println!(
@@ -143,6 +150,9 @@ fn run(args: Args) -> Result<()> {
     let gcode_path = args.gcode.unwrap_or_else(|| ddastep_bench::emu::repo_root().join("bench/demo/paper_532.gcode"));
     let gcode = std::fs::read_to_string(&gcode_path).with_context(|| format!("reading {}", gcode_path.display()))?;
     let mut board = Board::load(&elf)?;
+    if let Some(m) = &machine {
+        board.attach_plant(Box::new(VirtualMachine::new(m)));
+    }
     board.set_profile(args.profile);
     for p in &args.pin {
         board.schedule_input(parse_pin(p)?);
@@ -175,6 +185,9 @@ fn run(args: Args) -> Result<()> {
     // The firmware's own DWT timing of its step path over the run (what `$I` gives on a board).
     if let Ok(info) = board.send_line_wait_ok("$I") {
         info.lines().filter(|l| l.contains("step isr")).for_each(|l| println!("firmware self-report: {l}"));
+    }
+    if let Some(vm) = VirtualMachine::of(&board) {
+        println!("{}", vm.summary());
     }
     if args.profile {
         print!("{}", isr_profile(&board, 12));

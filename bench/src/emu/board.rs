@@ -57,6 +57,10 @@ pub struct Board {
     split: Option<usize>,
     inputs: Vec<InputFlip>,
     fault: Option<String>,
+    /// Cycles of the resets by the independent watchdog so far.
+    watchdogs: Vec<u64>,
+    /// Cycles of the resets the firmware requested.
+    soft_resets: Vec<u64>,
 }
 
 impl Board {
@@ -80,6 +84,8 @@ impl Board {
             split: None,
             inputs: Vec::new(),
             fault: None,
+            watchdogs: Vec::new(),
+            soft_resets: Vec::new(),
         })
     }
 
@@ -235,13 +241,32 @@ impl Board {
 
     // drive an input pin now (port A limit inputs, ...)
     pub fn set_input(&mut self, port: Port, pin: u8, level: bool) {
-        let p = &mut self.cpu.get_data_mut().ports[port as usize];
+        let m = self.cpu.get_data_mut();
+        let before = m.ports[port as usize].idr() & 1 << pin != 0;
+        let p = &mut m.ports[port as usize];
         p.ext_driven |= 1 << pin;
         if level {
             p.ext_level |= 1 << pin;
         } else {
             p.ext_level &= !(1 << pin);
         }
+        m.input_edge(port as usize, pin, before);
+    }
+
+    // wire a machine model to the pins (replaces any previous one); its power-on input levels
+    // apply at once
+    pub fn attach_plant(&mut self, mut plant: Box<dyn super::plant::Plant>) {
+        let mut flips = Vec::new();
+        plant.initial(&mut flips);
+        for f in flips {
+            self.schedule_input(f);
+        }
+        self.cpu.get_data_mut().plant = Some(plant);
+    }
+
+    // the machine model wired to the pins
+    pub fn plant(&self) -> Option<&dyn super::plant::Plant> {
+        self.cpu.get_data().plant.as_deref()
     }
 
     // schedule an input change at a modeled cycle
@@ -362,11 +387,20 @@ impl Board {
             bail!("CPU stopped: {f}");
         }
         let now = self.cycles();
+        if !self.cpu.get_data().plant_flips.is_empty() {
+            let flips = std::mem::take(&mut self.cpu.get_data_mut().plant_flips);
+            self.inputs.extend(flips);
+            self.inputs.sort_by_key(|f| std::cmp::Reverse(f.cycle));
+        }
         while self.inputs.last().is_some_and(|f| f.cycle <= now) {
             let f = self.inputs.pop().unwrap();
             self.set_input(f.port, f.pin, f.level);
         }
         self.cpu.get_data_mut().sync(now);
+        if let Some(flag) = self.cpu.get_data().reset_due {
+            self.system_reset(flag);
+            return Ok(());
+        }
         let basepri = self.reg(RegisterARM::BASEPRI);
         let primask = self.reg(RegisterARM::PRIMASK) != 0;
         let next_input = self.inputs.last().map_or(u64::MAX, |f| f.cycle);
@@ -499,6 +533,46 @@ impl Board {
         }
         exception::unstack(&mut self.cpu, exc_return);
         self.cpu.get_data_mut().now += return_cycles;
+    }
+
+    // the IWDG expired or the firmware asked (AIRCR): peripherals to reset (RCC_CSR `flag`
+    // set), the core restarts at the reset vector with the initial SP; RAM keeps its contents
+    // (the firmware's startup code zeroes .bss and copies .data, as after any reset)
+    fn system_reset(&mut self, flag: u32) {
+        self.cpu.get_data_mut().system_reset(flag);
+        if flag == super::iwdg::CSR_IWDGRSTF {
+            self.watchdogs.push(self.cycles());
+        } else {
+            self.soft_resets.push(self.cycles());
+        }
+        let regs = [
+            (RegisterARM::PRIMASK, 0),
+            (RegisterARM::BASEPRI, 0),
+            (RegisterARM::CONTROL, 0),
+            (RegisterARM::MSP, self.image.initial_sp as u64),
+            (RegisterARM::SP, self.image.initial_sp as u64),
+            (RegisterARM::APSR_NZCVQ, 0),
+            (RegisterARM::EPSR, 1 << 24),
+            (RegisterARM::LR, 0xFFFF_FFFF),
+            (RegisterARM::PC, (self.image.reset & !1) as u64),
+        ];
+        for (r, v) in regs {
+            let _ = self.cpu.reg_write(r, v);
+        }
+        self.sleeping = false;
+        self.sleep_on_exit = None;
+        self.split = None;
+        self.stats.isr = None;
+    }
+
+    // modeled cycles at which the firmware reset the MCU (AIRCR.SYSRESETREQ)
+    pub fn system_resets(&self) -> &[u64] {
+        &self.soft_resets
+    }
+
+    // modeled cycles at which the independent watchdog reset the MCU
+    pub fn watchdog_resets(&self) -> &[u64] {
+        &self.watchdogs
     }
 
     // charge an exception return of exception `n` to the profile (the clock is charged apart)

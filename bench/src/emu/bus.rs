@@ -13,6 +13,8 @@ use std::collections::{BTreeMap, HashMap, HashSet};
 
 use super::cost::{Block, BlockCache};
 use super::gpio::{PinEdge, Port};
+use super::exti::{self, Exti};
+use super::iwdg::{self, Iwdg};
 use super::memory::{apb_divider, bridge_cycles, bus_of, Bus, FlashConfig};
 use super::nvic::{Nvic, IRQ0};
 use super::profile::Histogram;
@@ -31,6 +33,10 @@ const TIM1: u32 = 0x4001_2C00;
 const USART1: u32 = 0x4001_3800;
 const GPIOA: u32 = 0x4001_0800;
 const RCC: u32 = 0x4002_1000;
+const IWDG: u32 = 0x4000_3000;
+const EXTI: u32 = 0x4001_0400;
+const AFIO_EXTICR1: u32 = 0x4001_0008;
+const RCC_CSR: u32 = 0x4002_1024;
 const FLASH_IF: u32 = 0x4002_2000;
 const RCC_CFGR: u32 = 0x4002_1004;
 const SCS: u32 = 0xE000_E000;
@@ -126,6 +132,14 @@ pub struct Machine {
     pub bridge_free: u64,
     /// FLASH_ACR was written: blocks are re-costed for this from the next block on.
     pub flash_pending: Option<FlashConfig>,
+    /// Independent watchdog; `reset_due` is set when it expires (the board resets the MCU).
+    pub iwdg: Iwdg,
+    /// A reset is due, with the RCC_CSR flag it leaves (IWDGRSTF, SFTRSTF).
+    pub reset_due: Option<u32>,
+    pub exti: Exti,
+    /// The machine wired to the pins, and the input changes it scheduled (board applies them).
+    pub plant: Option<Box<dyn super::plant::Plant>>,
+    pub plant_flips: Vec<super::board::InputFlip>,
 }
 
 impl Machine {
@@ -134,6 +148,7 @@ impl Machine {
         let mut regs = HashMap::new();
         regs.insert(RCC, 0x0000_0083);
         regs.insert(FLASH_IF, 0x30);
+        regs.insert(RCC_CSR, iwdg::CSR_PORRSTF | iwdg::CSR_PINRSTF);
         Self {
             now: 0,
             insns: 0,
@@ -163,7 +178,44 @@ impl Machine {
             stall: 0,
             bridge_free: 0,
             flash_pending: None,
+            iwdg: Iwdg::default(),
+            reset_due: None,
+            exti: Exti::default(),
+            plant: None,
+            plant_flips: Vec::new(),
         }
+    }
+
+    // a system reset (watchdog): peripherals, NVIC and clocks to their reset state, RCC_CSR
+    // flags `csr` added; time, traces, the serial transcript and external inputs are kept
+    pub fn system_reset(&mut self, csr: u32) {
+        let mut fresh = Machine::new();
+        std::mem::swap(self, &mut fresh);
+        let old = fresh;
+        self.now = old.now;
+        self.insns = old.insns;
+        self.blocks = old.blocks;
+        self.flash_pending = Some(FlashConfig::RESET);
+        self.edges = old.edges;
+        self.record_edges = old.record_edges;
+        self.unmodeled = old.unmodeled;
+        self.logged = old.logged;
+        self.profile = old.profile;
+        self.bridge_free = old.now;
+        self.tim1.changes = old.tim1.changes;
+        self.plant = old.plant;
+        self.plant_flips = old.plant_flips;
+        let u = old.usart1;
+        self.usart1.transcript = u.transcript;
+        self.usart1.tx_times = u.tx_times;
+        self.usart1.rx_queue = u.rx_queue;
+        self.usart1.rx_overruns = u.rx_overruns;
+        for (p, o) in self.ports.iter_mut().zip(&old.ports) {
+            p.ext_level = o.ext_level;
+            p.ext_driven = o.ext_driven;
+        }
+        let flags = old.regs.get(&RCC_CSR).copied().unwrap_or(0) & 0xFE00_0000;
+        self.regs.insert(RCC_CSR, flags | csr);
     }
 
     // the block being executed
@@ -229,14 +281,20 @@ impl Machine {
         if wraps > 0 {
             self.nvic.pending[super::nvic::SYSTICK as usize] = true;
         }
+        if self.iwdg.expires_at(super::board::HZ).is_some_and(|e| e <= t) {
+            self.reset_due = Some(iwdg::CSR_IWDGRSTF);
+        }
         self.nvic.level[(IRQ0 + TIM2_IRQ) as usize] = self.tim2.irq();
+        for line in 0..exti::LINES {
+            self.nvic.level[(IRQ0 + exti::EXTI0_IRQ + line) as usize] = self.exti.irq(line);
+        }
         self.nvic.level[(IRQ0 + USART1_IRQ) as usize] = self.usart1.irq();
         self.pending = self.nvic.any_pending();
     }
 
     // the next cycle at which a peripheral changes state
     pub fn next_event(&self) -> u64 {
-        [self.tim2.next_event(), self.usart1.next_event(), self.systick.next_event()]
+        [self.tim2.next_event(), self.usart1.next_event(), self.systick.next_event(), self.iwdg.expires_at(super::board::HZ)]
             .into_iter()
             .flatten()
             .min()
@@ -261,6 +319,8 @@ impl Machine {
             TIM2..=0x4000_03FF => self.tim2.read(word - TIM2, t),
             TIM1..=0x4001_2FFF => self.tim1.read(word - TIM1),
             USART1..=0x4001_3BFF => self.usart1.read(word - USART1, t),
+            IWDG..=0x4000_33FF => self.iwdg.read(word - IWDG),
+            EXTI..=0x4001_07FF => self.exti.read(word - EXTI),
             GPIOA..=0x4001_1BFF => {
                 let p = ((word - GPIOA) / 0x400) as usize;
                 self.ports[p].read((word - GPIOA) % 0x400)
@@ -302,6 +362,11 @@ impl Machine {
                 self.tim1.write(word - TIM1, merged, t)
             }
             USART1..=0x4001_3BFF => self.usart1.write(word - USART1, v, t),
+            IWDG..=0x4000_33FF => self.iwdg.write(word - IWDG, v, t),
+            EXTI..=0x4001_07FF => {
+                let merged = if word - EXTI == 0x14 { v } else { (self.exti.read(word - EXTI) & !mask) | v };
+                self.exti.write(word - EXTI, merged)
+            }
             GPIOA..=0x4001_1BFF => self.gpio_write(word, v, mask, lands),
             0xE000_E010..=0xE000_E01F => self.systick.write(word - 0xE000_E010, v, t),
             DWT_CTRL => {
@@ -323,10 +388,30 @@ impl Machine {
                     _ => v,
                 };
                 self.nvic.write(word - SCS, merged);
+                // AIRCR.SYSRESETREQ (with the key): a system reset.
+                if word == SCS + 0xD0C && v >> 16 == 0x05FA && v & 4 != 0 {
+                    self.reset_due = Some(iwdg::CSR_SFTRSTF);
+                    self.deadline = 0; // stop at the next block
+
+                }
             }
             _ => self.plain_write(word, v, mask),
         }
         self.sync(t);
+    }
+
+    // an external level change of input `pin` on port `port` (index): EXTI edge detection
+    pub fn input_edge(&mut self, port: usize, pin: u8, before: bool) {
+        let after = self.ports[port].idr() & 1 << pin != 0;
+        if pin as u32 >= exti::LINES || before == after {
+            return;
+        }
+        let cr = self.regs.get(&(AFIO_EXTICR1 + 4 * (pin as u32 / 4))).copied().unwrap_or(0);
+        if (cr >> (4 * (pin as u32 % 4))) & 0xF == port as u32 {
+            self.exti.edge(pin as u32, after);
+            let now = self.now;
+            self.sync(now);
+        }
     }
 
     fn gpio_write(&mut self, word: u32, v: u32, mask: u32, t: u64) {
@@ -339,6 +424,13 @@ impl Machine {
                 self.first_bsrr = Some(t);
             }
             let changed = old ^ new;
+            if let (Some(plant), true) = (&mut self.plant, changed != 0) {
+                plant.outputs(t, p as u8, old, new, &mut self.plant_flips);
+                // Stop the CPU in time for the earliest input change.
+                if let Some(first) = self.plant_flips.iter().map(|f| f.cycle).min() {
+                    self.deadline = self.deadline.min(first);
+                }
+            }
             if self.record_edges && changed != 0 {
                 for pin in 0..16 {
                     if changed & 1 << pin != 0 {
@@ -360,6 +452,7 @@ impl Machine {
             }
             0x4002_1004 => (v & !0xC) | (v & 3) << 2, // CFGR.SWS = SW
             0x4002_200C => 0,                          // FLASH_SR: never busy
+            RCC_CSR => v | (v & 1) << 1,               // LSIRDY = LSION
             FLASH_IF => (v & !0x20) | (v & 0x10) << 1, // ACR.PRFTBS = PRFTBE
             _ => {
                 self.log_unmodeled(word);
@@ -371,6 +464,10 @@ impl Machine {
     fn plain_write(&mut self, word: u32, v: u32, mask: u32) {
         let old = self.regs.get(&word).copied().unwrap_or(0);
         self.regs.insert(word, (old & !mask) | v);
+        if word == RCC_CSR && v & iwdg::CSR_RMVF != 0 {
+            // RMVF clears every reset flag (and reads back 0).
+            self.regs.insert(word, old & !mask & 0x00FF_FFFF | v & 0x00FF_FFFF & !iwdg::CSR_RMVF);
+        }
         if word == FLASH_IF {
             self.flash_pending = Some(FlashConfig::from_acr((old & !mask) | v));
         }

@@ -44,6 +44,8 @@ pub struct Options {
     pub json: Option<PathBuf>,
     /// Scheduled input changes (simulated time).
     pub inputs: Vec<InputFlip>,
+    /// A virtual machine wired to the pins (`--machine`).
+    pub machine: Option<crate::machine::MachineSpec>,
 }
 
 /// What a finished run did.
@@ -110,6 +112,9 @@ pub fn run(opts: &Options) -> Result<Summary> {
     let pty = Pty::open(opts.pty_link.as_deref())?;
     let mut tcp = opts.tcp.as_deref().map(Tcp::bind).transpose()?;
     let mut board = Board::load(&opts.elf)?;
+    if let Some(m) = &opts.machine {
+        board.attach_plant(Box::new(crate::machine::VirtualMachine::new(m)));
+    }
     for f in &opts.inputs {
         board.schedule_input(*f);
     }

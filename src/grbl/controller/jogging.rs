@@ -27,6 +27,9 @@ impl<const N: usize> Controller<'_, N> {
             return Err(Error::NotIdle);
         }
         let j = jog::plan(text, self.axes, &self.modal, self.planner.position_mm(), &self.offsets)?;
+        if self.beyond_travel(&j.target) {
+            return Err(Error::TravelExceeded);
+        }
         let mut planner = self.planner;
         let mv = planner.line(&j.target, Some(j.feed), &self.limits)?;
         self.planner = planner;

@@ -89,6 +89,7 @@ impl<const N: usize> Controller<'_, N> {
                 feed: rate * per_step * 60.0,
                 speed,
                 acc: &acc[..n_acc],
+                pins: self.limit_pins,
                 wco: show_wco.then_some(&wco[..n]),
                 ov: show_ov.then_some(ov),
             },

@@ -1,0 +1,89 @@
+//! Hard limits (`$21`): EXTI lines 0–2 on the X, Y, Z limit inputs (PA0–PA2), both edges, at
+//! the step interrupt's priority (so it runs right after a step interrupt in progress, never
+//! in the middle of its BSRR store). When an edge leaves a limit pin active that was not
+//! active at the last poll (`$5` applied; as Grbl's `HARD_LIMIT_FORCE_STATE_CHECK`, and so
+//! neither a switch's release nor its bounce trips), the handler
+//! stops TIM2 and its interrupt, drives every step pin low and sets [`HALTED`]; the idle loop
+//! then reports ALARM:1. The engine is not touched: its move is cut where the timer stopped,
+//! so the Ctrl-X that follows restarts the MCU (with a marker in .uninit RAM that makes the
+//! next boot an alarm: the position is lost).
+
+use core::mem::MaybeUninit;
+use core::sync::atomic::{AtomicBool, AtomicU32, Ordering::Relaxed};
+
+use ddastep::board;
+use stm32f1xx_hal::pac;
+
+/// The limit interrupt stopped the step output (cleared only by the restart).
+pub static HALTED: AtomicBool = AtomicBool::new(false);
+/// Bit 0: `$21` on; bit 1: `$5` (pins inverted); bits 8–10: pins already active at the last
+/// poll (a carriage resting on or leaving its switch: the release bounce must not trip).
+/// Written by `idle`, read by the handler.
+static ARMED: AtomicU32 = AtomicU32::new(0);
+/// EXTI lines 0, 1, 2 (PA0, PA1, PA2: AFIO_EXTICR1 selects port A at reset).
+const LINES: u32 = 0b111;
+/// Marker in RAM the startup code leaves alone: "restarted after a hard limit".
+const LOST_MAGIC: u32 = 0x4C49_4D54;
+#[link_section = ".uninit.DDASTEP_LOST"]
+static mut LOST: MaybeUninit<u32> = MaybeUninit::uninit();
+
+fn exti() -> &'static pac::exti::RegisterBlock {
+    // SAFETY: `setup` runs in init; afterwards `arm` writes IMR (idle) and the handler writes
+    // PR (rc_w1: clearing its own lines); the two registers are independent.
+    unsafe { &*pac::EXTI::ptr() }
+}
+
+/// Both edges of the three lines; masked until [`arm`].
+pub fn setup() {
+    let e = exti();
+    e.imr().write(|w| unsafe { w.bits(0) });
+    e.rtsr().write(|w| unsafe { w.bits(LINES) });
+    e.ftsr().write(|w| unsafe { w.bits(LINES) });
+    e.pr().write(|w| unsafe { w.bits(LINES) });
+}
+
+/// Follows `$21` and `$5`, and the pins active now (every poll: two stores).
+pub fn arm(on: bool, invert: bool, active: u8) {
+    ARMED.store(on as u32 | (invert as u32) << 1 | (active as u32) << 8, Relaxed);
+    exti().imr().write(|w| unsafe { w.bits(if on { LINES } else { 0 }) });
+}
+
+/// The EXTI0/1/2 handler body: stop all step output if a limit pin is active.
+pub fn on_edge() {
+    exti().pr().write(|w| unsafe { w.bits(LINES) });
+    let armed = ARMED.load(Relaxed);
+    if armed & 1 == 0 || HALTED.load(Relaxed) {
+        return;
+    }
+    let active = ddastep::limits::active_pins(super::hw::gpioa_idr(), armed & 2 != 0) as u32;
+    if active & !(armed >> 8) == 0 {
+        return;
+    }
+    // TIM2 off (counter, interrupt enables, flags, NVIC pending), then the step pins low.
+    let t = super::hw::tim2();
+    t.cr1().modify(|r, w| unsafe { w.bits(r.bits() & !1) });
+    t.dier().write(|w| unsafe { w.bits(0) });
+    t.sr().write(|w| unsafe { w.bits(0) });
+    cortex_m::peripheral::NVIC::unpend(pac::Interrupt::TIM2);
+    let low = board::STEP_PINS.iter().fold(0u32, |w, &p| w | 1 << (p + 16));
+    super::hw::gpiob().bsrr().write(|w| unsafe { w.bits(low) });
+    HALTED.store(true, Relaxed);
+}
+
+/// True (once) when this boot follows a restart after a hard limit.
+pub fn take_lost_marker() -> bool {
+    // SAFETY: init only, before interrupts; a plain word in .uninit (any value is valid).
+    unsafe {
+        let p = core::ptr::addr_of_mut!(LOST) as *mut u32;
+        let lost = p.read_volatile() == LOST_MAGIC;
+        p.write_volatile(0);
+        lost
+    }
+}
+
+/// Ctrl-X after a hard limit: restart the MCU, marking the position lost.
+pub fn restart_lost() -> ! {
+    // SAFETY: idle only; the marker is read by the next boot's init.
+    unsafe { (core::ptr::addr_of_mut!(LOST) as *mut u32).write_volatile(LOST_MAGIC) };
+    cortex_m::peripheral::SCB::sys_reset()
+}

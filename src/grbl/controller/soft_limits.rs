@@ -1,0 +1,77 @@
+//! Soft limits in the controller, as Grbl 1.1's `limits_soft_check`: a G-code target outside
+//! the travel box (see [`crate::limits`]) feed-holds what is already moving, flushes the queue
+//! once the machine has stopped (so the position stays exact), then reports ALARM:2 and
+//! `[MSG:Reset to continue]` and reads nothing more until Ctrl-X, after which the controller
+//! is in the alarm state (`$X` unlocks). The offending line gets no reply and moves nothing.
+//! Jogs are checked separately (`error:15`, in `jogging.rs`).
+//!
+//! A hard limit (`$21`, [`Controller::hard_limit`]) takes the same locked state at once: the
+//! firmware's limit interrupt has already stopped the step timer, so the queue is dropped
+//! without a hold, ALARM:1 is reported, and the position is lost (the shell restarts the MCU
+//! at the Ctrl-X, which boots in the alarm state).
+
+use super::Controller;
+use crate::limits;
+use crate::protocol::Out;
+use crate::queue::State;
+use crate::report;
+
+/// Where a soft-limit trip stands.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum SoftLimit {
+    Off,
+    /// Tripped: holding until the engine has stopped.
+    Stopping,
+    /// ALARM:2 reported: waiting for Ctrl-X.
+    Locked,
+}
+
+impl<const N: usize> Controller<'_, N> {
+    /// True when soft limits are on and `target` (machine mm) leaves the travel box.
+    pub(super) fn beyond_travel(&self, target: &[f64; N]) -> bool {
+        self.settings.soft_limits && limits::outside(target, &self.settings.max_travel, self.axes)
+    }
+
+    /// A G-code line asked for a target outside the box: stop everything (see the module).
+    pub(super) fn soft_limit_trip(&mut self) {
+        self.job = None;
+        self.lines.clear();
+        self.alarm = true;
+        self.shared.set_hold(true);
+        self.soft_limit = SoftLimit::Stopping;
+    }
+
+    /// A limit switch stopped the step output (the shell already halted the step timer):
+    /// drop everything, ALARM:1 and `[MSG:Reset to continue]`, read nothing until Ctrl-X.
+    pub fn hard_limit(&mut self, out: &mut impl Out) {
+        self.job = None;
+        self.lines.clear();
+        self.alarm = true;
+        self.feeder.abort();
+        self.pushed = self.shared.moves_done();
+        self.planner.sync(self.shared.positions(), &self.limits);
+        out.put(report::ALARM_HARD_LIMIT);
+        self.soft_limit = SoftLimit::Locked;
+    }
+
+    /// True from a soft- or hard-limit trip until the reset.
+    pub(super) fn tripped(&self) -> bool {
+        self.soft_limit != SoftLimit::Off
+    }
+
+    /// Finishes a trip once the engine stands still: flush, re-sync, ALARM:2.
+    pub(super) fn soft_limit_poll(&mut self, out: &mut impl Out) {
+        if self.soft_limit != SoftLimit::Stopping || matches!(self.shared.state(), State::Run | State::Holding) {
+            return;
+        }
+        if out.room() < report::ALARM_SOFT_LIMIT.len() {
+            return;
+        }
+        self.feeder.abort();
+        self.shared.set_hold(false);
+        self.pushed = self.shared.moves_done();
+        self.planner.sync(self.shared.positions(), &self.limits);
+        out.put(report::ALARM_SOFT_LIMIT);
+        self.soft_limit = SoftLimit::Locked;
+    }
+}
