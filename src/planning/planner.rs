@@ -275,8 +275,10 @@ mod tests {
     use super::*;
     use crate::ramp::period_of_hz;
 
+    /// The bench settings with the table top the firmware would build for 3 axes.
     fn lim() -> Limits<3> {
-        Limits::new(&Settings::BENCH, 60_000)
+        let s = Settings::BENCH;
+        Limits::new(&s, s.ramp_config(3, &s.timing()).vmax)
     }
 
     #[test]
