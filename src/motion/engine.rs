@@ -35,13 +35,18 @@ use crate::prepared::{Prepared, RampPlan};
 use crate::queue::{Shared, State};
 use crate::ramp::{Period, RampSlot, RAMP_LEN};
 use crate::ring::RingConsumer;
-use crate::walk::{Step as WalkStep, Walk};
+use crate::walk::{base_at, scaled, Step as WalkStep, Walk, FRESH, FRESH_MASK, PERIOD, PREDICT, TRIGGER};
 use crate::TICKS_PER_MS;
 
 /// Longest timer period one tick can set (ARR is 16 bits).
 pub const MAX_TICK: u32 = 1 << 16;
 /// Period of idle ticks while no move runs (0.5 ms: a new move starts within this).
 pub const IDLE_TICKS: u32 = TICKS_PER_MS / 2;
+/// A tick whose own period (the gap from its update event to the next) is shorter than this
+/// (2048 ticks: above 35 kHz, or a direction change's short gaps) runs at most one piece of
+/// ramp work, so its ARR store lands before the next update event; with a longer period it
+/// does all that is due at once.
+const SHORT_GAP: u32 = 2048;
 
 /// What the engine is doing.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -77,6 +82,14 @@ pub struct Engine<'a, const N: usize, const L: usize = RAMP_LEN> {
     n_slaves: u8,
     min_period: Period,
     period: Period,
+    /// The table's period at the walk's index (bits), before the move's scale.
+    base: u32,
+    /// This tick's own period: from its update event to the next (the previous tick's ARR).
+    gap_in: u32,
+    /// The index the next ramp millisecond moves to if it moves, and the table's period there
+    /// (looked up ahead on a quiet tick, so the millisecond's own tick only scales it).
+    next_idx: u32,
+    next_base: u32,
     walk: Walk,
     hold: bool,
     /// The running move's direction change is still to be written (kept across a hold).
@@ -109,6 +122,10 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
             n_slaves: 0,
             min_period: Period::ZERO,
             period: Period::ZERO,
+            base: 0,
+            gap_in: 0,
+            next_idx: u32::MAX,
+            next_base: 0,
             walk: Walk::REST,
             hold: false,
             dir_pending: false,
@@ -161,13 +178,28 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
         };
         self.extend = rem - chunk;
         self.ms_left -= chunk as i32;
-        if self.ms_left <= 0 {
+        if self.ms_left <= 0 && !self.quiet_tick() {
             self.ms_left += TICKS_PER_MS as i32;
             self.walk_ramp();
         } else if self.walk.unsettled() {
-            self.settle();
+            let pending = self.walk.pending;
+            if pending & FRESH_MASK != 0 {
+                // Set by this tick's step (this tick has paid for that), or a short gap or
+                // another piece's delay comes first.
+                self.walk.pending = pending - FRESH;
+            } else {
+                self.settle();
+            }
         }
+        self.gap_in = chunk;
         (chunk - 1) as u16
+    }
+
+    /// A ramp millisecond due now waits (a tick or two) while this tick's period is short and
+    /// it must run no ramp work ([`FRESH`]); with a long period it runs at once.
+    #[inline(always)]
+    fn quiet_tick(&self) -> bool {
+        self.walk.pending & FRESH_MASK != 0 && self.gap_in < SHORT_GAP
     }
 
     /// The next edge: a step, a direction change or an idle gap, with the gap after it.
@@ -237,7 +269,17 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
         let target = self.target();
         self.walk.start_decel(&self.plan, target);
         self.ms_left = TICKS_PER_MS as i32;
-        self.set_period();
+        self.period_soon();
+        self.walk.pending |= PREDICT;
+        self.fresh(3);
+    }
+
+    /// No ramp work on this tick and the `n - 1` after it (the count never drops).
+    #[inline(always)]
+    fn fresh(&mut self, n: u8) {
+        if self.walk.pending & FRESH_MASK < n * FRESH {
+            self.walk.pending = (self.walk.pending & !FRESH_MASK) | n * FRESH;
+        }
     }
 
     /// The exit target: 0 under a hold or when no successor is queued yet.
@@ -257,35 +299,91 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
         if !matches!(self.phase, Phase::Run | Phase::Dir) {
             return;
         }
-        let target = self.target();
         while self.walk.unsettled() {
-            // Slower than a step per ms: the work of the ticks in between happens here.
-            self.walk.settle(&self.plan, target, &self.ramp.profile().ramp);
+            // Slow steps: the work of the ticks in between happens here.
+            self.settle();
         }
+        let target = self.target();
         match self.walk.per_ms(&self.plan, target, self.left) {
             WalkStep::Same => {}
             WalkStep::AtRest if self.hold => {
                 self.phase = Phase::Held;
                 self.publish(State::Held);
             }
-            _ => self.set_period(),
+            _ => {
+                if self.walk.idx == self.next_idx {
+                    self.base = self.next_base;
+                    self.apply_period();
+                } else {
+                    self.period_soon();
+                }
+                self.walk.pending |= PREDICT;
+            }
         }
     }
 
-    /// Pending trigger work, one distance (a tick without a ramp millisecond).
+    /// Looks up the period one walk on (where the next ramp millisecond goes).
+    #[inline(always)]
+    fn predict(&mut self) {
+        let target = self.target();
+        self.next_idx = self.walk.next_idx(&self.plan, target);
+        self.next_base = base_at(self.next_idx, &self.ramp.profile().ramp);
+    }
+
+    /// Pending ramp work, one piece (a tick without a ramp millisecond): the period at a new
+    /// index, else one trigger distance.
     #[inline(never)]
     fn settle(&mut self) {
         if !matches!(self.phase, Phase::Run | Phase::Dir) {
+            self.walk.pending = 0;
             return;
         }
-        let target = self.target();
-        self.walk.settle(&self.plan, target, &self.ramp.profile().ramp);
+        let pending = self.walk.pending;
+        if pending & FRESH_MASK != 0 {
+            // Set by this tick's step (this tick has paid for that), or a short gap follows.
+            self.walk.pending = pending - FRESH;
+        } else {
+            if pending & PERIOD != 0 {
+                self.walk.pending = pending & !PERIOD;
+                self.set_period();
+            } else if pending & PREDICT != 0 {
+                self.walk.pending = pending & !PREDICT;
+                self.predict();
+            } else if pending & TRIGGER != 0 {
+                let target = self.target();
+                self.walk.settle_trigger(&self.plan, target, &self.ramp.profile().ramp);
+            } else {
+                self.walk.settle_up(&self.plan, &self.ramp.profile().ramp);
+            }
+            // Fast: two plain ticks before the next piece, so the delay a piece adds to the
+            // next edges is made up before another comes.
+            if self.walk.pending != 0 && self.gap_in < SHORT_GAP {
+                self.fresh(2);
+            }
+        }
     }
 
-    /// Period for the current ramp index.
+    /// The index moved: its period now when this tick's period is long, else on a later tick.
+    #[inline(always)]
+    fn period_soon(&mut self) {
+        if self.gap_in < SHORT_GAP {
+            self.walk.pending |= PERIOD;
+        } else {
+            self.set_period();
+        }
+    }
+
+    /// Period for the current ramp index (a table lookup).
     #[inline(always)]
     fn set_period(&mut self) {
-        self.period = self.walk.period(&self.plan, self.min_period, &self.ramp.profile().ramp);
+        self.base = self.walk.base(&self.ramp.profile().ramp);
+        self.apply_period();
+    }
+
+    /// Period for the table's period already looked up and the running move's scale.
+    #[inline(always)]
+    fn apply_period(&mut self) {
+        self.period = scaled(self.base, &self.plan, self.min_period);
         self.shared.period_bits.store(self.period.to_bits(), Relaxed);
     }
 
@@ -311,6 +409,7 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
             Phase::Run | Phase::Dir => {
                 self.walk.decel = false;
                 self.plan_decel();
+                self.walk.pending |= PREDICT;
                 self.publish(State::Run);
             }
             Phase::Held => {
@@ -318,6 +417,7 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
                 self.walk = Walk::REST;
                 self.plan_decel();
                 self.set_period();
+                self.predict();
                 self.ms_left = TICKS_PER_MS as i32;
                 self.phase = if self.dir_pending { Phase::Dir } else { Phase::Run };
                 self.publish(State::Run);
@@ -346,13 +446,19 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
         self.left = self.total;
         self.shared.start_move(p as *const Prepared<N>);
         self.walk.decel = self.hold;
-        // The trigger comes at the next tick (a move change costs no distance).
+        // The trigger comes at the next tick (a move change costs no distance), and the
+        // table's period at the index is the one the previous move ran at.
         self.walk.defer_decel();
-        self.set_period();
+        self.walk.pending |= PREDICT;
+        self.apply_period();
     }
 
     /// The running move made its last step: switch to the next one at speed, or go idle.
-    /// Returns the gap after the last step (shortened when a direction change comes first).
+    /// Returns the gap after the last step: shortened when a direction change comes first and
+    /// steps are slow (then this tick's own work fits in the period before it); at speed the
+    /// change comes one whole period after the last step, since this tick's late ARR store
+    /// would otherwise shorten the setup gap instead. The direction tick and the first step's
+    /// run no ramp work, so both fit in their gaps.
     #[inline(never)]
     fn finish(&mut self, gap: u32) -> u32 {
         self.shared.moves_done.fetch_add(1, Relaxed);
@@ -361,11 +467,15 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
             // SAFETY: a published slot; plain fields.
             let (epoch, dir, setup, min_gap) = unsafe { ((*p).epoch, (*p).dir_word, (*p).dir_setup, (*p).min_gap) };
             if epoch == self.ctl_seen.epoch() {
+                let slow = self.gap_in >= SHORT_GAP;
                 self.enter(p);
                 if dir != 0 {
                     self.phase = Phase::Dir;
                     self.dir_pending = true;
-                    return gap.saturating_sub(setup).max(min_gap);
+                    self.fresh(3);
+                    if slow {
+                        return gap.saturating_sub(setup).max(min_gap);
+                    }
                 }
                 return gap;
             }
@@ -434,13 +544,16 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
             return (0, IDLE_TICKS);
         }
         self.walk = Walk::REST;
+        self.base = self.walk.base(&self.ramp.profile().ramp);
         self.enter(p);
+        self.predict();
         self.phase = Phase::Run;
         self.publish(State::Run);
         // The ramp's milliseconds start at the move's first step.
         self.ms_left = TICKS_PER_MS as i32;
         if dir != 0 {
             self.ms_left += setup as i32;
+            self.fresh(2);
             (dir, setup)
         } else {
             self.step()

@@ -72,7 +72,7 @@ pub struct Prepared<const N: usize> {
     /// Direction pins to change before the first step (0: none, no setup gap).
     pub(crate) dir_word: u32,
     pub(crate) dir_setup: u32,
-    /// Shortest gap between two edges (the pulse and its low time).
+    /// Shortest gap between two edges (the pulse and its low time, a step tick's cost).
     pub(crate) min_gap: u32,
     // The position record.
     pub(crate) start: [i32; N],
@@ -139,8 +139,9 @@ impl<const N: usize> Prepared<N> {
             exit_q: AtomicU32::new(ramp.exit_q),
             min_period: Period::from_bits(t.min_period_for(n as u32).saturating_mul(16)),
             dir_word,
-            dir_setup: (t.dir_setup_ticks + STORE_JITTER_TICKS).max(t.min_period_ticks),
-            min_gap: t.min_period_ticks,
+            // Both gaps hold a step tick of this move (its handler cost, as its periods do).
+            dir_setup: (t.dir_setup_ticks + STORE_JITTER_TICKS).max(t.min_period_for(n as u32)),
+            min_gap: t.min_period_for(n as u32),
             start,
             steps,
             epoch,

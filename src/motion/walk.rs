@@ -36,10 +36,22 @@ pub enum Step {
     AtRest,
 }
 
-/// Trigger work left for the next tick (one distance per tick, so no tick pays for two).
+/// Work left for the ticks after a ramp millisecond or a move change, one piece per tick so no
+/// tick pays for two: the period at a new index ([`PERIOD`], the engine's), then the trigger
+/// distance for the current index and target, then the one from a walk up.
 const SETTLED: u8 = 0;
-const TRIGGER: u8 = 1;
-const UP: u8 = 2;
+/// The engine's period for the walk's index is still to be computed (bit; done first).
+pub const PERIOD: u8 = 1;
+/// The trigger distance for the current index and target is due (bit).
+pub const TRIGGER: u8 = 2;
+const UP: u8 = 4;
+/// The engine's look-up of the period one walk on is due (bit; after [`PERIOD`]).
+pub const PREDICT: u8 = 32;
+/// Ticks that run no ramp work (a count in bits 3–4, one unit each): the work was set by this
+/// tick's own step (a trigger, a move change), or a direction change's short gaps come next.
+pub const FRESH: u8 = 8;
+/// The bits of the [`FRESH`] count.
+pub const FRESH_MASK: u8 = 3 * FRESH;
 
 /// The walk's state.
 #[derive(Clone, Copy, Debug, Default)]
@@ -55,15 +67,20 @@ pub struct Walk {
     /// The deceleration distance from one walk up: going up needs at least this many steps
     /// left (and it becomes `decel_at` there).
     pub up_at: u32,
-    /// Trigger work for the next tick ([`Walk::settle`]).
-    pending: u8,
+    /// Work for the next ticks ([`Walk::settle`], [`PERIOD`]).
+    pub pending: u8,
+    /// `decel_for`'s distance sum and slope on the table (so the distance from one walk up
+    /// costs only its own end).
+    t_sum: u32,
+    t_slope: u32,
 }
 
 impl Walk {
     /// From rest.
-    pub const REST: Walk = Walk { idx: 0, decel: false, decel_at: 0, decel_for: u32::MAX, up_at: u32::MAX, pending: SETTLED };
+    pub const REST: Walk =
+        Walk { idx: 0, decel: false, decel_at: 0, decel_for: u32::MAX, up_at: u32::MAX, pending: SETTLED, t_sum: 0, t_slope: 0 };
 
-    /// True when [`Self::settle`] has work for this tick.
+    /// True when ramp work is pending ([`PERIOD`], [`TRIGGER`], the distance from a walk up).
     #[inline(always)]
     pub fn unsettled(&self) -> bool {
         self.pending != SETTLED
@@ -81,7 +98,7 @@ impl Walk {
             return if target == 0 { Step::AtRest } else { Step::Same };
         }
         if target != self.decel_for {
-            self.pending = TRIGGER; // a successor came (or went): both distances again
+            self.pending |= TRIGGER; // a successor came (or went): both distances again
             return Step::Same;
         }
         // Up one walk only if the way down from there still fits in the steps left;
@@ -89,7 +106,7 @@ impl Walk {
         if self.idx < plan.cruise_q && left >= self.up_at {
             self.idx = (self.idx + plan.walk_q).min(plan.cruise_q);
             self.decel_at = self.up_at;
-            self.pending = UP;
+            self.pending |= UP;
             return Step::Moved;
         }
         Step::Same
@@ -98,10 +115,30 @@ impl Walk {
     /// The trigger for the current index and target, at once (a move start, a resume).
     #[inline(always)]
     pub fn plan_decel<const L: usize>(&mut self, plan: &RampPlan, target: u32, table: &RampTable<L>) {
-        self.decel_at = decel_steps(self.idx, target, plan, table);
-        self.decel_for = target;
+        self.aim(target, table);
+        self.decel_at = self.decel_from(self.idx, plan, table);
         self.up_at = u32::MAX;
-        self.pending = UP;
+        self.pending = (self.pending & PERIOD) | UP;
+    }
+
+    /// Sets the target the distances are computed for (its sum and slope on the table).
+    #[inline(always)]
+    fn aim<const L: usize>(&mut self, target: u32, table: &RampTable<L>) {
+        self.decel_for = target;
+        let t = target.min(table.top_q());
+        self.t_sum = table.sum_at(t);
+        self.t_slope = table.per_ms_at(t);
+    }
+
+    /// Master steps walking down from `idx` to `decel_for` (samples at idx − walk, …, target, one
+    /// per ms: the table distance less half the end slopes, plus [`DECEL_MARGIN`]), with the
+    /// target's end cached; none when `idx` is not above the target.
+    #[inline(always)]
+    fn decel_from<const L: usize>(&self, idx: u32, plan: &RampPlan, table: &RampTable<L>) -> u32 {
+        if idx <= self.decel_for {
+            return DECEL_MARGIN;
+        }
+        ends_steps(table.sum_at(idx) - self.t_sum, table.per_ms_at(idx).saturating_sub(self.t_slope), plan)
     }
 
     /// The trigger for a new move at the next tick; until then it cannot fire.
@@ -110,34 +147,38 @@ impl Walk {
         self.decel_at = 0;
         self.decel_for = u32::MAX;
         self.up_at = u32::MAX;
-        self.pending = TRIGGER;
+        self.pending = (self.pending & (PERIOD | FRESH_MASK)) | TRIGGER;
+        if self.pending & FRESH_MASK == 0 {
+            self.pending |= FRESH;
+        }
     }
 
-    /// One distance of pending trigger work (a tick without a ramp millisecond).
+    /// Pending trigger work: the trigger for the current index and `target` (a tick without a
+    /// ramp millisecond; the engine does [`PERIOD`] before it, and this only when
+    /// [`TRIGGER`] is pending).
     #[inline(always)]
-    pub fn settle<const L: usize>(&mut self, plan: &RampPlan, target: u32, table: &RampTable<L>) {
-        if self.pending == TRIGGER {
-            self.decel_at = decel_steps(self.idx, target, plan, table);
-            self.decel_for = target;
-            self.pending = UP;
+    pub fn settle_trigger<const L: usize>(&mut self, plan: &RampPlan, target: u32, table: &RampTable<L>) {
+        self.aim(target, table);
+        self.decel_at = self.decel_from(self.idx, plan, table);
+        self.pending = (self.pending & PERIOD) | UP;
+    }
+
+    /// Pending trigger work: the distance from one walk up (the last piece).
+    #[inline(always)]
+    pub fn settle_up<const L: usize>(&mut self, plan: &RampPlan, table: &RampTable<L>) {
+        self.up_at = if self.idx < plan.cruise_q {
+            self.decel_from((self.idx + plan.walk_q).min(plan.cruise_q), plan, table)
         } else {
-            self.up_at = if self.idx < plan.cruise_q {
-                decel_steps((self.idx + plan.walk_q).min(plan.cruise_q), self.decel_for, plan, table)
-            } else {
-                u32::MAX
-            };
-            self.pending = SETTLED;
-        }
+            u32::MAX
+        };
+        self.pending &= PERIOD;
     }
 }
 
-/// Master steps walking down from `idx` to `target` (samples at idx − walk, …, target, one per
-/// ms: the table distance less half the end slopes), plus [`DECEL_MARGIN`].
+/// Steps of a walk down over table distance `d` whose end slopes differ by `slopes`.
 #[inline(always)]
-fn decel_steps<const L: usize>(idx: u32, target: u32, plan: &RampPlan, table: &RampTable<L>) -> u32 {
-    let t = target.min(idx);
-    let d = table.sum_at(idx) - table.sum_at(t);
-    let ends = (table.per_ms_at(idx).saturating_sub(table.per_ms_at(t)) as u64 * plan.walk_q as u64) >> 21;
+fn ends_steps(d: u32, slopes: u32, plan: &RampPlan) -> u32 {
+    let ends = (slopes as u64 * plan.walk_q as u64) >> 21;
     let steps = ((d as u64).saturating_sub(ends).min(u32::MAX as u64) * plan.dist_q as u64) >> 24;
     (steps.min(u32::MAX as u64 - DECEL_MARGIN as u64) as u32) + DECEL_MARGIN
 }
@@ -148,16 +189,44 @@ impl Walk {
     pub fn start_decel(&mut self, plan: &RampPlan, target: u32) {
         self.decel = true;
         self.decel_at = 0;
-        self.pending = SETTLED;
+        self.pending &= PERIOD;
         if self.idx > target {
             self.idx = self.idx.saturating_sub(plan.walk_q).max(target);
         }
     }
-    /// The master period at the current index for a move's plan, never below `min`.
+
+    /// Where the next ramp millisecond takes the index if it moves: one walk down towards
+    /// `target` when decelerating, else one walk up towards the cruise.
     #[inline(always)]
-    pub fn period<const L: usize>(&self, plan: &RampPlan, min: Period, table: &RampTable<L>) -> Period {
-        let p = if table.is_empty() { Period::ZERO } else { table.period_at(self.idx) };
-        let scaled = ((p.to_bits() as u64 * plan.scale as u64) >> 16).min(u32::MAX as u64) as u32;
-        Period::from_bits(scaled).max(plan.cruise).max(min)
+    pub fn next_idx(&self, plan: &RampPlan, target: u32) -> u32 {
+        if self.decel {
+            self.idx.saturating_sub(plan.walk_q).max(target)
+        } else {
+            (self.idx + plan.walk_q).min(plan.cruise_q)
+        }
     }
+
+    /// The table's period at the current index (0 for an empty table: moves cruise).
+    #[inline(always)]
+    pub fn base<const L: usize>(&self, table: &RampTable<L>) -> u32 {
+        base_at(self.idx, table)
+    }
+}
+
+/// The table's period (bits) at index `idx` (0 for an empty table: moves cruise).
+#[inline(always)]
+pub fn base_at<const L: usize>(idx: u32, table: &RampTable<L>) -> u32 {
+    if table.is_empty() {
+        0
+    } else {
+        table.period_at(idx).to_bits()
+    }
+}
+
+/// A move's master period from the table's period `base` (bits): scaled by its master's share,
+/// never below its cruise nor `min`.
+#[inline(always)]
+pub fn scaled(base: u32, plan: &RampPlan, min: Period) -> Period {
+    let scaled = ((base as u64 * plan.scale as u64) >> 16).min(u32::MAX as u64) as u32;
+    Period::from_bits(scaled).max(plan.cruise).max(min)
 }

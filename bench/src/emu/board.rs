@@ -19,7 +19,7 @@ use super::exception;
 use super::gpio::PinEdge;
 use super::nvic::IRQ0;
 use super::profile::{self, FnCost};
-use super::stats::{IsrEntry, Stats};
+use super::stats::{IsrEntry, IsrRun, Stats};
 
 /// Core clock: modeled cycles per second.
 pub const HZ: u64 = 72_000_000;
@@ -368,6 +368,18 @@ impl Board {
         windows.map(|w| self.stats.window_isr_load(w as usize)).collect()
     }
 
+    // start (clearing) or stop the log of every step-interrupt run (cycles, update event,
+    // BSRR store, blocks run): where the long ticks are
+    pub fn set_isr_log(&mut self, on: bool) {
+        self.cpu.get_data_mut().isr_blocks = on.then(Vec::new);
+        self.stats.isr_log = on.then(Vec::new);
+    }
+
+    // the step-interrupt runs logged since `set_isr_log(true)`
+    pub fn isr_log(&self) -> &[IsrRun] {
+        self.stats.isr_log.as_deref().unwrap_or(&[])
+    }
+
     // start (clearing) or stop the per-block cycle histogram
     pub fn set_profile(&mut self, on: bool) {
         self.cpu.get_data_mut().profile = on.then(Default::default);
@@ -510,8 +522,11 @@ impl Board {
         m.account(profile::ENTRY, cost, 0);
         if n == IRQ0 + TIM2_IRQ {
             m.first_bsrr = None;
+            if let Some(b) = &mut m.isr_blocks {
+                b.clear();
+            }
             let update = (m.tim2.sr & 1 != 0).then_some(m.tim2.last_update);
-            self.stats.isr = Some(IsrEntry { start, insns: m.insns, update });
+            self.stats.isr = Some(IsrEntry { start, insns: m.insns, update, overruns: m.tim2.overruns });
         }
     }
 
@@ -527,8 +542,10 @@ impl Board {
         let (_, return_cycles, tail) = self.cpu.get_data().exception_cycles();
         let ret = if next.is_some() { 0 } else { return_cycles };
         if n == IRQ0 + TIM2_IRQ {
-            let m = self.cpu.get_data();
-            self.stats.isr_done(now + ret, m.insns, m.first_bsrr);
+            let m = self.cpu.get_data_mut();
+            let blocks = m.isr_blocks.as_mut().map(std::mem::take).unwrap_or_default();
+            let (insns, bsrr) = (m.insns, m.first_bsrr);
+            self.stats.isr_done(now + ret, insns, bsrr, blocks);
         }
         if let Some(next) = next {
             self.take(next, exc_return, tail);

@@ -126,6 +126,8 @@ pub struct Machine {
     pub mmio_stop: Option<u32>,
     /// Per-block cycle histogram while profiling is on.
     pub profile: Option<Histogram>,
+    /// Block starts of the running TIM2 handler, while the per-entry log is on.
+    pub isr_blocks: Option<Vec<u32>>,
     /// Bridge stall cycles of the current block so far (added to the clock with the block).
     pub stall: u64,
     /// Cycle at which the AHB-to-APB bridges finish the last transfer (buffered writes).
@@ -175,6 +177,7 @@ impl Machine {
             flash_erase: None,
             mmio_stop: None,
             profile: None,
+            isr_blocks: None,
             stall: 0,
             bridge_free: 0,
             flash_pending: None,
@@ -201,6 +204,7 @@ impl Machine {
         self.unmodeled = old.unmodeled;
         self.logged = old.logged;
         self.profile = old.profile;
+        self.isr_blocks = old.isr_blocks.map(|_| Vec::new());
         self.bridge_free = old.now;
         self.tim1.changes = old.tim1.changes;
         self.plant = old.plant;
@@ -230,6 +234,11 @@ impl Machine {
         self.insns += insns;
         if let Some(h) = &mut self.profile {
             h.add(self.nvic.ipsr(), start, cycles, insns);
+        }
+        if let Some(b) = &mut self.isr_blocks {
+            if self.nvic.ipsr() == super::nvic::IRQ0 + TIM2_IRQ {
+                b.push(start);
+            }
         }
     }
 

@@ -38,6 +38,7 @@ mod timer;
 mod usart;
 
 pub use board::{Board, InputFlip, Port, HZ};
+pub use stats::IsrRun;
 pub use bus::{TIM2_IRQ, USART1_IRQ};
 pub use firmware::{firmware_elf, gcode_lines, repo_root, stream_gcode};
 pub use gpio::PinEdge;

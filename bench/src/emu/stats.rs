@@ -13,6 +13,8 @@ pub struct IsrEntry {
     pub insns: u64,
     /// Cycle of the update event when UIF was set at entry.
     pub update: Option<u64>,
+    /// TIM2 events that had found their flag still set, counted at entry.
+    pub overruns: u64,
 }
 
 /// Aggregates over all TIM2 handler runs.
@@ -28,6 +30,25 @@ pub struct IsrStats {
     pub bsrr_max: Option<u64>,
 }
 
+/// One run of the TIM2 handler (the per-entry log, `Board::set_isr_log`).
+#[derive(Clone, Debug)]
+pub struct IsrRun {
+    /// Cycle the exception entry began.
+    pub start: u64,
+    /// Modeled cycles from entry to the end of the return (or the last instruction before a
+    /// tail-chain).
+    pub cycles: u64,
+    /// Cycle of the update event when UIF was set at entry.
+    pub update: Option<u64>,
+    /// Cycle of the handler's first GPIOB BSRR/BRR store.
+    pub bsrr: Option<u64>,
+    /// TIM2 events that had found their flag still set, counted at entry (a rise from one
+    /// run to the next: this run was entered after an overrun).
+    pub overruns: u64,
+    /// Start addresses of the translated blocks it ran, in order.
+    pub blocks: Vec<u32>,
+}
+
 /// Everything collected during a run.
 #[derive(Default)]
 pub struct Stats {
@@ -39,6 +60,8 @@ pub struct Stats {
     pub step_isr: IsrStats,
     /// TIM2 handler cycles per window (entry to end of return).
     pub isr_busy: Vec<u64>,
+    /// Every TIM2 handler run, while the per-entry log is on.
+    pub isr_log: Option<Vec<IsrRun>>,
 }
 
 impl Stats {
@@ -51,8 +74,11 @@ impl Stats {
     }
 
     // close the running TIM2 handler at cycle `end` with `insns` executed so far
-    pub fn isr_done(&mut self, end: u64, insns: u64, first_bsrr: Option<u64>) {
+    pub fn isr_done(&mut self, end: u64, insns: u64, first_bsrr: Option<u64>, blocks: Vec<u32>) {
         let Some(e) = self.isr.take() else { return };
+        if let Some(log) = &mut self.isr_log {
+            log.push(IsrRun { start: e.start, cycles: end - e.start, update: e.update, bsrr: first_bsrr, overruns: e.overruns, blocks });
+        }
         let s = &mut self.step_isr;
         let cycles = end - e.start;
         let n = insns - e.insns;
