@@ -4,6 +4,7 @@ mod boot;
 mod hw;
 mod limits;
 mod panic;
+mod step;
 mod watchdog;
 
 use defmt_rtt as _;
@@ -25,7 +26,7 @@ mod app {
     use stm32f1xx_hal::pac;
     use stm32f1xx_hal::serial::{Rx, Tx};
 
-    use super::{hw, limits, watchdog};
+    use super::{hw, limits, step, watchdog};
 
     /// Axes the firmware drives: X Y Z A B C U.
     pub const AXES: usize = ddastep::MAX_AXES;
@@ -49,7 +50,6 @@ mod app {
 
     #[local]
     struct Local {
-        engine: Engine<'static, AXES>,
         rx: Rx<pac::USART1>,
         rx_in: Producer<'static, u8>,
         rx_out: Consumer<'static, u8>,
@@ -73,6 +73,7 @@ mod app {
         // (Step pins low and drivers off came first: `boot.rs`.)
         let by_watchdog = watchdog::take_reset_cause();
         let mut core = cx.core;
+        // (The step interrupt is bound outside RTIC: `step.rs`.)
         hw::start_cycle_counter(&mut core.DCB, &mut core.DWT);
         let board = hw::Board::setup(cx.device, core.SYST);
         let stored = hw::load_store();
@@ -99,13 +100,13 @@ mod app {
             controller.position_lost();
         }
         limits::setup();
+        step::install(engine, &mut core.NVIC);
         defmt::info!("ddastep up: 72 MHz, {} axes", AXES);
         hw::start_step_timer();
         watchdog::start();
         (
             SharedRes { tx: board.tx },
             Local {
-                engine,
                 rx: board.rx,
                 rx_in,
                 rx_out,
@@ -115,27 +116,6 @@ mod app {
                 flash: board.flash,
             },
         )
-    }
-
-    /// The step interrupt: store the precomputed word first, then compute the next one. The
-    /// body times itself with the DWT cycle counter (`$I` reports it, see `ddastep::steptime`).
-    #[task(binds = TIM2, priority = 3, local = [engine])]
-    fn step(cx: step::Context) {
-        let t0 = hw::cycles();
-        let engine = cx.local.engine;
-        let sr = hw::tim2().sr().read().bits();
-        if sr & hw::SR_UIF != 0 {
-            hw::gpiob().bsrr().write(|w| unsafe { w.bits(engine.word()) });
-            hw::tim2().sr().write(|w| unsafe { w.bits(!hw::SR_UIF) });
-            let arr = engine.tick();
-            hw::tim2().arr().write(|w| unsafe { w.bits(arr as u32) });
-        }
-        // The compare event ends the pulse; if it came while we computed, end it now.
-        if hw::tim2().sr().read().bits() & hw::SR_CC1IF != 0 {
-            hw::gpiob().bsrr().write(|w| unsafe { w.bits(engine.step_off()) });
-            hw::tim2().sr().write(|w| unsafe { w.bits(!hw::SR_CC1IF) });
-        }
-        STEP_TIME.record(hw::cycles().wrapping_sub(t0));
     }
 
     /// Limit inputs X, Y, Z (hard limits, `$21`): at the step interrupt's priority.
