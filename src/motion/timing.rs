@@ -73,12 +73,20 @@ impl Timing {
     pub const fn min_period_for(&self, slaves: u32) -> u32 {
         let cpu = HANDLER_BASE_TICKS + HANDLER_PER_SLAVE_TICKS * slaves;
         let low = HANDLER_FALL_TICKS + HANDLER_PER_SLAVE_TICKS * slaves + self.pulse_ticks;
+        // A long tick (ramp work, a move change) must check for the compare event before the
+        // next period's compare event comes, or it takes that one too and a pulse runs into
+        // the next step.
+        let long = (HANDLER_LONG_TICKS + HANDLER_PER_SLAVE_TICKS * slaves)
+            .saturating_sub(self.pulse_ticks + STORE_LATENCY_TICKS + HANDLER_TAIL_TICKS);
         let mut p = self.min_period_ticks;
         if cpu > p {
             p = cpu;
         }
         if low > p {
             p = low;
+        }
+        if long > p {
+            p = long;
         }
         p
     }
@@ -94,14 +102,20 @@ impl Timing {
     }
 }
 
-/// Step-handler cost per master step, timer ticks: the virtual bench measures ≈ 250 + 16.9 per
-/// slave modeled cycles with its silicon-checked memory model (bench/RESULTS.md: flash
-/// refills, APB bridge stalls, the DWT self-measurement), and the CPU stays ≤ 95 % busy up to
-/// 248 kHz with one axis, 224 kHz with three and 191 kHz with six; these keep every move
-/// inside that.
-pub const HANDLER_BASE_TICKS: u32 = 290;
+/// Step-handler cost per master step, timer ticks: the virtual bench's step-rate sweep
+/// (bench/RESULTS.md, one long move per point, modeled with the silicon-checked memory model)
+/// holds the CPU ≤ 95 % busy up to 265 kHz on one axis, 234 kHz on three and 193 kHz on seven
+/// (periods 272, 308 and 373 ticks); 277 + 17 per slave covers every axis count.
+pub const HANDLER_BASE_TICKS: u32 = 277;
 /// Extra handler ticks per slave axis (see [`HANDLER_BASE_TICKS`]).
-pub const HANDLER_PER_SLAVE_TICKS: u32 = 18;
+pub const HANDLER_PER_SLAVE_TICKS: u32 = 17;
+/// The longest step-handler run at speed, timer ticks (plus [`HANDLER_PER_SLAVE_TICKS`] per
+/// slave): a tick carrying one piece of ramp work or a move change; the bench's per-entry log
+/// (`Board::set_isr_log`) measured at most ≈ 490 modeled cycles on one axis and ≈ 535 on
+/// three and seven, during back-to-back moves at speed and ramps.
+pub const HANDLER_LONG_TICKS: u32 = 520;
+/// From a handler's compare-flag check to its end (the self-measurement), less a margin.
+pub const HANDLER_TAIL_TICKS: u32 = 10;
 /// Where a short pulse's falling edge lands after its rising edge when the compare event is
 /// already pending at the end of the update handler (measured high time ≈ 142 + 12 per slave
 /// modeled cycles), rounded up.
