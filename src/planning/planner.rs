@@ -187,6 +187,19 @@ impl<const N: usize> Planner<N> {
     }
 }
 
+impl<const N: usize> Planner<N> {
+    /// The same as [`Self::line`] for a move that starts and ends at rest: its junction speed
+    /// and the next move's are 0 (G93, whose closed-form time assumes rest at both ends).
+    pub fn line_at_rest(&mut self, target: &[f64; N], feed: Option<f64>, lim: &Limits<N>) -> Result<Option<Planned<N>>, Error> {
+        let mut planned = self.line(target, feed, lim)?;
+        if let Some(p) = planned.as_mut().and_then(|p| p.mv.path.as_mut()) {
+            p.junction = 0.0;
+        }
+        self.prev = None;
+        Ok(planned)
+    }
+}
+
 /// Grbl's junction speed (mm/s) from direction `a` into direction `b` (unit vectors): the
 /// speed at which a circle of deviation `dev` tangent to both moves is driven at the largest
 /// acceleration the axes allow along the change of direction,
