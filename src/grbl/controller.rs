@@ -780,16 +780,22 @@ fn plan<const N: usize>(
         Rate::Minutes(t) => {
             // At 1 mm/min no axis limit binds: the planner's rate is exactly master / (len·60).
             let mut dry = *planner;
-            let Some(probe) = dry.line(target, Some(1.0), lim)? else {
-                return planner.line_at_rest(target, Some(1.0), lim);
+            let feed = match dry.line(target, Some(1.0), lim)? {
+                Some(probe) => {
+                    let master = probe.mv.steps().iter().map(|s| s.unsigned_abs()).max().unwrap_or(0);
+                    let ramp = match probe.mv.path() {
+                        Some(p) => inverse_time::MasterRamp::new(p.share as f64, p.accel as f64, lim.per_mm, cfg),
+                        None => inverse_time::MasterRamp::new(1.0, 0.0, 0.0, cfg),
+                    };
+                    inverse_time::cruise_hz(master as u64, t * 60.0, &ramp) / probe.wanted_hz
+                }
+                None => 1.0,
             };
-            let master = probe.mv.steps().iter().map(|s| s.unsigned_abs()).max().unwrap_or(0);
-            let ramp = match probe.mv.path() {
-                Some(p) => inverse_time::MasterRamp::new(p.share as f64, p.accel as f64, lim.per_mm, cfg),
-                None => inverse_time::MasterRamp::new(1.0, 0.0, 0.0, cfg),
-            };
-            let feed = inverse_time::cruise_hz(master as u64, t * 60.0, &ramp) / probe.wanted_hz;
-            return planner.line_at_rest(target, Some(feed), lim);
+            // From rest to rest: no junction speed on either side.
+            planner.rest();
+            let planned = planner.line(target, Some(feed), lim);
+            planner.rest();
+            return planned;
         }
     };
     planner.line(target, Some(feed), lim)

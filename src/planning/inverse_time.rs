@@ -53,11 +53,12 @@ impl MasterRamp {
         };
         let (s, r) = if per_mm > 0.0 {
             let (s, walk_q) = walk_of(share, accel, per_mm, cfg.accel.max(1) as f64);
-            (s, walk_q as f64 / IDX_ONE as f64)
+            (s, walk_q as f64 * (1.0 / IDX_ONE as f64))
         } else {
             (1.0, 1.0)
         };
-        MasterRamp { v0: s * (v0 + a * (1.0 - r) / 2000.0), accel: s * r * a }
+        let sa = s * a;
+        MasterRamp { v0: s * v0 + sa * (1.0 - r) * 0.0005, accel: sa * r }
     }
 }
 

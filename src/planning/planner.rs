@@ -104,6 +104,12 @@ impl<const N: usize> Planner<N> {
         &self.steps
     }
 
+    /// The next move starts from rest: its junction speed with the last one is 0 (G93 moves,
+    /// whose closed-form time assumes rest at both ends, call it before and after planning).
+    pub fn rest(&mut self) {
+        self.prev = None;
+    }
+
     /// Takes the engine's step counters as the position (after a reset or new steps/mm).
     pub fn sync(&mut self, steps: [i32; N], lim: &Limits<N>) {
         self.steps = steps.map(i64::from);
@@ -184,19 +190,6 @@ impl<const N: usize> Planner<N> {
         self.mm = *target;
         self.steps = to;
         Ok(Some(Planned { mv: mv.with_path(path), mm_per_step: (len / master_steps as f64) as f32, wanted_hz }))
-    }
-}
-
-impl<const N: usize> Planner<N> {
-    /// The same as [`Self::line`] for a move that starts and ends at rest: its junction speed
-    /// and the next move's are 0 (G93, whose closed-form time assumes rest at both ends).
-    pub fn line_at_rest(&mut self, target: &[f64; N], feed: Option<f64>, lim: &Limits<N>) -> Result<Option<Planned<N>>, Error> {
-        let mut planned = self.line(target, feed, lim)?;
-        if let Some(p) = planned.as_mut().and_then(|p| p.mv.path.as_mut()) {
-            p.junction = 0.0;
-        }
-        self.prev = None;
-        Ok(planned)
     }
 }
 
