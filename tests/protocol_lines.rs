@@ -403,3 +403,19 @@ fn flash_write_comes_before_the_next_line_moves() {
     assert_eq!(b.shared.positions(), [200, 0, 0]);
     assert!(b.actions.iter().filter(|a| a.save).count() == 1);
 }
+
+#[test]
+fn axes_beyond_the_count_do_not_scale_the_table() {
+    // A 7-axis firmware set to 3 axes ($42) keeps a finer steps/mm on its unused A axis: the
+    // table's path units come from X, Y, Z only, and so must the planner's clamp to its top.
+    let mut b = Bench::<7>::with_defaults();
+    b.take();
+    assert_eq!(b.line("$103=1000"), "ok\r\n");
+    assert_eq!(b.line("$42=3"), "ok\r\n");
+    b.run_ms(2);
+    b.peak_hz = 0;
+    assert_eq!(b.line("G91 G0 X100"), "ok\r\n");
+    b.run_to_idle(10_000);
+    assert_eq!(b.shared.positions()[0], 10_000);
+    assert_eq!(b.peak_hz, 60_000, "X's $110 = 36 000 mm/min at 100 steps/mm");
+}

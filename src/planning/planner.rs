@@ -54,7 +54,8 @@ impl<const N: usize> Limits<N> {
             max_rate: core::array::from_fn(|i| s.max_rate[i] as f64),
             accel: core::array::from_fn(|i| s.accel[i] as f64),
             vmax_hz: vmax_hz.max(1),
-            per_mm: s.per_mm(N) as f64,
+            // The table's own path units: the axes in use ($42), as `Settings::build_profile`.
+            per_mm: s.per_mm(s.axis_count(N)) as f64,
             junction_dev: JUNCTION_DEVIATION_MM as f64,
             feed_ovr: 1.0,
             rapid_ovr: 1.0,
