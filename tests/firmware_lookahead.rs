@@ -55,6 +55,7 @@ fn fast_532_reaches_200_khz_on_the_seven_axis_firmware() {
     }
     wait_idle(&mut b, 3.0);
     let s = steps(&b);
+    eprintln!("{} | overruns {} | {}", status(&mut b), b.report().overruns, (0..3).map(|a| s.iter().filter(|s| s.axis == a).count().to_string()).collect::<Vec<_>>().join(","));
     assert_eq!(s.iter().filter(|s| s.axis == 0).count(), 10_000);
     assert_eq!(net(&s), [0; 7]);
     // Cruise: X at 200 kHz (± 0.5 %) over 1000 master steps in the middle of the first move.

@@ -77,6 +77,10 @@ fn plan(cmd: &str) -> Option<Plan> {
         "cargo sim" => Run(&[]),
         "cargo sim -- --gcode bench/demo/fast_532.gcode --vcd fast.vcd" => Run(&["fast.vcd"]),
         "cargo la -- fast.vcd --expect 5:3:2" => Run(&[]),
+        "cargo sim -- --gcode bench/demo/fast_532.gcode" => Run(&[]),
+        "cargo bench -p ddastep-bench --target host-tuple --bench plan_line" => {
+            Skip("a benchmark: numbers only, a minute of the emulator")
+        }
         "cargo build --release && arm-none-eabi-size target/thumbv7m-none-eabi/release/ddastep" => {
             Skip("run from the repository root by tests/firmware_size.rs (the same size check)")
         }

@@ -199,12 +199,27 @@ impl<'a, const N: usize> Controller<'a, N> {
     /// (or does so at the first `poll` the engine is parked for). Startup lines run at the
     /// first polls.
     pub fn new(feeder: Feeder<'a, N>, shared: &'a Shared<N>, slot: &'a RampSlot, stored: impl Into<Stored>) -> Self {
-        let mut stored: Stored = stored.into();
+        let mut c = core::mem::MaybeUninit::uninit();
+        Self::init(&mut c, feeder, shared, slot, stored.into());
+        // SAFETY: `init` wrote every field.
+        unsafe { c.assume_init() }
+    }
+
+    /// [`Self::new`] built in place (the firmware's static slot): the stack holds no copy of
+    /// the controller, which would not fit beside the statics.
+    #[inline(never)]
+    pub fn init<'s>(
+        at: &'s mut core::mem::MaybeUninit<Self>,
+        feeder: Feeder<'a, N>,
+        shared: &'a Shared<N>,
+        slot: &'a RampSlot,
+        mut stored: Stored,
+    ) -> &'s mut Self {
         // A store written for more axes than this build drives shows this build's count.
         stored.settings.axes = stored.settings.axes.min(N as u8);
         let settings = stored.settings;
         let axes = settings.axis_count(N);
-        let mut c = Controller {
+        let c = at.write(Controller {
             feeder,
             shared,
             slot,
@@ -248,7 +263,7 @@ impl<'a, const N: usize> Controller<'a, N> {
             soft_limit: SoftLimit::Off,
             watchdog_note: false,
             limit_pins: 0,
-        };
+        });
         c.startup_next = c.next_startup(0);
         c.apply_profile();
         c.planner.sync(shared.positions(), &c.limits);

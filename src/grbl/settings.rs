@@ -11,7 +11,7 @@
 //! it to its master's share of the path, so axes that do not move never slow a move down.
 
 use crate::protocol::Error;
-use crate::ramp::{Profile, RampConfig, RampError, Shape, MAX_RATE_HZ};
+use crate::ramp::{Profile, RampConfig, RampError, RampTable, Shape, MAX_RATE_HZ};
 #[allow(unused_imports)]
 use crate::ramp::MAX_RATE_HZ as _;
 use crate::timing::{ns_to_ticks, Timing};
@@ -457,15 +457,21 @@ impl Settings {
     }
 
     /// Rebuilds `profile` (table and timing) for `axes` axes. A ramp too long for the table is
-    /// rebuilt with the fastest top that fits.
+    /// built steeper (moves walk it at their own fraction), so the top stays the axes' max rate.
     pub fn build_profile<const L: usize>(&self, axes: usize, profile: &mut Profile<L>) -> Ramped {
         let timing = self.timing();
         let mut cfg = self.ramp_config(axes, &timing);
         let mut table_limited = false;
         profile.timing = timing;
         profile.per_mm = self.per_mm(axes);
-        for _ in 0..4 {
+        for attempt in 0..6 {
             match profile.ramp.build(cfg) {
+                // Too long for the table: a steeper table (every move walks it at its own
+                // fraction, so no move runs faster), down to a lower top only as a last resort.
+                Err(RampError::TooLong { .. }) if attempt < 4 => {
+                    let ms = RampTable::<L>::ramp_ms(&cfg) as f64;
+                    cfg.accel = (cfg.accel as f64 * ms / (L as f64 - 2.0).max(1.0)).min(u32::MAX as f64 / 2.0) as u32 + 1;
+                }
                 Err(RampError::TooLong { reachable_vmax }) => {
                     table_limited = true;
                     cfg.vmax = reachable_vmax.max(cfg.v0);

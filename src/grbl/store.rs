@@ -130,11 +130,27 @@ impl Stored {
     /// The newest valid image of two pages, and the index of the page to write next (the
     /// other one). Nothing valid: the defaults, and page 0.
     pub fn load(pages: [&[u8]; 2]) -> (Stored, usize) {
-        match pages.map(Stored::decode) {
-            [Some(a), Some(b)] if (b.seq.wrapping_sub(a.seq) as i32) > 0 => (b, 0),
-            [Some(a), _] => (a, 1),
-            [None, Some(b)] => (b, 0),
-            [None, None] => (Stored::DEFAULT, 0),
+        match Self::newest(pages) {
+            Some(i) => (Stored::decode(pages[i]).unwrap_or(Stored::DEFAULT), 1 - i),
+            None => (Stored::DEFAULT, 0),
         }
     }
+
+    /// Which page holds the newest valid image, if any. One image is decoded at a time (the
+    /// firmware calls this on boot and before each save: two images at once would cost the
+    /// stack 2 KiB more).
+    pub fn newest(pages: [&[u8]; 2]) -> Option<usize> {
+        match [seq_of(pages[0]), seq_of(pages[1])] {
+            [Some(a), Some(b)] if (b.wrapping_sub(a) as i32) > 0 => Some(1),
+            [Some(_), _] => Some(0),
+            [None, Some(_)] => Some(1),
+            [None, None] => None,
+        }
+    }
+}
+
+/// The sequence number of a valid image (see [`Stored::decode`]).
+#[inline(never)]
+fn seq_of(b: &[u8]) -> Option<u32> {
+    Stored::decode(b).map(|s| s.seq)
 }

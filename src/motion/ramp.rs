@@ -13,9 +13,10 @@
 //! shares the acceleration, and a move's step count never depends on the table. Beside each
 //! period the table keeps the distance walked up to it (`sums`, 1/256 step), which is what
 //! turns "decelerate from index a to b" into steps without a division. With
-//! [`RAMP_LEN`] = 1024 entries of 8 bytes the table is 8 KiB of RAM and covers 1.024 s of
+//! [`RAMP_LEN`] = 512 entries of 8 bytes the table is 4 KiB of RAM and covers 0.512 s of
 //! acceleration; a longer one is refused with [`RampError::TooLong`] naming the highest `vmax`
-//! that fits.
+//! that fits (the settings code then builds a steeper table instead, which slower moves walk at
+//! a smaller fraction: see `Settings::build_profile`).
 
 use core::cell::UnsafeCell;
 use core::sync::atomic::{AtomicBool, Ordering};
@@ -35,7 +36,7 @@ pub const MIN_RATE_HZ: u32 = 1;
 /// lower and is enforced by the engine's timing ([`crate::timing::Timing`]).
 pub const MAX_RATE_HZ: u32 = 1_000_000;
 /// Entries (milliseconds) in the firmware's table.
-pub const RAMP_LEN: usize = 1024;
+pub const RAMP_LEN: usize = 512;
 /// Fraction bits of a table index: the engine walks `walk_q / 2^20` entries per millisecond,
 /// so one table (built for the fastest acceleration) serves every slower one.
 pub const IDX_FRAC: u32 = 20;
