@@ -72,3 +72,54 @@ fn streamed_short_segments_never_starve() {
     assert_eq!(r.starved_windows, 0, "{r:?}");
     assert_eq!(b.report().overruns, 0);
 }
+
+/// Back-to-back moves at the `$I` rate cap (the sweep's settings: 0.5 µs pulses, the shortest
+/// the cap allows least room for a long tick): 12 segments joined at speed, on 1 axis
+/// collinear, on 3 and 7 axes with Y reversing at every junction (a direction change at
+/// speed). Every step reaches the pins, no timer update is missed, and the step ISR's longest
+/// run (a ramp piece or a move change) is printed beside its mean.
+#[test]
+fn back_to_back_moves_at_the_rate_cap_keep_every_step() {
+    use ddastep_bench::emu::sweep::{settings_lines, RATIO};
+    for axes in [1usize, 3, 7] {
+        let mut b = boot();
+        for l in settings_lines() {
+            ok(&mut b, &l);
+        }
+        let info = reply(&mut b, "$I");
+        // The cap for this move's slaves, from the firmware's own timing (as `$I` prints the
+        // single-axis one).
+        let mut s = ddastep::settings::Settings::BENCH;
+        s.set(0, ddastep_bench::emu::sweep::PULSE_US, 3).unwrap();
+        let cap = s.timing().max_rate_for(axes as u32 - 1);
+        assert!(info.contains(&format!("[MSG:max step rate {} Hz]", s.timing().max_rate_hz())), "{info}");
+        let hz = cap as f64 * 0.995;
+        ok(&mut b, "G91");
+        let mut want = [0i64; 7];
+        let mut rising = 0i64;
+        b.set_isr_log(true);
+        for k in 0..12 {
+            let mut steps: Vec<i64> = RATIO[..axes].iter().map(|&r| 200 * r as i64).collect();
+            if axes > 1 {
+                steps[1] = if k % 2 == 0 { 200 } else { -200 };
+            }
+            for (w, s) in want.iter_mut().zip(&steps) {
+                *w += s;
+                rising += s.abs();
+            }
+            let mm: Vec<f64> = steps.iter().map(|&s| s as f64 / 100.0).collect();
+            let path = mm.iter().map(|m| m * m).sum::<f64>().sqrt();
+            let feed = path / (steps[0] as f64 / hz) * 60.0;
+            let words: String = "XYZABCU".chars().zip(&mm).map(|(a, m)| format!(" {a}{m}")).collect();
+            ok(&mut b, &format!("G1{words} F{feed:.3}"));
+        }
+        wait_idle(&mut b, 3.0);
+        let log = b.isr_log();
+        let mean = log.iter().map(|r| r.cycles).sum::<u64>() as f64 / log.len() as f64;
+        let max = log.iter().map(|r| r.cycles).max().unwrap();
+        eprintln!("{axes} axes at {hz:.0} Hz (cap {cap}): step ISR mean {mean:.1} / max {max} modeled cycles, overruns {}", b.report().overruns);
+        assert_eq!(net(&steps(&b)), want, "{axes} axes");
+        assert_eq!(steps(&b).len() as i64, rising, "{axes} axes: rising edges");
+        assert_eq!(b.report().overruns, 0, "{axes} axes");
+    }
+}

@@ -717,8 +717,10 @@ const NOTES: &str = "\
 - Peripheral bridge stalls are modeled (TIM2 reads on APB1 5 cycles, GPIO on APB2 3, writes
   buffered); the APB2 figure is fitted to a silicon measurement, the APB1 one extrapolated.
 - The step interrupt includes its own DWT self-measurement (about 25 cycles per entry; `$I`).
-- The sweep measures one straight move per point; it says nothing about move-to-move refills
-  (`Engine::load`, ~1 000 modeled cycles) at high rates.
+- The sweep measures one straight move per point. Back-to-back moves at the `$I` cap (moves
+  changing at speed, a direction reversing at every junction) are checked by
+  `tests/firmware_lookahead.rs` (`back_to_back_moves_at_the_rate_cap_keep_every_step`, which
+  prints the step ISR's mean and longest run); the cap's long-tick term comes from there.
 ";
 
 // today's date (UTC) as YYYY-MM-DD
