@@ -13,12 +13,16 @@
 //! stays 0, so pulse width and resolution never change).
 //!
 //! Moves arrive prepared ([`crate::prepared`]) in a ring and run in their slot: a move change
-//! is a pointer switch, a position-record swap and the new move's period; its deceleration
-//! trigger follows on the next ticks ([`crate::walk`]): no search, no division, no loop over
-//! axes. The ramp index carries over from move to move
-//! (look-ahead junctions run through at speed). A direction change at a junction is carved out
-//! of the gap before the next step (the change, then `dir_setup`), so it never delays an edge
-//! unless the period is shorter than the setup.
+//! is a pointer switch, a position-record swap and the new move's period (the table's period
+//! at the index, already looked up, times the move's scale); its deceleration trigger follows
+//! on a later tick ([`crate::walk`]): no search, no division, no loop over axes. The ramp
+//! index carries over from move to move (look-ahead junctions run through at speed). Ramp work
+//! is spread over ticks, one piece at most per tick while periods are short (`ramp_work`).
+//! A direction change at a junction is carved out of the gap before the next step (the
+//! change, then `dir_setup`) when steps are slow; at speed it comes one period after the last
+//! step (the finishing tick's own ARR store may land after the next update, which must then
+//! not shorten the setup gap), then `dir_setup`, so the new move's first step waits for the
+//! setup. The ticks of a direction change and of the first step after it run no ramp work.
 //!
 //! Invariants: every move emits exactly its step counts (the ramp only sets periods); each
 //! axis's position equals the step words handed out; a direction change is written alone and
@@ -35,23 +39,16 @@ use crate::prepared::{Prepared, RampPlan};
 use crate::queue::{Shared, State};
 use crate::ramp::{Period, RampSlot, RAMP_LEN};
 use crate::ring::RingConsumer;
-use crate::walk::{base_at, scaled, Step as WalkStep, Walk, FRESH, FRESH_MASK, PERIOD, PREDICT, TRIGGER};
+use crate::walk::{Walk, FRESH, FRESH_MASK, PREDICT};
+
+mod ramp_work;
+use ramp_work::SHORT_GAP;
 use crate::TICKS_PER_MS;
 
 /// Longest timer period one tick can set (ARR is 16 bits).
 pub const MAX_TICK: u32 = 1 << 16;
 /// Period of idle ticks while no move runs (0.5 ms: a new move starts within this).
 pub const IDLE_TICKS: u32 = TICKS_PER_MS / 2;
-/// A tick whose own period (the gap from its update event to the next) is shorter than this
-/// (2048 ticks: above 35 kHz, or a direction change's short gaps) runs at most one piece of
-/// ramp work, so its ARR store lands before the next update event; with a longer period it
-/// does all that is due at once.
-const SHORT_GAP: u32 = 2048;
-/// Plain ticks between two long ones (see `Engine::spaced`): four pieces of ramp work and
-/// their spacing take 52 ticks, inside the 72 ticks of a millisecond at the 72 kHz where a
-/// period gets shorter than the longest tick (at 35–72 kHz the millisecond's catch-up fits
-/// in its period).
-const SPACE: u8 = 12;
 
 /// What the engine is doing.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -205,16 +202,6 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
         (chunk - 1) as u16
     }
 
-    /// A ramp millisecond due now waits while this tick's period is short and ramp work is
-    /// still pending (it would run all of it at once) or the tick must run none ([`FRESH`]);
-    /// with a long period it runs at once. (Work is pending at a millisecond only after a move
-    /// change or a trigger just before it: the pieces of one millisecond and their spacing
-    /// fit in it.)
-    #[inline(always)]
-    fn quiet_tick(&self) -> bool {
-        self.walk.pending != 0 && self.gap_in < SHORT_GAP
-    }
-
     /// The next edge: a step, a direction change or an idle gap, with the gap after it.
     #[inline(always)]
     fn next_event(&mut self) -> (u32, u32) {
@@ -278,138 +265,6 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
         unsafe { ((*self.cur).dir_word, (*self.cur).dir_setup) }
     }
 
-    /// Starts walking down: one walk down now and a fresh millisecond for it.
-    #[inline(never)]
-    fn start_decel(&mut self) {
-        let target = self.target();
-        self.walk.start_decel(&self.plan, target);
-        self.ms_left = TICKS_PER_MS as i32;
-        self.period_soon();
-        self.walk.pending |= PREDICT;
-        self.fresh(1);
-        self.spaced();
-    }
-
-    /// After a long tick with a short period: [`SPACE`] plain ticks (with work pending)
-    /// before the next piece of ramp work, so the delay it added to the next edges is made up
-    /// first (at 95 % load a plain tick makes up about 5 % of a period).
-    #[inline(always)]
-    fn spaced(&mut self) {
-        if self.gap_in < SHORT_GAP {
-            self.space = SPACE;
-        }
-    }
-
-    /// No ramp work on this tick and the `n - 1` after it (the count never drops).
-    #[inline(always)]
-    fn fresh(&mut self, n: u8) {
-        if self.walk.pending & FRESH_MASK < n * FRESH {
-            self.walk.pending = (self.walk.pending & !FRESH_MASK) | n * FRESH;
-        }
-    }
-
-    /// The exit target: 0 under a hold or when no successor is queued yet.
-    #[inline(always)]
-    fn target(&self) -> u32 {
-        if self.hold || !self.ring.has_next() {
-            0
-        } else {
-            // SAFETY: an atomic field of the running slot.
-            unsafe { (*self.cur).exit_q.load(Relaxed) }
-        }
-    }
-
-    /// One millisecond has passed: move along the ramp.
-    #[inline(never)]
-    fn walk_ramp(&mut self) {
-        if !matches!(self.phase, Phase::Run | Phase::Dir) {
-            return;
-        }
-        while self.walk.unsettled() {
-            // Slow steps: the work of the ticks in between happens here.
-            self.settle();
-        }
-        let target = self.target();
-        match self.walk.per_ms(&self.plan, target, self.left) {
-            WalkStep::Same => {}
-            WalkStep::AtRest if self.hold => {
-                self.phase = Phase::Held;
-                self.publish(State::Held);
-            }
-            _ => {
-                if self.walk.idx == self.next_idx {
-                    self.base = self.next_base;
-                    self.apply_period();
-                } else {
-                    self.period_soon();
-                }
-                self.walk.pending |= PREDICT;
-                self.spaced();
-            }
-        }
-    }
-
-    /// Looks up the period one walk on (where the next ramp millisecond goes).
-    #[inline(always)]
-    fn predict(&mut self) {
-        let target = self.target();
-        self.next_idx = self.walk.next_idx(&self.plan, target);
-        self.next_base = base_at(self.next_idx, &self.ramp.profile().ramp);
-    }
-
-    /// Pending ramp work, one piece (a tick without a ramp millisecond): the period at a new
-    /// index, else one trigger distance.
-    #[inline(never)]
-    fn settle(&mut self) {
-        if !matches!(self.phase, Phase::Run | Phase::Dir) {
-            self.walk.pending = 0;
-            return;
-        }
-        let pending = self.walk.pending;
-        if pending & FRESH_MASK != 0 {
-            // Set by this tick's step (this tick has paid for that), or a short gap follows.
-            self.walk.pending = pending - FRESH;
-        } else {
-            if pending & PERIOD != 0 {
-                self.walk.pending = pending & !PERIOD;
-                self.set_period();
-            } else if pending & PREDICT != 0 {
-                self.walk.pending = pending & !PREDICT;
-                self.predict();
-            } else if pending & TRIGGER != 0 {
-                let target = self.target();
-                self.walk.settle_trigger(&self.plan, target, &self.ramp.profile().ramp);
-            } else {
-                self.walk.settle_up(&self.plan, &self.ramp.profile().ramp);
-            }
-            self.spaced();
-        }
-    }
-
-    /// The index moved: its period now when this tick's period is long, else on a later tick.
-    #[inline(always)]
-    fn period_soon(&mut self) {
-        if self.gap_in < SHORT_GAP {
-            self.walk.pending |= PERIOD;
-        } else {
-            self.set_period();
-        }
-    }
-
-    /// Period for the current ramp index (a table lookup).
-    #[inline(always)]
-    fn set_period(&mut self) {
-        self.base = self.walk.base(&self.ramp.profile().ramp);
-        self.apply_period();
-    }
-
-    /// Period for the table's period already looked up and the running move's scale.
-    #[inline(always)]
-    fn apply_period(&mut self) {
-        self.period = scaled(self.base, &self.plan, self.min_period);
-        self.shared.period_bits.store(self.period.to_bits(), Relaxed);
-    }
-
     /// The control word changed: an immediate stop, or a feed hold on or off.
     #[inline(never)]
     fn control(&mut self, ctl: Ctl) {
@@ -447,11 +302,6 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
             }
             Phase::Idle => {}
         }
-    }
-
-    fn plan_decel(&mut self) {
-        let target = self.target();
-        self.walk.plan_decel(&self.plan, target, &self.ramp.profile().ramp);
     }
 
     /// Makes the front slot the running move (its steps, slaves, ramp plan).
