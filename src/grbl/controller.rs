@@ -17,6 +17,7 @@
 //! Positions: the planner works in machine millimetres; work offsets ([`Offsets`]) turn
 //! program coordinates into machine ones in the interpreter, and reports subtract them again.
 
+mod encoder;
 mod jogging;
 mod soft_limits;
 mod status;
@@ -189,6 +190,8 @@ pub struct Controller<'a, const N: usize> {
     watchdog_note: bool,
     /// Limit pins active (bit i = axis i), for `Pn:`.
     limit_pins: u8,
+    /// Encoder feedback's step-loss check (see `encoder.rs`).
+    enc: crate::encoder::loss::Monitor,
 }
 
 impl<'a, const N: usize> Controller<'a, N> {
@@ -245,8 +248,10 @@ impl<'a, const N: usize> Controller<'a, N> {
             soft_limit: SoftLimit::Off,
             watchdog_note: false,
             limit_pins: 0,
+            enc: crate::encoder::loss::Monitor::OFF,
         };
         c.startup_next = c.next_startup(0);
+        c.enc_configure();
         c.apply_profile();
         c.planner.sync(shared.positions(), &c.limits);
         c

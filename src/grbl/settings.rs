@@ -10,22 +10,24 @@
 //! (`max_i $110+i × $100+i / 60`), capped by the timing's fastest rate and by what fits in the
 //! table's 1.024 s.
 
+use crate::encoder::{self, EncoderSettings};
 use crate::protocol::Error;
 use crate::ramp::{Profile, RampConfig, RampError, Shape, MAX_RATE_HZ};
 use crate::timing::{ns_to_ticks, Timing};
 use crate::MAX_AXES;
 
 /// Bytes of the flash image.
-pub const SETTINGS_LEN: usize = 160;
+pub const SETTINGS_LEN: usize = 184;
 const MAGIC: u8 = 0xD5;
-const VERSION: u8 = 3;
+const VERSION: u8 = 4;
 /// Byte offset of the settings after the axis arrays: `$12`, `$30`, `$31`, `$33` (f32, u32),
-/// `$32` (flag byte); CRC last.
+/// `$32` (flag byte), the encoder's `$87`-`$99` from `TAIL + 20`; CRC last.
 const TAIL: usize = 24 + 4 * 4 * MAX_AXES;
 /// Absolute floor of the step period (ticks; 144 = 500 kHz, the engine's design limit). The
 /// binding limits are the pulse rule and the step handler's measured cost, both applied by
 /// `Timing::min_period_for`.
 pub const ISR_FLOOR_TICKS: u32 = 144;
+const _: () = assert!(TAIL + 20 + crate::encoder::IMAGE_LEN <= SETTINGS_LEN - 4);
 
 /// Setting numbers of our own (free in Grbl 1.1, which uses 0-6, 10-13, 20-27, 30-32, 100+).
 pub const DIR_SETUP: u16 = 29; // grblHAL's number for the direction-to-step delay
@@ -51,9 +53,10 @@ const FIXED: [(u16, f32, u8); 7] = [
 
 /// Setting numbers below 100 in `$$` order: Grbl's, ours and the [`FIXED`] ones. (A table
 /// rather than an iterator chain over `FIXED`: ~400 bytes less flash.)
-const LOW_IDS: [u16; 27] = [
+const LOW_IDS: [u16; 33] = [
     0, 1, 2, 3, 4, 5, 6, STATUS_MASK, 11, 12, 13, 20, 21, 22, 23, 24, 25, 26, 27, DIR_SETUP, 30,
-    31, 32, SPINDLE_PWM_HZ, RAMP_START, RAMP_SHAPE, AXIS_COUNT,
+    31, 32, SPINDLE_PWM_HZ, RAMP_START, RAMP_SHAPE, AXIS_COUNT, encoder::AXIS, encoder::COUNTS_PER_STEP,
+    encoder::INVERT, encoder::THRESHOLD, encoder::ACTION, encoder::LAG,
 ];
 
 /// Persistent settings. Axis arrays are indexed X Y Z A B C U; only the firmware's first N
@@ -109,6 +112,8 @@ pub struct Settings {
     pub status_mask: u8,
     /// `$42` axes the machine has, 3..=7.
     pub axes: u8,
+    /// `$87`-`$89`, `$97`-`$99`: encoder feedback.
+    pub encoder: EncoderSettings,
 }
 
 impl Default for Settings {
@@ -177,6 +182,7 @@ impl Settings {
         max_travel: [200.0; MAX_AXES],
         status_mask: 1,
         axes: 3,
+        encoder: EncoderSettings::DEFAULT,
     };
 
     /// The seed paper's bench (the settings before the safe defaults, which the demos and
@@ -234,6 +240,7 @@ impl Settings {
             RAMP_SHAPE => ((self.shape == Shape::SCurve) as u8 as f64, 0),
             STATUS_MASK => (self.status_mask as f64, 0),
             AXIS_COUNT => (self.axes as f64, 0),
+            87..=89 | 97..=99 => self.encoder.get(id)?,
             100..=139 => {
                 let (g, i) = ((id - 100) / 10, (id % 10) as usize);
                 if i >= axes.min(self.axes as usize).min(MAX_AXES) {
@@ -366,6 +373,10 @@ impl Settings {
                 self.axes = int as u8;
                 Ok(Change::Profile)
             }
+            87..=89 | 97..=99 => {
+                self.encoder.set(id, value, axes.min(self.axes as usize))?;
+                Ok(Change::Shell)
+            }
             100..=139 => {
                 let (g, i) = ((id - 100) / 10, (id % 10) as usize);
                 if i >= axes.min(self.axes as usize).min(MAX_AXES) {
@@ -488,6 +499,7 @@ impl Settings {
         b[TAIL + 8..TAIL + 12].copy_from_slice(&self.spindle_min.to_le_bytes());
         b[TAIL + 12..TAIL + 16].copy_from_slice(&self.spindle_pwm_hz.to_le_bytes());
         b[TAIL + 16] = self.laser_mode as u8;
+        b[TAIL + 20..TAIL + 20 + encoder::IMAGE_LEN].copy_from_slice(&self.encoder.to_bytes());
         let crc = crc32(&b[..SETTINGS_LEN - 4]);
         b[SETTINGS_LEN - 4..].copy_from_slice(&crc.to_le_bytes());
         b
@@ -533,6 +545,7 @@ impl Settings {
             },
             axes: b[21],
             status_mask: b[22],
+            encoder: EncoderSettings::from_bytes(&b[TAIL + 20..]),
             ..Settings::DEFAULT
         };
         let values = [&mut s.steps_per_mm, &mut s.max_rate, &mut s.accel, &mut s.max_travel].into_iter().flatten();
@@ -568,7 +581,7 @@ mod tests {
     fn low_ids_are_ours_and_every_fixed_one() {
         let ours = [
             0, 1, 2, 3, 4, 5, 6, STATUS_MASK, 12, 20, 21, 22, 30, 31, 32, SPINDLE_PWM_HZ, DIR_SETUP, RAMP_START, RAMP_SHAPE,
-            AXIS_COUNT,
+            AXIS_COUNT, 87, 88, 89, 97, 98, 99,
         ];
         assert_eq!(LOW_IDS.len(), ours.len() + FIXED.len());
         assert!(ours.iter().chain(FIXED.iter().map(|f| &f.0)).all(|id| LOW_IDS.contains(id)));

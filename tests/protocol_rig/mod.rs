@@ -29,7 +29,28 @@ impl Out for Tx {
     }
 }
 
+/// A motor with a quadrature encoder on one axis, as TIM3 and the firmware's SysTick see it:
+/// the count follows the axis's position `lag_ms` milliseconds late, times `counts_per_step`,
+/// minus the counts slipped so far; the controller gets the library's own 16-bit extension.
+pub struct EncoderModel {
+    pub axis: usize,
+    pub counts_per_step: f64,
+    pub lag_ms: usize,
+    /// Counts lost so far (missed steps × counts per step).
+    pub slipped: f64,
+    history: std::collections::VecDeque<i32>,
+    sampler: ddastep::encoder::count::Sampler,
+}
+
+impl EncoderModel {
+    pub fn new(axis: usize, counts_per_step: f64, lag_ms: usize) -> Self {
+        EncoderModel { axis, counts_per_step, lag_ms, slipped: 0.0, history: Default::default(), sampler: Default::default() }
+    }
+}
+
 pub struct Bench<const N: usize> {
+    /// An encoder read before every poll, when set.
+    pub encoder: Option<EncoderModel>,
     pub shared: &'static Shared<N>,
     pub ctl: Controller<'static, N>,
     pub engine: Engine<'static, N>,
@@ -54,6 +75,7 @@ impl<const N: usize> Bench<N> {
         let engine = Engine::new(shared, cons, slot, pin_map::<N>(0, 0));
         let ctl = Controller::new(Feeder::new(prod, shared), shared, slot, settings);
         let mut b = Bench {
+            encoder: None,
             shared,
             ctl,
             engine,
@@ -98,6 +120,15 @@ impl<const N: usize> Bench<N> {
         }
         if self.shared.positions() != before && !self.enabled {
             self.stepped_while_disabled = true;
+        }
+        if let Some(e) = &mut self.encoder {
+            e.history.push_back(self.shared.positions()[e.axis]);
+            while e.history.len() > e.lag_ms + 1 {
+                e.history.pop_front();
+            }
+            let counts = (e.history[0] as f64 * e.counts_per_step - e.slipped).floor() as i64;
+            let (count, window) = e.sampler.sample(counts as u16);
+            self.ctl.encoder(count, window, &mut self.tx);
         }
         let a = self.ctl.poll(self.now_ms, &mut self.tx);
         self.enabled = a.enable;
