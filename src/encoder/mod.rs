@@ -32,17 +32,19 @@ pub const IMAGE_LEN: usize = 24;
 /// Largest `$88`: at the engine's fastest 248 kHz this is 15.9 M counts/s, within what TIM3
 /// counts through its input filter and what the 1 ms extension keeps.
 pub const MAX_COUNTS_PER_STEP: f64 = 64.0;
+/// Smallest `$88` (one step of its fixed point): 1/2¹⁶ count per step.
+pub const MIN_COUNTS_PER_STEP: f64 = 1.0 / 65_536.0;
 
-/// Per setting, in [`IDS`] order: lowest and highest value (`$87`'s highest is the axis
-/// count), decimals in `$$` (0: whole numbers, truncated as Grbl truncates masks and flags),
-/// the binary point of the stored integer, default (stored).
-const TABLE: [(f64, f64, u8, u8, i32); 6] = [
-    (0.0, 7.0, 0, 0, 0),
-    (0.001, MAX_COUNTS_PER_STEP, 3, RATIO_SHIFT, 1 << RATIO_SHIFT),
-    (0.0, 1.0, 0, 0, 0),
-    (0.0, 1e6, 0, 0, 20),
-    (0.0, 1.0, 0, 0, 0),
-    (0.0, 1000.0, 3, LAG_SHIFT, 1 << LAG_SHIFT),
+/// Per setting, in [`IDS`] order: highest value (`$87`'s is the axis count), decimals in `$$`
+/// (0: whole numbers, truncated as Grbl truncates masks and flags), the binary point of the
+/// stored integer, default (stored). The lowest value is 0, but 1/2¹⁶ for `$88`.
+const TABLE: [(u32, u8, u8, i32); 6] = [
+    (7, 0, 0, 0),
+    (MAX_COUNTS_PER_STEP as u32, 3, RATIO_SHIFT, 1 << RATIO_SHIFT),
+    (1, 0, 0, 0),
+    (1_000_000, 0, 0, 20),
+    (1, 0, 0, 0),
+    (1000, 3, LAG_SHIFT, 1 << LAG_SHIFT),
 ];
 /// `$88` is kept as counts per step × 2¹⁶ (what the step-loss check computes with).
 pub const RATIO_SHIFT: u8 = 16;
@@ -75,7 +77,7 @@ fn index(id: u16) -> Option<usize> {
 impl EncoderSettings {
     /// Off; when turned on: one count per step, 20 steps, feed hold, 1 ms of lag.
     pub const DEFAULT: EncoderSettings =
-        EncoderSettings([TABLE[0].4, TABLE[1].4, TABLE[2].4, TABLE[3].4, TABLE[4].4, TABLE[5].4]);
+        EncoderSettings([TABLE[0].3, TABLE[1].3, TABLE[2].3, TABLE[3].3, TABLE[4].3, TABLE[5].3]);
 
     /// `$87`: the watched axis (0 = X), if any.
     pub fn axis(&self) -> Option<usize> {
@@ -104,23 +106,29 @@ impl EncoderSettings {
 
     /// Value and decimals of setting `id` (one of [`IDS`]) for `$$`.
     pub fn get(&self, id: u16) -> Option<(f64, u32)> {
+        // `get`, not indexing: no panic path in the firmware.
         let i = index(id)?;
-        Some((self.0[i] as f64 / (1u32 << TABLE[i].3) as f64, TABLE[i].2 as u32))
+        let (&v, &(_, decimals, shift, _)) = (self.0.get(i)?, TABLE.get(i)?);
+        Some((v as f64 / (1u32 << shift) as f64, decimals as u32))
     }
 
     /// `$id=value` for one of [`IDS`] (`value` must be finite and not negative, as
     /// `Settings::set` checks first), on a machine with `axes` axes.
     pub fn set(&mut self, id: u16, value: f64, axes: usize) -> Result<(), Error> {
         let i = index(id).ok_or(Error::InvalidStatement)?;
-        let (lo, hi, decimals, shift, _) = TABLE[i];
-        let hi = if i == 0 { axes as f64 } else { hi };
-        if value < lo || value > hi {
+        let (Some(slot), Some(&(hi, decimals, shift, _))) = (self.0.get_mut(i), TABLE.get(i)) else {
+            return Err(Error::InvalidStatement);
+        };
+        let hi = if i == 0 { axes as u32 } else { hi };
+        let v = if decimals == 0 { libm::trunc(value) } else { value };
+        let scaled = v * (1u32 << shift) as f64 + 0.5;
+        // `$88` must be at least one step of its fixed point: a ratio of 0 watches nothing.
+        if !(value <= hi as f64 && scaled >= (i == 1) as u8 as f64) {
             return Err(Error::InvalidStatement);
         }
-        let v = if decimals == 0 { libm::trunc(value) } else { value };
-        // SAFETY: finite and within the table's range, so below 2^23 once scaled (the
-        // unchecked conversion spares the saturating one's compare chain in flash).
-        self.0[i] = unsafe { (v * (1u32 << shift) as f64 + 0.5).to_int_unchecked::<i32>() };
+        // SAFETY: finite, not negative and within the table's range, so below 2^23 once
+        // scaled (the unchecked conversion spares the saturating one's compare chain in flash).
+        *slot = unsafe { scaled.to_int_unchecked::<i32>() };
         Ok(())
     }
 

@@ -132,20 +132,25 @@ pub fn status(out: &mut impl Out, s: &Status) {
 
 /// `[MSG:Step loss X 12]`: the axis and how far the motor is behind, steps (negative: ahead).
 pub fn step_loss(out: &mut impl Out, axis: usize, steps: f64) {
-    tagged(out, b"[MSG:Step loss ", axis, b" ", &[(steps, 0)]);
+    values(out, [b"[MSG:Step loss ", axis_letter(axis), b" "], &[(steps, 0)], b"]\r\n");
 }
 
 /// `$ENC`: `[ENC:X,10.000,9.960,4]`: axis, commanded and measured position (mm, machine),
 /// commanded − measured steps.
 pub fn encoder(out: &mut impl Out, axis: usize, commanded_mm: f64, measured_mm: f64, steps: f64) {
-    tagged(out, b"[ENC:", axis, b",", &[(commanded_mm, 3), (measured_mm, 3), (steps, 0)]);
+    values(out, [b"[ENC:", axis_letter(axis), b","], &[(commanded_mm, 3), (measured_mm, 3), (steps, 0)], b"]\r\n");
 }
 
-/// `head`, the axis letter, `sep`, the values separated by commas, `]` (one copy of the
-/// writes for both lines above).
+/// The letter of axis `i` (X Y Z A B C U).
+fn axis_letter(i: usize) -> &'static [u8] {
+    b"XYZABCU".get(i..=i).unwrap_or_default()
+}
+
+/// `head`, then `(value, decimals)` separated by commas, then `tail`: one copy of the writes
+/// for the encoder's two lines.
 #[inline(never)]
-fn tagged(out: &mut impl Out, head: &[u8], axis: usize, sep: &[u8], values: &[(f64, u32)]) {
-    for part in [head, b"XYZABCU".get(axis..=axis).unwrap_or_default(), sep] {
+fn values(out: &mut impl Out, head: [&[u8]; 3], values: &[(f64, u32)], tail: &[u8]) {
+    for part in head {
         out.put(part);
     }
     for (i, &(v, d)) in values.iter().enumerate() {
@@ -154,7 +159,7 @@ fn tagged(out: &mut impl Out, head: &[u8], axis: usize, sep: &[u8], values: &[(f
         }
         put_fixed(out, v, d);
     }
-    out.put(b"]\r\n");
+    out.put(tail);
 }
 
 fn axes(out: &mut impl Out, v: &[f64]) {

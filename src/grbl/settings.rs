@@ -219,6 +219,10 @@ impl Settings {
 
     /// Value of setting `id` and its decimals for `$$`, if it exists for `axes` axes.
     pub fn get(&self, id: u16, axes: usize) -> Option<(f64, u32)> {
+        // The encoder's first, outside the match (whose jump table would span to 99).
+        if let Some(v) = self.encoder.get(id) {
+            return Some(v);
+        }
         let v = match id {
             0 => (self.pulse_us as f64, 3),
             1 => (self.idle_delay_ms as f64, 0),
@@ -240,7 +244,6 @@ impl Settings {
             RAMP_SHAPE => ((self.shape == Shape::SCurve) as u8 as f64, 0),
             STATUS_MASK => (self.status_mask as f64, 0),
             AXIS_COUNT => (self.axes as f64, 0),
-            87..=89 | 97..=99 => self.encoder.get(id)?,
             100..=139 => {
                 let (g, i) = ((id - 100) / 10, (id % 10) as usize);
                 if i >= axes.min(self.axes as usize).min(MAX_AXES) {
@@ -275,6 +278,11 @@ impl Settings {
                 Err(Error::InvalidStatement)
             }
         };
+        if matches!(id, 87..=89 | 97..=99) {
+            // `encoder::IDS`, outside the match below (whose jump table would span to 99)
+            self.encoder.set(id, value, axes.min(self.axes as usize))?;
+            return Ok(Change::Shell);
+        }
         match id {
             0 => {
                 // 0.2 µs: TMC drivers need 100 ns; shorter than that no driver takes.
@@ -372,10 +380,6 @@ impl Settings {
                 }
                 self.axes = int as u8;
                 Ok(Change::Profile)
-            }
-            87..=89 | 97..=99 => {
-                self.encoder.set(id, value, axes.min(self.axes as usize))?;
-                Ok(Change::Shell)
             }
             100..=139 => {
                 let (g, i) = ((id - 100) / 10, (id % 10) as usize);

@@ -23,7 +23,7 @@ impl<const N: usize> Controller<'_, N> {
         if self.alarm || self.sleep || (hold_trip && !self.shared.hold_requested()) {
             self.enc.rearm();
         }
-        let commanded = self.shared.positions()[axis];
+        let Some(&commanded) = self.shared.positions().get(axis) else { return };
         let Some(loss) = self.enc.update(Reading { commanded, counts, window }) else { return };
         report::step_loss(out, loss.axis, loss.steps);
         if loss.alarm {
@@ -42,15 +42,14 @@ impl<const N: usize> Controller<'_, N> {
     /// watches an axis in use.
     #[inline(never)]
     pub(super) fn encoder_status(&self) -> Option<(f64, f64)> {
-        let axis = self.enc.axis()?;
-        let spm = self.limits.steps_per_mm[axis];
+        let spm = *self.limits.steps_per_mm.get(self.enc.axis()?)?;
         Some((self.enc.measured_steps() / spm, self.enc.speed_steps_per_s() * 60.0 / spm))
     }
 
     /// `$ENC`: `[ENC:X,commanded mm,measured mm,commanded - measured steps]`.
     pub(super) fn encoder_report(&self, out: &mut impl Out) -> Result<(), Error> {
         let axis = self.enc.axis().ok_or(Error::SettingDisabled)?;
-        let spm = self.limits.steps_per_mm[axis];
+        let spm = *self.limits.steps_per_mm.get(axis).ok_or(Error::SettingDisabled)?;
         let e = &self.enc;
         report::encoder(out, axis, e.commanded_steps() as f64 / spm, e.measured_steps() / spm, e.error_steps());
         Ok(())
