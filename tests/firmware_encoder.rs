@@ -105,12 +105,7 @@ fn slip_mid_move_feed_holds_at_the_next_check_and_reports_axis_and_amount() {
     let spec = machine(4.0, 50.0, "[[fault]]\nat_mm=25\nslip_steps=40\n");
     let mut b = boot_encoder(&spec, &[(87, 1.0), (88, 4.0), (97, 20.0), (98, 0.0)]);
     ok(&mut b, "G91 G1 X50 F12000");
-    let found = b.run_until(HZ, |b| b.serial_output().contains("Step loss")).unwrap();
-    assert!(found, "{}", b.serial_output());
-    b.run_for(HZ / 1000).unwrap();
-    let out = b.serial_output();
-    let msg = out.lines().find(|l| l.starts_with("[MSG:Step loss X ")).expect("step loss reported");
-    let lost: f64 = msg.trim_end_matches(']').rsplit(' ').next().unwrap().parse().unwrap();
+    let (_, msg, lost) = run_to(&mut b, "Step loss", HZ / 1000);
     // The 40 slipped steps, plus what the rotor trails by at 20 kHz (50 µs: one step) and the
     // engine's count running one step ahead of the pins.
     assert!((40.0..=43.0).contains(&lost), "{msg}");
@@ -133,6 +128,18 @@ fn slip_mid_move_feed_holds_at_the_next_check_and_reports_axis_and_amount() {
     assert_eq!(b.serial_output().matches("Step loss").count(), 1);
 }
 
+/// Runs until `text` appears (at most 1 s), then `extra` cycles more: the output, the step
+/// loss line for X and the steps it says.
+fn run_to(b: &mut Board, text: &str, extra: u64) -> (String, String, f64) {
+    let found = b.run_until(HZ, |b| b.serial_output().contains(text)).unwrap();
+    assert!(found, "{}", b.serial_output());
+    b.run_for(extra).unwrap();
+    let out = b.serial_output();
+    let msg = out.lines().find(|l| l.starts_with("[MSG:Step loss X ")).expect("step loss reported").to_string();
+    let lost = msg.trim_end_matches(']').rsplit(' ').next().unwrap().parse().unwrap();
+    (out, msg, lost)
+}
+
 /// Runs until the engine holds (status `Hold:0`), at most 1 s.
 fn wait_idle_or_held(b: &mut Board) {
     for _ in 0..100 {
@@ -152,14 +159,10 @@ fn missed_steps_raise_alarm_17_within_the_threshold() {
     let mut b = boot_encoder(&spec, &[(87, 1.0), (88, 4.0), (97, 30.0), (98, 1.0), (99, 1.0)]);
     ok(&mut b, "G91 G1 X60 F6000"); // 10 kHz: 10 steps per ms
     ok(&mut b, "G1 X-60");
-    let found = b.run_until(HZ, |b| b.serial_output().contains("ALARM:17")).unwrap();
-    assert!(found, "{}", b.serial_output());
-    b.run_for(HZ / 100).unwrap();
-    let out = b.serial_output();
-    let msg = out.lines().find(|l| l.starts_with("[MSG:Step loss X ")).expect("step loss reported");
-    let lost: f64 = msg.trim_end_matches(']').rsplit(' ').next().unwrap().parse().unwrap();
-    // Limit: (30 + 1) steps + 1 count + 10 steps/ms × 1 ms (lag allowance) = 41.25 steps, of
-    // which the 0.2 ms rotor lag uses 2; reported at the first check past it (10 steps/ms).
+    let (out, msg, lost) = run_to(&mut b, "ALARM:17", HZ / 100);
+    // Limit: (30 + 1) steps + 1 count + 10 steps/ms × 1 ms (lag allowance) + 1 count = 41.5
+    // steps, of which the 0.2 ms rotor lag uses 2; reported at the first check past it (10
+    // steps/ms).
     assert!((41.0..=54.0).contains(&lost), "{msg}");
     assert!(out.contains(&format!("{msg}\r\nALARM:17\r\n[MSG:Reset to continue]\r\n")), "{out}");
     // The motion stopped (decelerated) and the second move was dropped.

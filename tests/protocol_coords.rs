@@ -171,13 +171,7 @@ fn coordinates_survive_a_settings_change_in_the_stored_image() {
     assert_eq!(s.startup[0].as_bytes(), b"G55");
     assert_eq!(s.build_info.as_bytes(), b"MILL1");
     // A new controller from that image: same listing, and the startup line runs.
-    let mut c = Bench::<3>::new(ddastep::settings::Settings::BENCH);
-    c.ctl = ddastep::controller::Controller::new(
-        ddastep::queue::Feeder::new(Box::leak(Box::new(heapless::spsc::Queue::<_, 16>::new())).split().0, c.shared),
-        c.shared,
-        Box::leak(Box::new(ddastep::ramp::RampSlot::new())),
-        s,
-    );
+    let mut c = Bench::<3>::with_stored(s);
     c.take();
     c.tick_ms();
     assert_eq!(c.take(), ">G55:ok\r\n");

@@ -193,15 +193,17 @@ fn build_info_names_us_and_the_rate_limit() {
     let limit = 72_000_000 / (2 * 216 + ddastep::timing::STORE_LATENCY_TICKS);
     assert_eq!(
         b.line("$I"),
-        format!(
-            "[VER:1.1h.ddastep:]\r\n[OPT:,15,128]\r\n[MSG:max step rate {limit} Hz]\r\n\
-             [MSG:ramp 1000-60000 Hz 1000000 Hz/s trapezoid]\r\nok\r\n"
-        )
+        "[VER:1.1h.ddastep:]\r\n[OPT:,24,128]\r\n[MSG:max step rate 150000 Hz]\r\n\
+         [MSG:ramp 1000-103923 Hz 2000000 Hz/s trapezoid]\r\nok\r\n"
     );
-    // Slow accel on Y: the table cannot reach the axes' top in 1.024 s.
-    assert_eq!(b.line("$121=100"), "ok\r\n");
+    // Slow accel on every axis: the table (path units, twice the largest acceleration)
+    // cannot reach the axes' top in 1.024 s.
+    for l in ["$120=100", "$121=100", "$122=100"] {
+        assert_eq!(b.line(l), "ok\r\n");
+    }
     b.run_ms(2);
-    assert!(b.line("$I").contains("[MSG:ramp 1000-11239 Hz 10000 Hz/s trapezoid (table-limited)]"));
+    let info = b.line("$I");
+    assert!(info.contains("[MSG:ramp 1000-21479 Hz 20000 Hz/s trapezoid (table-limited)]"), "{info}");
     assert!(b.line("$#").starts_with("[G54:0.000,0.000,0.000]\r\n[G55:"));
     assert_eq!(b.line("$"), "[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $SLP $C $X $H ~ ! ? ctrl-x]\r\nok\r\n");
 }
@@ -243,11 +245,11 @@ fn dwell_waits_for_the_queue_then_the_time() {
     b.send("G4 P0.25\n");
     let t0 = b.now_ms;
     assert!(b.ctl.busy(), "the dwell holds its line");
-    // The next line waits behind the dwell.
+    // The next line waits (in the RX ring) behind the dwell.
     b.send("G0 Y1\n");
+    b.finish();
     let t = b.now_ms - t0;
     assert!((350..400).contains(&t), "dwell ended after {t} ms");
-    b.finish();
     assert_eq!(replies(&b.take()), (2, 0));
     b.run_to_idle(1000);
     assert_eq!(b.shared.positions(), [1000, 100, 0]);

@@ -89,12 +89,18 @@ proptest! {
             }
             b.drain();
         }
-        // The queued moves run exactly as accepted.
+        // The queued moves run exactly as accepted (the feeder hands them over at each poll,
+        // as the firmware's idle loop does every millisecond).
         let k = moves.len() as u32;
         let mut updates = 0u64;
         while b.shared.moves_done() < k {
             b.timer.update(&mut b.engine);
             updates += 1;
+            if b.shared.moves_done() < k && b.timer.now() / 72_000 > b.now_ms as u64 {
+                b.now_ms += 1;
+                b.ctl.poll(b.now_ms, &mut b.tx);
+                b.drain();
+            }
             prop_assert!(updates < 10_000_000);
         }
         prop_assert_eq!(b.shared.positions().map(i64::from), want);

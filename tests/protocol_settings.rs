@@ -71,45 +71,50 @@ fn encoder_settings_follow_the_table() {
 }
 
 #[test]
-fn profile_uses_the_slowest_accel_and_the_fastest_axis() {
-    let mut s = Settings::BENCH;
-    s.set(121, 500.0, 3).unwrap(); // Y: 50 000 steps/s²
-    s.set(112, 60_000.0, 3).unwrap(); // Z: 100 kHz
+fn profile_is_in_path_units_at_twice_the_fastest_accel() {
+    let mut s = Settings::DEFAULT;
+    s.set(121, 500.0, 3).unwrap(); // Y: slow, but the table serves the fastest axis
+    s.set(112, 60_000.0, 3).unwrap(); // Z: 1000 mm/s
     s.set(120, 1.0, 3).unwrap();
     s.set(120, 10_000.0, 3).unwrap();
     let t = s.timing();
     let floor = 2 * 216 + ddastep::timing::STORE_LATENCY_TICKS;
     assert_eq!((t.pulse_ticks, t.dir_setup_ticks, t.min_period_ticks), (216, 360, floor));
     let cfg = s.ramp_config(3, &t);
-    assert_eq!((cfg.v0, cfg.vmax, cfg.accel), (1000, 100_000, 50_000));
-    // 99 kHz at 50 000 steps/s² needs 1.98 s: the table caps the top.
+    // Rate = path speed × 100 steps/mm; top √(600² + 600² + 1000²) mm/s; 2 × 10 000 mm/s².
+    assert_eq!((cfg.v0, cfg.vmax, cfg.accel), (1000, 131_148, 2_000_000));
+    assert_eq!(s.per_mm(3), 100.0);
+    // Slow on every axis: 130 kHz at 100 000 /s² needs 1.3 s: the table caps the top.
+    for id in [120, 121, 122] {
+        s.set(id, 500.0, 3).unwrap();
+    }
     static SLOT: RampSlot = RampSlot::new();
     let mut g = SLOT.try_write().unwrap();
     let r = s.build_profile(3, &mut g);
     assert!(r.table_limited);
-    assert_eq!(r.cfg.vmax, 1000 + 50_000 * 1024 / 1000 - 1);
+    assert_eq!(r.cfg.vmax, 1000 + 100_000 * 1024 / 1000 - 1);
     assert_eq!(g.ramp.config(), r.cfg);
-    assert_eq!(r.max_rate_hz, 72_000_000 / floor);
-    // The bench settings fit: 59 ms to 60 kHz.
-    let r = Settings::BENCH.build_profile(3, &mut g);
+    assert_eq!(r.max_rate_hz, 150_000);
+    // Defaults fit: 52 ms to √3 × 600 mm/s.
+    let r = Settings::DEFAULT.build_profile(3, &mut g);
     assert!(!r.table_limited);
-    assert_eq!((r.cfg.vmax, g.ramp.len()), (60_000, 59));
+    assert_eq!((r.cfg.vmax, g.ramp.len()), (103_923, 52));
 }
 
 #[test]
 fn short_pulses_raise_the_rate_limit() {
-    let mut s = Settings::BENCH;
-    // Period floor: 2 × pulse + the store latency, and the step handler's cost (290 ticks +
-    // 18 per slave axis) with a pulse's low time after its end (150 + 18 per slave).
+    let mut s = Settings::DEFAULT;
+    // Period floor: 2 × pulse + 48 ticks of store latency, and the step handler's cost (248
+    // ticks + 15 per slave axis) with a pulse's low time after its end.
     s.set(0, 2.0, 3).unwrap();
     let pulse_limit = 72_000_000 / (2 * 144 + ddastep::timing::STORE_LATENCY_TICKS);
     assert_eq!(s.timing().max_rate_hz(), pulse_limit);
     assert_eq!(s.timing().max_rate_for(2), pulse_limit);
     assert_eq!(s.timing().max_rate_for(6), 72_000_000 / (150 + 108 + 144));
     s.set(0, 1.0, 3).unwrap();
-    assert_eq!(s.timing().max_rate_hz(), 248_275);
-    assert_eq!(s.timing().max_rate_for(6), 72_000_000 / (290 + 108));
+    assert_eq!(s.timing().max_rate_hz(), 290_322);
+    assert_eq!(s.timing().max_rate_for(6), 72_000_000 / (248 + 90));
     s.set(0, 0.5, 3).unwrap();
-    assert_eq!(s.timing().max_rate_hz(), 248_275);
+    assert_eq!(s.timing().max_rate_hz(), 290_322);
     assert!(s.set(0, 0.1, 3).is_err());
 }

@@ -9,7 +9,7 @@ use ddastep::engine::Engine;
 use ddastep::queue::{Feeder, Move, Shared};
 use ddastep::ramp::{RampConfig, RampSlot, Shape};
 use ddastep::timing::Timing;
-use heapless::spsc::Queue;
+use ddastep::ring::MoveRing;
 
 /// Ticks through `n` long moves on `N` axes, measuring each tick.
 fn bench_axes<const N: usize>(c: &mut Criterion, name: &str) {
@@ -21,9 +21,9 @@ fn bench_axes<const N: usize>(c: &mut Criterion, name: &str) {
         p.ramp.build(cfg).expect("table");
         p.timing = Timing::new(36, 72, 144);
     }
-    let q: &'static mut Queue<Move<N>, 16> = Box::leak(Box::new(Queue::new()));
+    let q: &'static mut MoveRing<N> = Box::leak(Box::new(MoveRing::new()));
     let (prod, cons) = q.split();
-    let mut feeder = Feeder::new(prod, shared);
+    let mut feeder = Feeder::new(prod, Box::leak(Box::new(ddastep::lookahead::Buffer::new())), shared, slot, pin_map::<N>(0, 0));
     let mut engine = Engine::new(shared, cons, slot, pin_map::<N>(0, 0));
     let steps: [i64; N] = core::array::from_fn(|i| 1_000_000_000 / (i as i64 + 2) * 2 - i as i64);
     feeder.push(Move::new(steps, 400_000).expect("move")).expect("room");

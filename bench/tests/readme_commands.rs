@@ -77,6 +77,10 @@ fn plan(cmd: &str) -> Option<Plan> {
         "cargo sim" => Run(&[]),
         "cargo sim -- --gcode bench/demo/fast_532.gcode --vcd fast.vcd" => Run(&["fast.vcd"]),
         "cargo la -- fast.vcd --expect 5:3:2" => Run(&[]),
+        "cargo sim -- --gcode bench/demo/fast_532.gcode" => Run(&[]),
+        "cargo bench -p ddastep-bench --target host-tuple --bench plan_line" => {
+            Skip("a benchmark: numbers only, a minute of the emulator")
+        }
         "cargo build --release && arm-none-eabi-size target/thumbv7m-none-eabi/release/ddastep" => {
             Skip("run from the repository root by tests/firmware_size.rs (the same size check)")
         }
@@ -87,6 +91,7 @@ fn plan(cmd: &str) -> Option<Plan> {
         "cargo sim -- --vcd paper.vcd --json paper.json" => Run(&["paper.vcd", "paper.json"]),
         "cargo sim -- --gcode my.gcode --max-seconds 5 --pin PA0@0.25=0" => Run(&[]),
         "cargo sim -- --machine bench/demo/gantry300.toml" => Run(&[]),
+        "cargo sim -- --machine bench/demo/encoder_x.toml" => Run(&[]),
         "cargo sim -- --sweep" => Skip("the step-rate benchmark: about a minute of both cores"),
         "cargo sim -- --serve --pty-link /tmp/ttyBLUEPILL --tcp 127.0.0.1:23000 --max-seconds 2" => Run(&[]),
         "socat pty,raw,echo=0,link=/tmp/ttyGRBL tcp:127.0.0.1:23000" => {

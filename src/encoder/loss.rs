@@ -4,9 +4,9 @@
 //! [`Reading`] taken there: the extended count read fresh from TIM3 and the axis's position
 //! from the engine.
 //!
-//! Fixed point: the ratio is counts per step × 2¹⁶ (signed: negative with `$89`), positions
-//! are compared in counts × 2¹⁶, so a fractional ratio (0.25 counts/step) loses nothing. The
-//! deviation `commanded × ratio − measured` trips when its size exceeds
+//! Fixed point: the ratio is counts per step × 2¹⁶ (signed: negative with `$89`); positions
+//! are compared in whole counts with wrapping 32-bit arithmetic (the count wraps too, and only
+//! differences matter). The deviation `commanded × ratio − measured` trips when its size exceeds
 //! `(threshold + 1 step) × ratio + 1 count + |speed| × lag`: one count is the encoder's
 //! resolution, one step the engine's position counter running one edge ahead of the pins, and
 //! the lag allowance the motor's rotor trailing its field while it moves (`$99`).
@@ -55,13 +55,15 @@ enum Armed {
 pub struct Monitor {
     axis: Option<usize>,
     /// Counts per step × 2¹⁶, negative when inverted; never 0 while `axis` is set.
-    ratio: i64,
-    threshold: i64,
+    ratio: i32,
+    /// The deviation allowed standing still, counts: (threshold + 1 step) × ratio rounded up,
+    /// + 1 count.
+    base: i32,
     /// Lag allowance per count of the speed window, counts × 2¹⁶ (lag / window × 2¹⁶).
-    lag_per_count: i64,
+    lag_per_count: i32,
     alarm: bool,
-    /// Measured position = counts × 2¹⁶ + zero (in commanded counts × 2¹⁶).
-    zero: i64,
+    /// Expected count minus encoder count at the last sync.
+    zero: i32,
     last: Reading,
     armed: Armed,
 }
@@ -75,8 +77,8 @@ impl Default for Monitor {
 impl Monitor {
     pub const OFF: Monitor = Monitor {
         axis: None,
-        ratio: ONE,
-        threshold: 0,
+        ratio: ONE as i32,
+        base: 0,
         lag_per_count: 0,
         alarm: false,
         zero: 0,
@@ -87,14 +89,13 @@ impl Monitor {
     /// Takes `s` for a machine with `axes` axes (an axis beyond them: off); re-synced at the
     /// next reading.
     pub fn configure(&mut self, s: &EncoderSettings, axes: usize) {
-        let ratio = s.ratio() as i64;
-        let axis = s.axis().filter(|&a| a < axes && ratio > 0);
+        let ratio = s.ratio();
         *self = Monitor {
-            axis,
+            axis: s.axis().filter(|&a| a < axes && ratio > 0),
             ratio: if s.invert() { -ratio } else { ratio },
-            threshold: s.threshold() as i64,
+            base: (((s.threshold() as i64 + 1) * ratio as i64 + 0xFFFF) >> 16) as i32 + 1,
             // ms × 2¹³ = ms × 2¹⁶ / WINDOW_MS: counts × 2¹⁶ per count of the window.
-            lag_per_count: s.lag() as i64,
+            lag_per_count: s.lag(),
             alarm: s.alarm(),
             ..Monitor::OFF
         };
@@ -121,13 +122,15 @@ impl Monitor {
         let axis = self.axis?;
         match self.armed {
             Armed::Unsynced => {
-                self.zero = r.commanded as i64 * self.ratio - ((r.counts as i64) << 16);
+                self.zero = self.expected().wrapping_sub(r.counts);
                 self.armed = Armed::Armed;
                 None
             }
             Armed::Tripped => None,
             Armed::Armed => {
-                if self.deviation().abs() <= self.limit() {
+                // The lag allowance rounded up to a count.
+                let lag = mul_q16(r.window.unsigned_abs() as i32, self.lag_per_count) + 1;
+                if self.deviation().unsigned_abs() <= self.base.wrapping_add(lag) as u32 {
                     return None;
                 }
                 self.armed = Armed::Tripped;
@@ -136,26 +139,20 @@ impl Monitor {
         }
     }
 
-    /// The size the deviation may reach (counts × 2¹⁶) at the last reading's speed.
-    fn limit(&self) -> i64 {
-        let ratio = self.ratio.abs();
-        (self.threshold + 1) * ratio + ONE + (self.last.window as i64).abs() * self.lag_per_count
+    /// The count the commanded position should show (wrapping like the count itself).
+    fn expected(&self) -> i32 {
+        mul_q16(self.last.commanded, self.ratio)
     }
 
-    /// Commanded − measured position at the last reading, counts × 2¹⁶ (sign of steps × ratio).
-    fn deviation(&self) -> i64 {
-        self.last.commanded as i64 * self.ratio - self.measured_q16()
+    /// Commanded − measured position at the last reading, counts (sign of steps × ratio;
+    /// wrapping arithmetic: only the difference matters).
+    fn deviation(&self) -> i32 {
+        self.expected().wrapping_sub(self.last.counts).wrapping_sub(self.zero)
     }
 
-    fn measured_q16(&self) -> i64 {
-        ((self.last.counts as i64) << 16) + self.zero
-    }
-
-    /// Commanded − measured position at the last reading, steps (to the encoder's count:
-    /// the deviation's fraction of a count is dropped).
+    /// Commanded − measured position at the last reading, steps (to the encoder's count).
     pub fn error_steps(&self) -> f64 {
-        // Whole counts fit i32 (the count is one): no 64-bit integer division or conversion.
-        (self.deviation() >> 16) as i32 as f64 * ONE as f64 / self.ratio as f64
+        self.deviation() as f64 * ONE as f64 / self.ratio as f64
     }
 
     /// The commanded position at the last reading, steps.
@@ -172,6 +169,11 @@ impl Monitor {
     pub fn speed_steps_per_s(&self) -> f64 {
         self.last.window as f64 * (1000 * ONE / WINDOW_MS as i64) as f64 / self.ratio as f64
     }
+}
+
+/// `a × b / 2¹⁶`, floored, truncated to 32 bits (one long multiply).
+fn mul_q16(a: i32, b: i32) -> i32 {
+    ((a as i64 * b as i64) >> 16) as i32
 }
 
 #[cfg(test)]
@@ -215,9 +217,11 @@ mod tests {
         assert_eq!(m.measured_steps(), 400.0);
         // 25 counts in 8 ms = 100 steps per 8 ms = 12 500 steps/s.
         assert_eq!(m.speed_steps_per_s(), 12_500.0);
-        // Lag 2 ms at 12 500 steps/s = 25 steps allowed on top of 8 + 1 + 4 (one count).
-        assert_eq!(m.update(Reading { commanded: 437, counts: -100, window: -25 }), None);
-        assert!(m.update(Reading { commanded: 439, counts: -100, window: -25 }).is_some());
+        // Limit in whole counts: (8 + 1) steps × 0.25 = 2.25 → 3, + 1 count, + lag 2 ms at
+        // 25 counts per 8 ms = 6.25 → 7 (rounded up, + 1): 11 counts = 44 steps.
+        assert_eq!(m.update(Reading { commanded: 443, counts: -100, window: -25 }), None);
+        assert_eq!(m.error_steps(), 44.0);
+        assert!(m.update(Reading { commanded: 445, counts: -100, window: -25 }).is_some());
     }
 
     #[test]

@@ -32,8 +32,6 @@ pub const IMAGE_LEN: usize = 24;
 /// Largest `$88`: at the engine's fastest 248 kHz this is 15.9 M counts/s, within what TIM3
 /// counts through its input filter and what the 1 ms extension keeps.
 pub const MAX_COUNTS_PER_STEP: f64 = 64.0;
-/// Smallest `$88` (one step of its fixed point): 1/2¹⁶ count per step.
-pub const MIN_COUNTS_PER_STEP: f64 = 1.0 / 65_536.0;
 
 /// Per setting, in [`IDS`] order: highest value (`$87`'s is the axis count), decimals in `$$`
 /// (0: whole numbers, truncated as Grbl truncates masks and flags), the binary point of the

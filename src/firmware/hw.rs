@@ -72,7 +72,7 @@ pub fn load_store() -> Stored {
 /// Writes the image into the page not holding the newest valid one, then reads it back (the
 /// CPU stalls while flash is busy: only when idle). A power cut leaves the other page intact.
 pub fn save_store(parts: &mut flash::Parts, image: &[u8; IMAGE_LEN]) {
-    let target = Stored::load([store_page(0), store_page(1)]).1;
+    let target = Stored::newest([store_page(0), store_page(1)]).map_or(0, |i| 1 - i);
     let at = STORE_OFFSETS[target];
     let mut w = parts.writer(flash::SectorSize::Sz1K, flash::FlashSize::Sz64K);
     let ok = w.erase(at, 1024).is_ok() && w.write(at, image).is_ok();

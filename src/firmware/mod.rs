@@ -16,8 +16,10 @@ mod app {
     use ddastep::board;
     use ddastep::controller::Controller;
     use ddastep::engine::Engine;
-    use ddastep::protocol::{realtime, Realtime};
-    use ddastep::queue::{Feeder, Move, Shared};
+    use ddastep::shell::{dispatch, idle_step, Requests};
+    use ddastep::queue::{Feeder, Shared};
+    use ddastep::lookahead::Buffer;
+    use ddastep::ring::MoveRing;
     use ddastep::ramp::RampSlot;
     use ddastep::steptime::STEP_TIME;
     use heapless::spsc::{Consumer, Producer, Queue};
@@ -35,12 +37,8 @@ mod app {
     pub static PROFILE: RampSlot = RampSlot::new();
     /// Milliseconds since boot (SysTick).
     pub static MILLIS: AtomicU32 = AtomicU32::new(0);
-    /// `?` arrived (set by the USART interrupt, taken by `idle`).
-    static STATUS_REQ: AtomicBool = AtomicBool::new(false);
-    /// Ctrl-X arrived.
-    static RESET_REQ: AtomicBool = AtomicBool::new(false);
-    /// 0x85 (jog cancel) arrived.
-    static JOG_CANCEL_REQ: AtomicBool = AtomicBool::new(false);
+    /// `?` and Ctrl-X, left by the USART interrupt for `idle`.
+    static REQUESTS: Requests = Requests::new();
     /// Work for `idle`: set by SysTick (every ms) and USART1, not by the step interrupt, so
     /// `idle` sleeps through step ticks instead of polling after each one.
     static POLL: AtomicBool = AtomicBool::new(true);
@@ -58,12 +56,17 @@ mod app {
         rx_out: Consumer<'static, u8>,
         tx_in: Producer<'static, u8>,
         tx_out: Consumer<'static, u8>,
-        controller: Controller<'static, AXES>,
+        controller: &'static mut Controller<'static, AXES>,
         flash: stm32f1xx_hal::flash::Parts,
     }
 
     #[init(local = [
-        moves: Queue<Move<AXES>, 16> = Queue::new(),
+        moves: MoveRing<AXES> = MoveRing::new(),
+        plans: Buffer<AXES> = Buffer::new(),
+        // The controller lives here, not in the returned resources: built in place it costs
+        // init one copy of it on the stack instead of three.
+        // (MaybeUninit, not Option: `None` would put 2.9 KB of .data in flash.)
+        ctl: core::mem::MaybeUninit<Controller<'static, AXES>> = core::mem::MaybeUninit::uninit(),
         rxq: Queue<u8, 256> = Queue::new(),
         txq: Queue<u8, 512> = Queue::new(),
     ])]
@@ -80,7 +83,13 @@ mod app {
         let (tx_in, tx_out) = cx.local.txq.split();
         let pins = board::pin_map::<AXES>(settings.step_invert, settings.dir_invert);
         let engine = Engine::new(&SHARED, mv_out, &PROFILE, pins);
-        let mut controller = Controller::new(Feeder::new(mv_in, &SHARED), &SHARED, &PROFILE, stored);
+        let controller = Controller::init(
+            cx.local.ctl,
+            Feeder::new(mv_in, cx.local.plans, &SHARED, &PROFILE, pins),
+            &SHARED,
+            &PROFILE,
+            stored,
+        );
         // Drivers off at the level `$4` asks for (`boot.rs` assumed active low).
         hw::ENABLE_OFF_HIGH.store(!settings.enable_invert, Relaxed);
         hw::set_enable(!settings.enable_invert);
@@ -151,17 +160,9 @@ mod app {
     fn usart(mut cx: usart::Context) {
         POLL.store(true, Relaxed);
         while let Ok(b) = cx.local.rx.read() {
-            match realtime(b) {
-                Some(Realtime::Hold) => SHARED.set_hold(true),
-                Some(Realtime::Resume) => SHARED.set_hold(false),
-                Some(Realtime::Status) => STATUS_REQ.store(true, Relaxed),
-                Some(Realtime::Reset) => RESET_REQ.store(true, Relaxed),
-                Some(Realtime::JogCancel) => JOG_CANCEL_REQ.store(true, Relaxed),
-                Some(Realtime::Extended(x)) => SHARED.set_overrides(SHARED.overrides().apply(x)),
+            if let Some(b) = dispatch(b, &SHARED, &REQUESTS) {
                 // A full ring drops the byte: a character-counting sender never fills it.
-                None => {
-                    let _ = cx.local.rx_in.enqueue(b);
-                }
+                let _ = cx.local.rx_in.enqueue(b);
             }
         }
         let tx_out = cx.local.tx_out;
@@ -209,38 +210,20 @@ mod app {
             }
             let now = MILLIS.load(Relaxed);
             let halted = limits::HALTED.load(Relaxed);
-            if halted && RESET_REQ.load(Relaxed) {
+            if halted && REQUESTS.reset_pending() {
                 limits::restart_lost();
             }
             if halted && !hard_reported {
                 hard_reported = true;
                 ctl.hard_limit(tx_in);
             }
-            if RESET_REQ.swap(false, Relaxed) {
-                // Bytes before the Ctrl-X belong to the old stream.
-                while rx_out.dequeue().is_some() {}
-                ctl.soft_reset(tx_in);
-            }
-            if STATUS_REQ.swap(false, Relaxed) {
-                ctl.status_request();
-            }
-            if JOG_CANCEL_REQ.swap(false, Relaxed) {
-                ctl.jog_cancel();
-            }
-            while let Some(&b) = rx_out.peek() {
-                if !ctl.byte(b, tx_in) {
-                    break;
-                }
-                rx_out.dequeue();
-            }
-            ctl.set_rx_free(rx_out.capacity() - rx_out.len());
             let idr = hw::gpioa_idr();
             ctl.set_limit_inputs(idr);
             let invert = ctl.settings().limit_invert;
             limits::arm(ctl.settings().hard_limits, invert, ddastep::limits::active_pins(idr, invert));
             let (counts, window) = encoder::read();
             ctl.encoder(counts, window, tx_in);
-            let act = ctl.poll(now, tx_in);
+            let act = idle_step(ctl, rx_out, tx_in, now, &REQUESTS);
             hw::ENABLE_OFF_HIGH.store(!ctl.settings().enable_invert, Relaxed);
             hw::set_enable(act.enable_pin_high);
             if let Some(ticks) = act.pulse_ticks {

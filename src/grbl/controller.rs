@@ -184,6 +184,8 @@ pub struct Controller<'a, const N: usize> {
     pwm_hz: u32,
     /// `$C` off, `$RST`: a soft reset follows the line's `ok`.
     reset_after: bool,
+    /// After a soft reset: take the engine's position once it has stopped.
+    resync: bool,
     /// A soft-limit trip in progress (see `soft_limits.rs`).
     soft_limit: SoftLimit,
     /// The MCU was reset by the watchdog: say so after the next banner.
@@ -200,12 +202,27 @@ impl<'a, const N: usize> Controller<'a, N> {
     /// (or does so at the first `poll` the engine is parked for). Startup lines run at the
     /// first polls.
     pub fn new(feeder: Feeder<'a, N>, shared: &'a Shared<N>, slot: &'a RampSlot, stored: impl Into<Stored>) -> Self {
-        let mut stored: Stored = stored.into();
+        let mut c = core::mem::MaybeUninit::uninit();
+        Self::init(&mut c, feeder, shared, slot, stored.into());
+        // SAFETY: `init` wrote every field.
+        unsafe { c.assume_init() }
+    }
+
+    /// [`Self::new`] built in place (the firmware's static slot): the stack holds no copy of
+    /// the controller, which would not fit beside the statics.
+    #[inline(never)]
+    pub fn init<'s>(
+        at: &'s mut core::mem::MaybeUninit<Self>,
+        feeder: Feeder<'a, N>,
+        shared: &'a Shared<N>,
+        slot: &'a RampSlot,
+        mut stored: Stored,
+    ) -> &'s mut Self {
         // A store written for more axes than this build drives shows this build's count.
         stored.settings.axes = stored.settings.axes.min(N as u8);
         let settings = stored.settings;
         let axes = settings.axis_count(N);
-        let mut c = Controller {
+        let c = at.write(Controller {
             feeder,
             shared,
             slot,
@@ -245,11 +262,12 @@ impl<'a, const N: usize> Controller<'a, N> {
             tool: (SpindleDir::Off, 0.0, 0),
             pwm_hz: 0,
             reset_after: false,
+            resync: false,
             soft_limit: SoftLimit::Off,
             watchdog_note: false,
             limit_pins: 0,
             enc: crate::encoder::loss::Monitor::OFF,
-        };
+        });
         c.startup_next = c.next_startup(0);
         c.enc_configure();
         c.apply_profile();
@@ -356,7 +374,7 @@ impl<'a, const N: usize> Controller<'a, N> {
     /// [`REPLY_ROOM`] TX bytes are free): keep the byte and offer it again after a `poll`.
     #[must_use]
     pub fn byte(&mut self, b: u8, out: &mut impl Out) -> bool {
-        if self.busy() || self.sleep || out.room() < REPLY_ROOM {
+        if self.busy() || self.sleep || self.resync || out.room() < REPLY_ROOM {
             return false;
         }
         match self.lines.push(b) {
@@ -405,7 +423,9 @@ impl<'a, const N: usize> Controller<'a, N> {
         self.check = false;
         self.soft_limit = SoftLimit::Off;
         self.pushed = self.shared.moves_done();
-        self.planner.sync(self.shared.positions(), &self.limits);
+        // The engine stops at its next tick; its position is final only then (see `poll`).
+        self.resync = true;
+        self.take_position();
         self.wco_count = 0;
         self.ovr_count = 0;
         if moving {
@@ -423,9 +443,11 @@ impl<'a, const N: usize> Controller<'a, N> {
     /// writes a requested status report.
     pub fn poll(&mut self, now_ms: u32, out: &mut impl Out) -> Actions {
         self.now = now_ms;
+        self.take_position();
         if self.profile_dirty {
             self.apply_profile();
         }
+        self.feeder.service();
         self.jog_poll(out);
         self.soft_limit_poll(out);
         self.drive_enable();
@@ -461,6 +483,14 @@ impl<'a, const N: usize> Controller<'a, N> {
         put_ok(out);
         if core::mem::take(&mut self.reset_after) {
             self.soft_reset(out);
+        }
+    }
+
+    /// After a soft reset: once the engine has stopped, its position is the planner's.
+    fn take_position(&mut self) {
+        if self.resync && self.shared.state() == State::Idle {
+            self.planner.sync(self.shared.positions(), &self.limits);
+            self.resync = false;
         }
     }
 

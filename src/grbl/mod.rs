@@ -1,5 +1,5 @@
 //! The Grbl 1.1 front end: the serial line protocol, G-code, `$` settings, reports and the
-//! controller that ties them to the planner.
+//! controller that ties them to the planner, and the shell's realtime dispatch and idle step.
 
 pub mod controller;
 pub mod coords;
@@ -9,5 +9,6 @@ pub mod limits;
 pub mod protocol;
 pub mod report;
 pub mod settings;
+pub mod shell;
 pub mod spindle;
 pub mod store;

@@ -27,8 +27,9 @@ pub enum Realtime {
     /// 0x85: cancel the running and queued jogs
     /// ([`crate::controller::Controller::jog_cancel`]).
     JogCancel,
-    /// Grbl's other extended realtime bytes (0x80..=0xFF: overrides; 0x84 safety door, which
-    /// does nothing without a door input, as in Grbl built without one).
+    /// Grbl's other extended realtime bytes (0x80..=0xFF): overrides 0x90–0x9D act
+    /// ([`crate::queue::Overrides::apply`]); 0x84 safety door does nothing without a door
+    /// input, as in Grbl built without one.
     Extended(u8),
 }
 

@@ -4,15 +4,17 @@
 //! Who uses it: the controller (`$$`, `$N=`), the firmware shell (flash load/save via
 //! [`Settings::from_bytes`] / [`Settings::to_bytes`]).
 //!
-//! One ramp table serves every move, so its acceleration is the smallest axis limit in master
-//! steps/s² (`min_i $120+i × $100+i`): a slave has at most the master's steps, so it never
-//! accelerates faster than its own limit. Its top is the fastest axis limit in steps/s
-//! (`max_i $110+i × $100+i / 60`), capped by the timing's fastest rate and by what fits in the
-//! table's 1.024 s.
+//! One ramp table serves every move. It is in path units: its rate is the path speed times the
+//! largest `$100+i`, its acceleration twice the largest `$120+i` in those units, its top the
+//! fastest path speed all axes allow together (capped by what fits in the table's 1.024 s).
+//! Each move walks it at its own acceleration's fraction (from the axes it moves) and scales
+//! it to its master's share of the path, so axes that do not move never slow a move down.
 
 use crate::encoder::{self, EncoderSettings};
 use crate::protocol::Error;
-use crate::ramp::{Profile, RampConfig, RampError, Shape, MAX_RATE_HZ};
+use crate::ramp::{Profile, RampConfig, RampError, RampTable, Shape, MAX_RATE_HZ};
+#[allow(unused_imports)]
+use crate::ramp::MAX_RATE_HZ as _;
 use crate::timing::{ns_to_ticks, Timing};
 use crate::MAX_AXES;
 
@@ -412,12 +414,14 @@ impl Settings {
         let full = Settings { axes: MAX_AXES as u8, ..*self };
         let mut probe = full;
         let mut ok = (3..=MAX_AXES as u8).contains(&self.axes);
+        // Each setting must go through `set` and read back unchanged (compared one value at a
+        // time: the derived `==` on the whole struct links a float compare per field, ~1 KB).
         for id in Self::ids(MAX_AXES).filter(|&id| id != AXIS_COUNT) {
-            if let Some((v, _)) = full.get(id, MAX_AXES) {
-                ok &= probe.set(id, v, MAX_AXES).is_ok();
+            if let Some(got) = full.get(id, MAX_AXES) {
+                ok &= probe.set(id, got.0, MAX_AXES).is_ok() && probe.get(id, MAX_AXES) == Some(got);
             }
         }
-        ok && probe == full
+        ok
     }
 
     /// Step timing in timer ticks.
@@ -428,37 +432,63 @@ impl Settings {
         Timing::new(pulse, dir, ISR_FLOOR_TICKS)
     }
 
+    /// Table rate per mm/s of path speed on the first `axes` axes: the largest `$100+i`, so a
+    /// move's master never runs faster than the table.
+    pub fn per_mm(&self, axes: usize) -> f32 {
+        // Compared in f64 (exact for f32 values): f32 max would link fmaxf and the f32 compares.
+        self.steps_per_mm.iter().take(axes.max(1)).fold(0.0f64, |a, &b| a.max(b as f64)) as f32
+    }
+
+    /// The ramp table's top on `axes` axes once built (what the planner's limits take).
+    pub fn wanted_vmax(s: &Settings, axes: usize) -> u32 {
+        let mut p: Profile = Profile { ramp: crate::ramp::RampTable::new(), timing: Timing::UNSET, per_mm: 0.0 };
+        s.build_profile(axes, &mut p).cfg.vmax
+    }
+
     /// The ramp asked for by the first `axes` axes (before the table's length is considered).
+    /// The table is in path units (rate = path speed × [`Self::per_mm`]): its acceleration is
+    /// twice the largest `$120+i` (a diagonal may accelerate faster than one axis; each move
+    /// walks it at its own fraction), its top the fastest path speed the axes allow together.
     pub fn ramp_config(&self, axes: usize, timing: &Timing) -> RampConfig {
+        let _ = timing;
         // max/min, not clamp, here and below: clamp's panic message would link integer
         // formatting into the firmware.
         #[allow(clippy::manual_clamp, reason = "clamp's panic path costs flash")]
         let axes = axes.max(1).min(MAX_AXES);
-        let mut accel = f64::MAX;
-        let mut top = 0.0f64;
+        let c = self.per_mm(axes) as f64;
+        let mut accel = 0.0f64;
+        let mut top2 = 0.0f64;
         for i in 0..axes {
-            let spm = self.steps_per_mm[i] as f64;
-            accel = accel.min(self.accel[i] as f64 * spm);
-            top = top.max(self.max_rate[i] as f64 * spm / 60.0);
+            accel = accel.max(self.accel[i] as f64 * 2.0);
+            let v = self.max_rate[i] as f64 / 60.0;
+            top2 += v * v;
         }
-        let vmax = (top as u32).max(1).min(timing.max_rate_hz());
+        let accel = accel * c;
+        let vmax = ((crate::planner::sqrt(top2) * c) as u32).max(1).min(crate::ramp::MAX_RATE_HZ);
         RampConfig {
             v0: self.ramp_start_hz.max(1).min(vmax),
             vmax,
-            accel: (accel as u32).max(1),
+            accel: (accel.min(u32::MAX as f64) as u32).max(1),
             shape: self.shape,
         }
     }
 
     /// Rebuilds `profile` (table and timing) for `axes` axes. A ramp too long for the table is
-    /// rebuilt with the fastest top that fits.
+    /// built steeper (moves walk it at their own fraction), so the top stays the axes' max rate.
     pub fn build_profile<const L: usize>(&self, axes: usize, profile: &mut Profile<L>) -> Ramped {
         let timing = self.timing();
         let mut cfg = self.ramp_config(axes, &timing);
         let mut table_limited = false;
         profile.timing = timing;
-        for _ in 0..4 {
+        profile.per_mm = self.per_mm(axes);
+        for attempt in 0..6 {
             match profile.ramp.build(cfg) {
+                // Too long for the table: a steeper table (every move walks it at its own
+                // fraction, so no move runs faster), down to a lower top only as a last resort.
+                Err(RampError::TooLong { .. }) if attempt < 4 => {
+                    let ms = RampTable::<L>::ramp_ms(&cfg) as f64;
+                    cfg.accel = (cfg.accel as f64 * ms / (L as f64 - 2.0).max(1.0)).min(u32::MAX as f64 / 2.0) as u32 + 1;
+                }
                 Err(RampError::TooLong { reachable_vmax }) => {
                     table_limited = true;
                     cfg.vmax = reachable_vmax.max(cfg.v0);
@@ -472,15 +502,17 @@ impl Settings {
         Ramped { cfg, max_rate_hz: timing.max_rate_hz(), table_limited }
     }
 
-    /// The flash image: magic, version, fields (little-endian), CRC-32.
+    /// The flash image: magic, version, fields (little-endian), CRC-32. (Not inlined: the
+    /// idle loop's copy cost ~450 bytes more than the call.)
+    #[inline(never)]
     pub fn to_bytes(&self) -> [u8; SETTINGS_LEN] {
         let mut b = [0u8; SETTINGS_LEN];
         b[0] = MAGIC;
         b[1] = VERSION;
         b[2..4].copy_from_slice(&(SETTINGS_LEN as u16).to_le_bytes());
-        b[4..8].copy_from_slice(&self.pulse_us.to_le_bytes());
-        b[8..12].copy_from_slice(&self.dir_setup_us.to_le_bytes());
-        b[12..16].copy_from_slice(&self.ramp_start_hz.to_le_bytes());
+        put4(&mut b, 4, self.pulse_us.to_le_bytes());
+        put4(&mut b, 8, self.dir_setup_us.to_le_bytes());
+        put4(&mut b, 12, self.ramp_start_hz.to_le_bytes());
         b[16] = self.idle_delay_ms;
         b[17] = self.step_invert;
         b[18] = self.dir_invert;
@@ -493,24 +525,28 @@ impl Settings {
         b[20] = (self.shape == Shape::SCurve) as u8;
         b[21] = self.axes;
         b[22] = self.status_mask;
-        // Axis arrays from byte 24, in field order (chunks, not computed indices: no panic path).
-        let values = [&self.steps_per_mm, &self.max_rate, &self.accel, &self.max_travel].into_iter().flatten();
-        for (w, v) in b[24..].chunks_exact_mut(4).zip(values) {
-            w.copy_from_slice(&v.to_le_bytes());
+        // Axis arrays from byte 24, in field order (chunks, not computed indices: no panic path;
+        // nested loops, not `flatten`: ~0.4 KB less flash).
+        let arrays = [&self.steps_per_mm, &self.max_rate, &self.accel, &self.max_travel];
+        for (row, arr) in b[24..TAIL].chunks_exact_mut(4 * MAX_AXES).zip(arrays) {
+            for (w, v) in row.chunks_exact_mut(4).zip(arr) {
+                w.copy_from_slice(&v.to_le_bytes());
+            }
         }
-        b[TAIL..TAIL + 4].copy_from_slice(&self.arc_tolerance.to_le_bytes());
-        b[TAIL + 4..TAIL + 8].copy_from_slice(&self.spindle_max.to_le_bytes());
-        b[TAIL + 8..TAIL + 12].copy_from_slice(&self.spindle_min.to_le_bytes());
-        b[TAIL + 12..TAIL + 16].copy_from_slice(&self.spindle_pwm_hz.to_le_bytes());
+        put4(&mut b, TAIL, self.arc_tolerance.to_le_bytes());
+        put4(&mut b, TAIL + 4, self.spindle_max.to_le_bytes());
+        put4(&mut b, TAIL + 8, self.spindle_min.to_le_bytes());
+        put4(&mut b, TAIL + 12, self.spindle_pwm_hz.to_le_bytes());
         b[TAIL + 16] = self.laser_mode as u8;
         b[TAIL + 20..TAIL + 20 + encoder::IMAGE_LEN].copy_from_slice(&self.encoder.to_bytes());
         let crc = crc32(&b[..SETTINGS_LEN - 4]);
-        b[SETTINGS_LEN - 4..].copy_from_slice(&crc.to_le_bytes());
+        put4(&mut b, SETTINGS_LEN - 4, crc.to_le_bytes());
         b
     }
 
     /// Settings from a flash image, or `None` if it is not one (erased, other version, bad
     /// checksum, a value out of range).
+    #[inline(never)]
     pub fn decode(b: &[u8]) -> Option<Settings> {
         let b: &[u8; SETTINGS_LEN] = b.get(..SETTINGS_LEN)?.try_into().ok()?;
         let word = |at: usize| [b[at], b[at + 1], b[at + 2], b[at + 3]];
@@ -552,9 +588,11 @@ impl Settings {
             encoder: EncoderSettings::from_bytes(&b[TAIL + 20..]),
             ..Settings::DEFAULT
         };
-        let values = [&mut s.steps_per_mm, &mut s.max_rate, &mut s.accel, &mut s.max_travel].into_iter().flatten();
-        for (w, v) in b[24..].chunks_exact(4).zip(values) {
-            *v = f32::from_le_bytes([w[0], w[1], w[2], w[3]]);
+        let arrays = [&mut s.steps_per_mm, &mut s.max_rate, &mut s.accel, &mut s.max_travel];
+        for (row, arr) in b[24..TAIL].chunks_exact(4 * MAX_AXES).zip(arrays) {
+            for (w, v) in row.chunks_exact(4).zip(arr.iter_mut()) {
+                *v = f32::from_le_bytes([w[0], w[1], w[2], w[3]]);
+            }
         }
         s.is_valid().then_some(s)
     }
@@ -562,6 +600,15 @@ impl Settings {
     /// Settings from a flash image, or the defaults if it is not a valid one.
     pub fn from_bytes(b: &[u8]) -> Settings {
         Self::decode(b).unwrap_or(Settings::DEFAULT)
+    }
+}
+
+/// Stores 4 bytes at `at` (one call instead of a slice index and copy at each field: the
+/// image writer is ~0.1 KB smaller).
+#[inline(never)]
+pub(crate) fn put4(b: &mut [u8], at: usize, v: [u8; 4]) {
+    if let Some(w) = b.get_mut(at..at + 4) {
+        w.copy_from_slice(&v);
     }
 }
 

@@ -12,7 +12,7 @@
 //! Each page sees every second write, halving flash wear per page.
 
 use crate::coords::{Coords, COORDS_LEN};
-use crate::settings::{crc32, Settings, SETTINGS_LEN};
+use crate::settings::{crc32, put4, Settings, SETTINGS_LEN};
 
 /// Bytes a stored text line can hold (Grbl keeps 80 with its terminator).
 pub const TEXT_LEN: usize = 79;
@@ -91,10 +91,11 @@ impl Stored {
     };
 
     /// The flash image.
+    #[inline(never)]
     pub fn to_bytes(&self) -> [u8; IMAGE_LEN] {
         let mut b = [0u8; IMAGE_LEN];
-        b[..4].copy_from_slice(&MAGIC);
-        b[4..8].copy_from_slice(&self.seq.to_le_bytes());
+        put4(&mut b, 0, MAGIC);
+        put4(&mut b, 4, self.seq.to_le_bytes());
         b[SETTINGS_AT..COORDS_AT].copy_from_slice(&self.settings.to_bytes());
         b[COORDS_AT..TEXT_AT].copy_from_slice(&self.coords.to_bytes());
         let texts = self.startup.iter().chain(core::iter::once(&self.build_info));
@@ -103,7 +104,7 @@ impl Stored {
             w[1..].copy_from_slice(&t.buf);
         }
         let crc = crc32(&b[..IMAGE_LEN - 4]);
-        b[IMAGE_LEN - 4..].copy_from_slice(&crc.to_le_bytes());
+        put4(&mut b, IMAGE_LEN - 4, crc.to_le_bytes());
         b
     }
 
@@ -130,11 +131,27 @@ impl Stored {
     /// The newest valid image of two pages, and the index of the page to write next (the
     /// other one). Nothing valid: the defaults, and page 0.
     pub fn load(pages: [&[u8]; 2]) -> (Stored, usize) {
-        match pages.map(Stored::decode) {
-            [Some(a), Some(b)] if (b.seq.wrapping_sub(a.seq) as i32) > 0 => (b, 0),
-            [Some(a), _] => (a, 1),
-            [None, Some(b)] => (b, 0),
-            [None, None] => (Stored::DEFAULT, 0),
+        match Self::newest(pages) {
+            Some(i) => (Stored::decode(pages[i]).unwrap_or(Stored::DEFAULT), 1 - i),
+            None => (Stored::DEFAULT, 0),
         }
     }
+
+    /// Which page holds the newest valid image, if any. One image is decoded at a time (the
+    /// firmware calls this on boot and before each save: two images at once would cost the
+    /// stack 2 KiB more).
+    pub fn newest(pages: [&[u8]; 2]) -> Option<usize> {
+        match [seq_of(pages[0]), seq_of(pages[1])] {
+            [Some(a), Some(b)] if (b.wrapping_sub(a) as i32) > 0 => Some(1),
+            [Some(_), _] => Some(0),
+            [None, Some(_)] => Some(1),
+            [None, None] => None,
+        }
+    }
+}
+
+/// The sequence number of a valid image (see [`Stored::decode`]).
+#[inline(never)]
+fn seq_of(b: &[u8]) -> Option<u32> {
+    Stored::decode(b).map(|s| s.seq)
 }

@@ -8,29 +8,34 @@
 //! [`Engine::tick`], which computes the word for the *next* update event and returns the ARR
 //! value to preload now (TIM2's ARR is buffered, so it takes effect at the next update and sets
 //! the gap after it). Falling edges come from a compare event `pulse_ticks` after each update,
-//! where the handler stores [`PinMap::step_off`]. Periods longer than 65 536 ticks
+//! where the handler stores [`Engine::step_off`]. Periods longer than 65 536 ticks
 //! (< 1.1 kHz) are split into filler events whose word is 0 (period extension; the prescaler
 //! stays 0, so pulse width and resolution never change).
 //!
+//! Moves arrive prepared ([`crate::prepared`]) in a ring and run in their slot: a move change
+//! is a pointer switch, a position-record swap and the new move's period; its deceleration
+//! trigger follows on the next ticks ([`crate::walk`]): no search, no division, no loop over
+//! axes. The ramp index carries over from move to move
+//! (look-ahead junctions run through at speed). A direction change at a junction is carved out
+//! of the gap before the next step (the change, then `dir_setup`), so it never delays an edge
+//! unless the period is shorter than the setup.
+//!
 //! Invariants: every move emits exactly its step counts (the ramp only sets periods); each
-//! axis's position counter counts every step word the engine hands out, so it equals the pulses
-//! emitted once that word is written at the next edge; a direction change is written alone
-//! and followed by at least `dir_setup_ticks` before the next step; the ramp index moves by one
-//! entry per millisecond of timer time (at most one boundary per tick, since a tick is ≤ 65 536
-//! ticks < 72 000). No floats, no division, no loop over the queue: the only loop is over the
-//! move's slave axes (≤ 6).
+//! axis's position equals the step words handed out; a direction change is written alone and
+//! followed by at least `dir_setup_ticks` before the next step. No floats, no division, no
+//! loop over the queue: the only loop is the unrolled one over the move's slaves (≤ 6).
 //!
 //! Cycle budget: see bench/RESULTS.md (modeled on the virtual bench).
 
 use core::sync::atomic::Ordering::Relaxed;
 
-use heapless::spsc::Consumer;
-
 use crate::board::PinMap;
-use crate::interp::Dda;
-use crate::queue::{Move, Shared, State};
+use crate::control::Ctl;
+use crate::prepared::{Prepared, RampPlan};
+use crate::queue::{Shared, State};
 use crate::ramp::{Period, RampSlot, RAMP_LEN};
-use crate::timing::{Timing, STORE_JITTER_TICKS};
+use crate::ring::RingConsumer;
+use crate::walk::{Step as WalkStep, Walk};
 use crate::TICKS_PER_MS;
 
 /// Longest timer period one tick can set (ARR is 16 bits).
@@ -38,108 +43,82 @@ pub const MAX_TICK: u32 = 1 << 16;
 /// Period of idle ticks while no move runs (0.5 ms: a new move starts within this).
 pub const IDLE_TICKS: u32 = TICKS_PER_MS / 2;
 
-/// Where the engine is within a move.
+/// What the engine is doing.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Phase {
     /// No move loaded.
     Idle,
-    /// Walking up the ramp table.
-    Accel,
-    /// At the move's own cruise period.
-    Cruise,
-    /// Walking down the ramp table.
-    Decel,
+    /// A direction change is the next edge, then the move's first step.
+    Dir,
+    /// Stepping.
+    Run,
     /// Stopped by feed hold, move not finished.
     Held,
-}
-
-/// One slave axis of the running move.
-#[derive(Clone, Copy, Debug)]
-struct Slave {
-    dda: Dda,
-    on: u32,
-    axis: u8,
 }
 
 /// The step engine for `N` axes.
 pub struct Engine<'a, const N: usize, const L: usize = RAMP_LEN> {
     shared: &'a Shared<N>,
-    queue: Consumer<'a, Move<N>>,
+    ring: RingConsumer<'a, N>,
     ramp: &'a RampSlot<L>,
-    pins: PinMap<N>,
-    min_period: Period,
-    dir_setup: u32,
+    step_off: u32,
     // The edge about to happen.
     word: u32,
     extend: u32,
     frac: u32,
     ms_left: i32,
-    // The running move.
+    // The running move (a slot of the ring; valid while `phase != Idle`).
     phase: Phase,
-    hold_stop: bool,
-    ctl_seen: u32,
-    idx: u16,
-    cruise_idx: u16,
-    cruise: Period,
-    period: Period,
-    left: u32,
+    cur: *mut Prepared<N>,
+    plan: RampPlan,
     total: u32,
-    /// Start decelerating once `left` is at most this (set when accelerating or cruising).
-    decel_at: u32,
-    /// `left` plus the ramp steps already made when the current acceleration began.
-    ramp_base: u32,
-    /// Ramp steps made and `left` when the deceleration began (for a released feed hold).
-    decel_ramp: u32,
-    decel_left: u32,
+    left: u32,
     master_on: u32,
-    master_axis: u8,
-    mv_steps: [i32; N],
-    slaves: [Slave; N],
     n_slaves: u8,
-    dir_neg: u32,
-    dir_known: u32,
+    min_period: Period,
+    period: Period,
+    walk: Walk,
+    hold: bool,
+    /// The running move's direction change is still to be written (kept across a hold).
+    dir_pending: bool,
+    ctl_seen: Ctl,
 }
+
+// SAFETY: `cur` points into the ring the engine consumes; the engine is moved into the
+// interrupt once and used only there.
+unsafe impl<const N: usize, const L: usize> Send for Engine<'_, N, L> {}
 
 impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
     /// An idle engine.
-    pub fn new(
-        shared: &'a Shared<N>,
-        queue: Consumer<'a, Move<N>>,
-        ramp: &'a RampSlot<L>,
-        pins: PinMap<N>,
-    ) -> Self {
+    pub fn new(shared: &'a Shared<N>, ring: RingConsumer<'a, N>, ramp: &'a RampSlot<L>, pins: PinMap<N>) -> Self {
         Engine {
             shared,
-            queue,
+            ring,
             ramp,
-            pins,
-            min_period: Period::ZERO,
-            dir_setup: 0,
+            step_off: pins.step_off,
             word: 0,
             extend: 0,
             frac: 0,
             ms_left: TICKS_PER_MS as i32,
             phase: Phase::Idle,
-            hold_stop: false,
-            ctl_seen: shared.ctl.load(Relaxed),
-            idx: 0,
-            cruise_idx: 0,
-            cruise: Period::ZERO,
-            period: Period::ZERO,
-            left: 0,
+            cur: core::ptr::null_mut(),
+            plan: RampPlan::lone(0, Period::ZERO),
             total: 0,
-            decel_at: 0,
-            ramp_base: 0,
-            decel_ramp: 0,
-            decel_left: 0,
+            left: 0,
             master_on: 0,
-            master_axis: 0,
-            mv_steps: [0; N],
-            slaves: [Slave { dda: Dda::new(0, 0), on: 0, axis: 0 }; N],
             n_slaves: 0,
-            dir_neg: 0,
-            dir_known: 0,
+            min_period: Period::ZERO,
+            period: Period::ZERO,
+            walk: Walk::REST,
+            hold: false,
+            dir_pending: false,
+            ctl_seen: shared.ctl.load(),
         }
+    }
+
+    /// Ramp-walk state for tests: (index Q20, decelerating, decel trigger, master steps left).
+    pub fn walk_state(&self) -> (u32, bool, u32, u32) {
+        (self.walk.idx, self.walk.decel, self.walk.decel_at, self.left)
     }
 
     /// The BSRR word to store at this update event (precomputed by the previous tick).
@@ -151,7 +130,7 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
     /// The BSRR word for the compare event (falling step edges).
     #[inline(always)]
     pub fn step_off(&self) -> u32 {
-        self.pins.step_off
+        self.step_off
     }
 
     /// Computes the next edge's word; returns the ARR value to preload now.
@@ -185,6 +164,8 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
         if self.ms_left <= 0 {
             self.ms_left += TICKS_PER_MS as i32;
             self.walk_ramp();
+        } else if self.walk.unsettled() {
+            self.settle();
         }
         (chunk - 1) as u16
     }
@@ -192,12 +173,13 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
     /// The next edge: a step, a direction change or an idle gap, with the gap after it.
     #[inline(always)]
     fn next_event(&mut self) -> (u32, u32) {
-        let ctl = self.shared.ctl.load(Relaxed);
+        let ctl = self.shared.ctl.load();
         if ctl != self.ctl_seen {
             self.control(ctl);
         }
         match self.phase {
-            Phase::Accel | Phase::Cruise | Phase::Decel => self.step(),
+            Phase::Run => self.step(),
+            Phase::Dir => self.dir_change(),
             Phase::Held => (0, IDLE_TICKS),
             Phase::Idle => self.refill(),
         }
@@ -208,6 +190,9 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
     fn step(&mut self) -> (u32, u32) {
         let mut word = self.master_on;
         let total = self.total;
+        // SAFETY: `cur` is the front slot of the ring, owned by the engine until it pops it;
+        // only its slaves are borrowed (the feeder may store its `exit_q` concurrently).
+        let slaves = unsafe { &mut (*self.cur).slaves };
         // Unrolled over the slots (N is a constant), stopping after the move's last slave: no
         // loop counter, no bounds checks, no branch inside a slot.
         let n = self.n_slaves as usize;
@@ -216,7 +201,7 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
                 if $i + 1 >= N || $i >= n {
                     break $out;
                 }
-                let s = &mut self.slaves[$i];
+                let s = &mut slaves[$i];
                 word |= s.on & s.dda.step_mask(total);
             )*};
         }
@@ -225,258 +210,238 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
         }
         self.left -= 1;
         self.shared.mv_done.store(total - self.left, Relaxed);
-        if self.left <= self.decel_at {
+        if self.left <= self.walk.decel_at && !self.walk.decel {
             self.start_decel();
         }
         let acc = self.frac + self.period.to_bits();
         self.frac = acc & 15;
+        let mut gap = acc >> 4;
         if self.left == 0 {
-            self.end_move(true);
+            gap = self.finish(gap);
         }
-        (word, acc >> 4)
+        (word, gap)
     }
 
-    /// One millisecond has passed: move one entry along the ramp.
+    /// The direction change before a move's first step, then the setup gap.
     #[inline(never)]
-    fn walk_ramp(&mut self) {
-        match self.phase {
-            Phase::Accel => {
-                self.idx += 1;
-                if self.idx >= self.cruise_idx {
-                    self.idx = self.cruise_idx;
-                    self.cruise_now();
-                }
-            }
-            Phase::Decel => {
-                if self.idx > 0 {
-                    self.idx -= 1;
-                } else if self.hold_stop {
-                    self.phase = Phase::Held;
-                    self.publish(State::Held);
-                    return;
-                }
-            }
-            _ => return,
-        }
+    fn dir_change(&mut self) -> (u32, u32) {
+        self.phase = Phase::Run;
+        self.dir_pending = false;
+        // SAFETY: as in `step`; plain fields the feeder never writes after publishing.
+        unsafe { ((*self.cur).dir_word, (*self.cur).dir_setup) }
+    }
+
+    /// Starts walking down: one walk down now and a fresh millisecond for it.
+    #[inline(never)]
+    fn start_decel(&mut self) {
+        let target = self.target();
+        self.walk.start_decel(&self.plan, target);
+        self.ms_left = TICKS_PER_MS as i32;
         self.set_period();
     }
 
-    /// Turns round on the ramp so the way down mirrors the way up: from cruise, the next entry
-    /// down gets a whole millisecond; mid-ramp, the current entry gets as long again as it has
-    /// had, so the steps down equal the steps up (`ramp_steps`).
+    /// The exit target: 0 under a hold or when no successor is queued yet.
+    #[inline(always)]
+    fn target(&self) -> u32 {
+        if self.hold || !self.ring.has_next() {
+            0
+        } else {
+            // SAFETY: an atomic field of the running slot.
+            unsafe { (*self.cur).exit_q.load(Relaxed) }
+        }
+    }
+
+    /// One millisecond has passed: move along the ramp.
     #[inline(never)]
-    fn start_decel(&mut self) {
-        if self.phase == Phase::Decel {
+    fn walk_ramp(&mut self) {
+        if !matches!(self.phase, Phase::Run | Phase::Dir) {
             return;
         }
-        self.decel_ramp = self.ramp_steps();
-        self.decel_left = self.left;
-        self.decel_at = 0;
-        if self.phase == Phase::Cruise {
-            if self.idx > 0 {
-                self.idx -= 1;
-                self.set_period();
-            }
-            self.ms_left = TICKS_PER_MS as i32;
-        } else {
-            self.ms_left = TICKS_PER_MS as i32 - self.ms_left;
+        let target = self.target();
+        while self.walk.unsettled() {
+            // Slower than a step per ms: the work of the ticks in between happens here.
+            self.walk.settle(&self.plan, target, &self.ramp.profile().ramp);
         }
-        self.phase = Phase::Decel;
+        match self.walk.per_ms(&self.plan, target, self.left) {
+            WalkStep::Same => {}
+            WalkStep::AtRest if self.hold => {
+                self.phase = Phase::Held;
+                self.publish(State::Held);
+            }
+            _ => self.set_period(),
+        }
+    }
+
+    /// Pending trigger work, one distance (a tick without a ramp millisecond).
+    #[inline(never)]
+    fn settle(&mut self) {
+        if !matches!(self.phase, Phase::Run | Phase::Dir) {
+            return;
+        }
+        let target = self.target();
+        self.walk.settle(&self.plan, target, &self.ramp.profile().ramp);
     }
 
     /// Period for the current ramp index.
     #[inline(always)]
     fn set_period(&mut self) {
-        let p = if self.idx >= self.cruise_idx {
-            self.cruise
-        } else {
-            self.ramp.profile().ramp.period(self.idx as usize)
-        };
-        self.period = p.max(self.min_period);
+        self.period = self.walk.period(&self.plan, self.min_period, &self.ramp.profile().ramp);
         self.shared.period_bits.store(self.period.to_bits(), Relaxed);
-    }
-
-    /// Ramp steps made so far: steps up the table, less steps back down.
-    fn ramp_steps(&self) -> u32 {
-        match self.phase {
-            Phase::Accel => self.ramp_base - self.left,
-            Phase::Cruise => self.decel_at,
-            Phase::Decel => self.decel_ramp.saturating_sub(self.decel_left - self.left),
-            _ => 0,
-        }
-    }
-
-    /// (Re)starts accelerating with `made` ramp steps already behind.
-    fn accel_now(&mut self, made: u32) {
-        self.phase = Phase::Accel;
-        self.ramp_base = self.left + made;
-        // left ≤ made + (steps from here) ⟺ 2·left ≤ ramp_base.
-        self.decel_at = self.ramp_base >> 1;
-    }
-
-    /// Reaches the cruise rate: the steps it took up are the steps it needs down.
-    fn cruise_now(&mut self) {
-        self.decel_at = self.ramp_steps();
-        self.phase = Phase::Cruise;
     }
 
     /// The control word changed: an immediate stop, or a feed hold on or off.
     #[inline(never)]
-    fn control(&mut self, ctl: u32) {
+    fn control(&mut self, ctl: Ctl) {
         let old = core::mem::replace(&mut self.ctl_seen, ctl);
-        if (old ^ ctl) >> 1 != 0 {
-            self.end_move(false);
+        if ctl.stopped_since(old) && self.phase != Phase::Idle {
+            self.stop_move();
         }
-        let hold = ctl & 1 != 0;
+        let hold = ctl.hold();
+        if hold == self.hold {
+            return;
+        }
+        self.hold = hold;
         match self.phase {
-            Phase::Accel | Phase::Cruise | Phase::Decel if hold != self.hold_stop => self.toggle_hold(hold),
-            Phase::Held if !hold => self.resume(),
-            _ => {}
-        }
-    }
-
-    /// A feed-hold request changed.
-    #[inline(never)]
-    fn toggle_hold(&mut self, hold: bool) {
-        {
-            self.hold_stop = hold;
-            if hold {
-                if self.phase != Phase::Decel {
+            Phase::Run | Phase::Dir if hold => {
+                if !self.walk.decel {
                     self.start_decel();
                 }
                 self.publish(State::Holding);
-            } else {
-                let made = self.ramp_steps();
-                if self.left > made {
-                    self.accel_now(made);
-                }
+            }
+            Phase::Run | Phase::Dir => {
+                self.walk.decel = false;
+                self.plan_decel();
                 self.publish(State::Run);
             }
-        }
-    }
-
-    /// Leaves a completed feed hold: accelerate again from the bottom of the table.
-    #[inline(never)]
-    fn resume(&mut self) {
-        self.hold_stop = false;
-        self.idx = 0;
-        if self.left == 0 {
-            self.phase = Phase::Idle;
-            self.publish(State::Idle);
-            return;
-        }
-        self.start_ramp();
-        self.set_period();
-        self.publish(State::Run);
-    }
-
-    /// From rest: accelerate, or cruise at once when the cruise rate is below the table.
-    fn start_ramp(&mut self) {
-        self.accel_now(0);
-        if self.cruise_idx == 0 {
-            self.cruise_now();
-        }
-    }
-
-    /// Ends the running move (counted as done only when completed).
-    #[inline(never)]
-    fn end_move(&mut self, completed: bool) {
-        if self.phase != Phase::Idle {
-            // What each axis made: all of it, or (stopped) the master's and the slaves' counts.
-            let done = self.total - self.left;
-            let mut made = [0u32; N];
-            made[self.master_axis as usize] = done;
-            for s in self.slaves.iter().take(self.n_slaves as usize) {
-                made[s.axis as usize] = s.dda.made(done, self.total);
+            Phase::Held => {
+                // Resume: accelerate again from the bottom of the table.
+                self.walk = Walk::REST;
+                self.plan_decel();
+                self.set_period();
+                self.ms_left = TICKS_PER_MS as i32;
+                self.phase = if self.dir_pending { Phase::Dir } else { Phase::Run };
+                self.publish(State::Run);
             }
-            let steps = self.mv_steps;
-            self.shared.end_move(|i| if steps[i] < 0 { -(made[i] as i32) } else { made[i] as i32 });
+            Phase::Idle => {}
         }
-        if completed {
-            self.shared.moves_done.fetch_add(1, Relaxed);
+    }
+
+    fn plan_decel(&mut self) {
+        let target = self.target();
+        self.walk.plan_decel(&self.plan, target, &self.ramp.profile().ramp);
+    }
+
+    /// Makes the front slot the running move (its steps, slaves, ramp plan).
+    #[inline(always)]
+    fn enter(&mut self, p: *mut Prepared<N>) {
+        self.cur = p;
+        // SAFETY: a published slot, now owned by the engine; plain fields only.
+        unsafe {
+            self.plan = (*p).ramp;
+            self.total = (*p).total;
+            self.master_on = (*p).master_on;
+            self.n_slaves = (*p).n_slaves;
+            self.min_period = (*p).min_period;
         }
+        self.left = self.total;
+        self.shared.start_move(p as *const Prepared<N>);
+        self.walk.decel = self.hold;
+        // The trigger comes at the next tick (a move change costs no distance).
+        self.walk.defer_decel();
+        self.set_period();
+    }
+
+    /// The running move made its last step: switch to the next one at speed, or go idle.
+    /// Returns the gap after the last step (shortened when a direction change comes first).
+    #[inline(never)]
+    fn finish(&mut self, gap: u32) -> u32 {
+        self.shared.moves_done.fetch_add(1, Relaxed);
+        self.ring.pop();
+        if let Some(p) = self.ring.front() {
+            // SAFETY: a published slot; plain fields.
+            let (epoch, dir, setup, min_gap) = unsafe { ((*p).epoch, (*p).dir_word, (*p).dir_setup, (*p).min_gap) };
+            if epoch == self.ctl_seen.epoch() {
+                self.enter(p);
+                if dir != 0 {
+                    self.phase = Phase::Dir;
+                    self.dir_pending = true;
+                    return gap.saturating_sub(setup).max(min_gap);
+                }
+                return gap;
+            }
+        }
+        // Nothing queued: at rest unless the feeder was late at speed (counted).
+        if self.walk.idx != 0 && !self.hold {
+            self.shared.starved.fetch_add(1, Relaxed);
+        }
+        self.go_idle(|p, i| p.steps[i]);
+        gap
+    }
+
+    /// An immediate stop: the running move ends where it is, each axis at the steps it made.
+    #[inline(never)]
+    fn stop_move(&mut self) {
+        let done = self.total - self.left;
+        let total = self.total;
+        self.ring.pop();
+        self.go_idle(|p, i| {
+            let made = if i == p.master as usize {
+                done
+            } else {
+                p.slaves[..p.n_slaves as usize].iter().find(|s| s.axis as usize == i).map_or(0, |s| s.dda.made(done, total))
+            };
+            if p.steps[i] < 0 {
+                -(made as i32)
+            } else {
+                made as i32
+            }
+        });
+    }
+
+    /// Publishes the positions after the running move (`made(move, axis)`) and goes idle.
+    fn go_idle(&mut self, made: impl Fn(&Prepared<N>, usize) -> i32) {
+        // SAFETY: the slot was just popped but is not reused before the producer sees the pop
+        // and pushes again, which cannot happen inside this interrupt.
+        let p = unsafe { &*self.cur };
+        self.shared.idle_at(|i| p.start[i].wrapping_add(made(p, i)));
+        self.cur = core::ptr::null_mut();
         self.left = 0;
+        self.walk = Walk::REST;
         self.phase = Phase::Idle;
-        self.hold_stop = false;
+        self.dir_pending = false;
         self.shared.period_bits.store(0, Relaxed);
         self.publish(State::Idle);
     }
 
-    /// Loads the next move, if any (queue refill; never in the step path).
+    /// Loads the next move from rest, if any (queue refill; never in the step path).
     #[inline(never)]
     fn refill(&mut self) -> (u32, u32) {
-        if self.ctl_seen & 1 != 0 {
+        if self.hold {
             self.publish(State::Held);
             return (0, IDLE_TICKS);
         }
         if !self.ramp.enter() {
             return (0, IDLE_TICKS);
         }
-        let Some(mv) = self.queue.dequeue() else {
+        let Some(p) = self.ring.front() else {
             self.publish(State::Idle);
             return (0, IDLE_TICKS);
         };
-        if mv.epoch != self.ctl_seen >> 1 {
-            return (0, IDLE_TICKS); // dropped by an immediate stop
+        // SAFETY: a published slot; plain fields.
+        let (epoch, dir, setup) = unsafe { ((*p).epoch, (*p).dir_word, (*p).dir_setup) };
+        if epoch != self.ctl_seen.epoch() {
+            self.ring.pop(); // dropped by an immediate stop
+            return (0, IDLE_TICKS);
         }
-        self.load(&mv)
-    }
-
-    /// Sets up a move: master, slaves, ramp; returns a direction event when a pin must change.
-    fn load(&mut self, mv: &Move<N>) -> (u32, u32) {
-        let m = mv.master as usize;
-        self.master_axis = mv.master;
-        self.mv_steps = mv.steps;
-        self.total = mv.steps[m].unsigned_abs();
-        self.left = self.total;
-        self.master_on = self.pins.step_on[m];
-        self.shared.start_move(&mv.steps, self.total);
-        let mut n = 0;
-        let mut dir_word = 0;
-        let mut dir_neg = self.dir_neg;
-        let mut moving = 0;
-        for (i, &s) in mv.steps.iter().enumerate() {
-            if s == 0 {
-                continue;
-            }
-            moving |= 1 << i;
-            let neg = (s < 0) as u32;
-            if (self.dir_known >> i & 1) == 0 || (dir_neg >> i & 1) != neg {
-                dir_word |= if neg == 1 { self.pins.dir_neg[i] } else { self.pins.dir_pos[i] };
-                dir_neg = (dir_neg & !(1 << i)) | neg << i;
-            }
-            if i != m {
-                self.slaves[n] = Slave {
-                    dda: Dda::new(s.unsigned_abs(), self.total),
-                    on: self.pins.step_on[i],
-                    axis: i as u8,
-                };
-                n += 1;
-            }
-        }
-        self.n_slaves = n as u8;
-        self.dir_neg = dir_neg;
-        self.dir_known |= moving;
-        self.cruise = mv.cruise;
-        let profile = self.ramp.profile();
-        self.cruise_idx = profile.ramp.cruise_index(mv.cruise);
-        let t = match profile.timing {
-            Timing::UNSET => Timing::DEFAULT,
-            t => t,
-        };
-        self.min_period = Period::from_bits(t.min_period_for(n as u32).saturating_mul(16));
-        self.dir_setup = (t.dir_setup_ticks + STORE_JITTER_TICKS).max(t.min_period_ticks);
-        self.idx = 0;
-        self.hold_stop = false;
-        self.start_ramp();
-        self.set_period();
+        self.walk = Walk::REST;
+        self.enter(p);
+        self.phase = Phase::Run;
         self.publish(State::Run);
         // The ramp's milliseconds start at the move's first step.
         self.ms_left = TICKS_PER_MS as i32;
-        if dir_word != 0 {
-            let gap = self.dir_setup;
-            self.ms_left += gap as i32;
-            (dir_word, gap)
+        if dir != 0 {
+            self.ms_left += setup as i32;
+            (dir, setup)
         } else {
             self.step()
         }

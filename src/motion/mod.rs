@@ -2,17 +2,28 @@
 //!
 //! - [`interp`]: the DDA (Bresenham) interpolator — master axis plus up to six slaves in
 //!   exact integer ratio, every slave within ½ step of the ideal line.
-//! - [`ramp`]: per-millisecond ramp tables (trapezoid or S-curve) of master timer periods.
+//! - [`ramp`]: per-millisecond ramp tables (trapezoid or S-curve) of timer periods, with the
+//!   distance walked up to each entry.
+//! - [`prepared`]: a move as the step interrupt needs it, computed outside it.
+//! - [`ring`]: the lock-free ring of prepared moves (run in place by the engine).
+//! - [`walk`]: the ramp walk — the table index, its per-millisecond update and the
+//!   deceleration trigger.
+//! - [`control`]: the control word (feed hold + immediate-stop epoch), one type for both sides.
 //! - [`engine`]: the step engine behind TIM2; one [`engine::Engine::tick`] computes the next
 //!   GPIO BSRR word and the next timer period.
-//! - [`queue`]: the lock-free move queue and the atomics shared with the step interrupt.
+//! - [`queue`]: moves as the planner hands them over, and the atomics shared with the step
+//!   interrupt (positions, state, overrides).
 //! - [`timing`]: driver timing (pulse width, direction setup) as typed constants.
 //! - [`sim`]: a model of the TIM2 preload pipeline that turns ticks into timed edges (host
 //!   tests, benchmarks).
 
+pub mod control;
 pub mod engine;
 pub mod interp;
+pub mod prepared;
 pub mod queue;
 pub mod ramp;
+pub mod ring;
 pub mod sim;
 pub mod timing;
+pub mod walk;

@@ -1,18 +1,19 @@
-//! The move queue between the planner (producer) and the step engine (consumer), and the
-//! state they share: all lock-free (a `heapless::spsc` queue and atomics).
+//! Moves as the planner hands them over, and the state shared lock-free between the step
+//! interrupt and everything else (atomics only).
 //!
-//! Who uses it: the planner pushes [`Move`]s through a [`Feeder`]; the engine consumes them;
-//! status reports read [`Shared`].
+//! Who uses it: the planner builds [`Move`]s; the [`Feeder`] plans and prepares them for the
+//! engine; status reports read [`Shared`].
 //!
-//! Invariant: an immediate stop ([`Feeder::abort`]) bumps an epoch; the engine drops the running
-//! move at its next tick and every queued move stamped with an older epoch when it reaches it
-//! (one per tick, so the interrupt never loops over the queue).
+//! Invariant: an immediate stop ([`Feeder::abort`]) bumps an epoch in the control word; the
+//! engine drops the running move at its next tick and every queued move stamped with an older
+//! epoch when it reaches it (one per tick, so the interrupt never loops over the queue).
 
-use core::sync::atomic::{fence, AtomicI32, AtomicU32, AtomicU8, Ordering::{Acquire, Relaxed, Release}};
+use core::sync::atomic::{fence, AtomicI32, AtomicU32, AtomicU8, AtomicUsize, Ordering::{Acquire, Relaxed, Release}};
 
-use heapless::spsc::Producer;
-
+use crate::control::Control;
+pub use crate::feeder::Feeder;
 use crate::interp::master_axis;
+use crate::prepared::Prepared;
 use crate::ramp::{period_of_millihz, Period, MAX_RATE_HZ, MIN_RATE_HZ};
 
 /// What the engine is doing, as published in [`Shared::state`].
@@ -29,8 +30,99 @@ pub enum State {
     Held = 3,
 }
 
-/// Grbl's override percentages (feed, rapid, spindle; 100 = as programmed), as `Ov:` reports
-/// them: feed 10–200, rapid 25/50/100, spindle 10–200.
+/// Why a move cannot be built.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MoveError {
+    /// No axis moves.
+    ZeroLength,
+    /// A step count beyond ±(2^31 - 1).
+    TooManySteps,
+    /// Cruise rate outside 1 step/s ..= 1 MHz.
+    RateOutOfRange,
+}
+
+/// One straight move: signed steps per axis and the master cruise rate; with a [`Path`], also
+/// what the look-ahead needs to run it through its junctions. Built outside the interrupt.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Move<const N: usize> {
+    pub(crate) steps: [i32; N],
+    pub(crate) master: u8,
+    pub(crate) cruise: Period,
+    pub(crate) path: Option<Path>,
+}
+
+/// A move's length and limits in path units (mm, s), for the look-ahead.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Path {
+    /// Length, mm.
+    pub len: f32,
+    /// Master steps per mm of path.
+    pub share: f32,
+    /// Nominal (cruise) path speed, mm/s, after every clamp.
+    pub speed: f32,
+    /// Path acceleration the moving axes allow, mm/s².
+    pub accel: f32,
+    /// Highest speed at the junction with the previous move (junction deviation `$11` and
+    /// both moves' nominal speeds), mm/s.
+    pub junction: f32,
+}
+
+impl<const N: usize> Move<N> {
+    /// A move of `steps` (signed, per axis) whose master axis cruises at `cruise_hz` steps/s.
+    pub fn new(steps: [i64; N], cruise_hz: u32) -> Result<Self, MoveError> {
+        Self::new_millihz(steps, cruise_hz as u64 * 1000)
+    }
+
+    /// The same with the cruise rate in milli-steps per second (G93 times need more than whole
+    /// steps/s at low rates).
+    pub fn new_millihz(steps: [i64; N], cruise_millihz: u64) -> Result<Self, MoveError> {
+        if !(MIN_RATE_HZ as u64 * 1000..=MAX_RATE_HZ as u64 * 1000).contains(&cruise_millihz) {
+            return Err(MoveError::RateOutOfRange);
+        }
+        let mut s = [0i32; N];
+        let mut counts = [0u32; N];
+        for i in 0..N {
+            if steps[i] > i32::MAX as i64 || steps[i] < -(i32::MAX as i64) {
+                return Err(MoveError::TooManySteps);
+            }
+            s[i] = steps[i] as i32;
+            counts[i] = s[i].unsigned_abs();
+        }
+        let master = master_axis(&counts);
+        if counts[master] == 0 {
+            return Err(MoveError::ZeroLength);
+        }
+        Ok(Move { steps: s, master: master as u8, cruise: period_of_millihz(cruise_millihz), path: None })
+    }
+
+    /// Signed steps per axis.
+    pub fn steps(&self) -> &[i32; N] {
+        &self.steps
+    }
+
+    /// The master axis (most steps, ties to the lowest index).
+    pub fn master(&self) -> usize {
+        self.master as usize
+    }
+
+    /// Master cruise period.
+    pub fn cruise(&self) -> Period {
+        self.cruise
+    }
+
+    /// The same move with its geometry, so the look-ahead can join it to its neighbours.
+    pub fn with_path(mut self, path: Path) -> Self {
+        self.path = Some(path);
+        self
+    }
+
+    /// Its geometry, if it has one (a move without one starts and ends at rest).
+    pub fn path(&self) -> Option<&Path> {
+        self.path.as_ref()
+    }
+}
+
+/// Override percentages (Grbl 1.1 realtime bytes 0x90–0x9D).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Overrides {
     pub feed: u8,
@@ -39,7 +131,7 @@ pub struct Overrides {
 }
 
 impl Overrides {
-    /// Everything as programmed (power-up and reset).
+    /// 100 % everywhere.
     pub const NONE: Overrides = Overrides { feed: 100, rapid: 100, spindle: 100 };
 
     const fn pack(self) -> u32 {
@@ -71,92 +163,30 @@ impl Overrides {
     }
 }
 
-/// Why a move cannot be built.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum MoveError {
-    /// No axis moves.
-    ZeroLength,
-    /// A step count beyond ±(2^31 - 1).
-    TooManySteps,
-    /// Cruise rate outside 1 step/s ..= 1 MHz.
-    RateOutOfRange,
-}
-
-/// One straight move, ready for the queue: signed steps per axis and the master cruise rate.
-/// Built outside the interrupt (this is where the division happens).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Move<const N: usize> {
-    pub(crate) steps: [i32; N],
-    pub(crate) master: u8,
-    pub(crate) cruise: Period,
-    pub(crate) epoch: u32,
-}
-
-impl<const N: usize> Move<N> {
-    /// A move of `steps` (signed, per axis) whose master axis cruises at `cruise_hz` steps/s.
-    pub fn new(steps: [i64; N], cruise_hz: u32) -> Result<Self, MoveError> {
-        Self::new_millihz(steps, cruise_hz as u64 * 1000)
-    }
-
-    /// The same with the cruise rate in milli-steps per second (G93 times need more than whole
-    /// steps/s at low rates).
-    pub fn new_millihz(steps: [i64; N], cruise_millihz: u64) -> Result<Self, MoveError> {
-        if !(MIN_RATE_HZ as u64 * 1000..=MAX_RATE_HZ as u64 * 1000).contains(&cruise_millihz) {
-            return Err(MoveError::RateOutOfRange);
-        }
-        let mut s = [0i32; N];
-        let mut counts = [0u32; N];
-        for i in 0..N {
-            if steps[i] > i32::MAX as i64 || steps[i] < -(i32::MAX as i64) {
-                return Err(MoveError::TooManySteps);
-            }
-            s[i] = steps[i] as i32;
-            counts[i] = s[i].unsigned_abs();
-        }
-        let master = master_axis(&counts);
-        if counts[master] == 0 {
-            return Err(MoveError::ZeroLength);
-        }
-        Ok(Move { steps: s, master: master as u8, cruise: period_of_millihz(cruise_millihz), epoch: 0 })
-    }
-
-    /// Signed steps per axis.
-    pub fn steps(&self) -> &[i32; N] {
-        &self.steps
-    }
-
-    /// The master axis (most steps, ties to the lowest index).
-    pub fn master(&self) -> usize {
-        self.master as usize
-    }
-
-    /// Master cruise period.
-    pub fn cruise(&self) -> Period {
-        self.cruise
-    }
-}
 
 /// State shared lock-free between the engine (interrupt) and the rest of the firmware.
 ///
 /// Positions are published as a record the engine rewrites only when a move starts or ends:
-/// the axes' positions at the start of the running move (`base`), that move's signed steps, its
-/// master count and the master steps handed out so far (`done`, one store per step). A reader
-/// derives every axis's position exactly as the DDA made it, `base + sign·⌊(done·|c| + ⌊M/2⌋)/M⌋`
-/// (the division happens in the reader, never in the interrupt). `seq` is a sequence lock: odd
-/// while the engine rewrites the record, so a reader that overlapped a rewrite reads again.
+/// the running move (a pointer to its prepared slot: absolute start, signed steps, master
+/// count) and the master steps handed out so far (`done`, one store per step); while idle, the
+/// positions themselves (`base`). A reader derives every axis's position exactly as the DDA
+/// made it, `start + sign·⌊(done·|c| + ⌊M/2⌋)/M⌋` (the division happens in the reader, never
+/// in the interrupt). `seq` is a sequence lock: odd while the engine rewrites the record, so a
+/// reader that overlapped a rewrite reads again.
 pub struct Shared<const N: usize> {
     base: [AtomicI32; N],
-    mv_steps: [AtomicI32; N],
-    mv_total: AtomicU32,
+    cur: AtomicUsize,
     pub(crate) mv_done: AtomicU32,
     seq: AtomicU32,
-    /// Control word the engine polls with one load per tick: bit 0 feed hold, bits 1.. the
-    /// immediate-stop epoch.
-    pub(crate) ctl: AtomicU32,
+    /// Feed hold and immediate-stop epoch, polled by the engine with one load per tick.
+    pub(crate) ctl: Control,
     pub(crate) state: AtomicU8,
     pub(crate) moves_done: AtomicU32,
     pub(crate) period_bits: AtomicU32,
-    /// [`Overrides`] packed feed | rapid << 8 | spindle << 16.
+    /// Moves that ended above the table's first entry with nothing queued (a deceleration to
+    /// rest that landed a little high, or a feeder late at speed): a diagnostic.
+    pub(crate) starved: AtomicU32,
+    /// Override percentages: feed | rapid << 8 | spindle << 16.
     ovr: AtomicU32,
 }
 
@@ -170,25 +200,21 @@ impl<const N: usize> Shared<N> {
     pub const fn new() -> Self {
         Shared {
             base: [const { AtomicI32::new(0) }; N],
-            mv_steps: [const { AtomicI32::new(0) }; N],
-            mv_total: AtomicU32::new(0),
+            cur: AtomicUsize::new(0),
             mv_done: AtomicU32::new(0),
             seq: AtomicU32::new(0),
-            ctl: AtomicU32::new(0),
+            ctl: Control::new(),
             state: AtomicU8::new(State::Idle as u8),
             moves_done: AtomicU32::new(0),
             period_bits: AtomicU32::new(0),
-            ovr: AtomicU32::new(Overrides::NONE.pack()),
+            starved: AtomicU32::new(0),
+            ovr: AtomicU32::new(100 | 100 << 8 | 100 << 16),
         }
     }
 
     /// Feed hold on (decelerate and pause) or off (resume).
     pub fn set_hold(&self, on: bool) {
-        if on {
-            self.ctl.fetch_or(1, Relaxed);
-        } else {
-            self.ctl.fetch_and(!1, Relaxed);
-        }
+        self.ctl.set_hold(on);
     }
 
     /// The override percentages in force.
@@ -204,12 +230,12 @@ impl<const N: usize> Shared<N> {
 
     /// True while a feed hold is requested.
     pub fn hold_requested(&self) -> bool {
-        self.ctl.load(Relaxed) & 1 != 0
+        self.ctl.load().hold()
     }
 
     /// The immediate-stop epoch moves are stamped with.
     pub(crate) fn epoch(&self) -> u32 {
-        self.ctl.load(Relaxed) >> 1
+        self.ctl.load().epoch()
     }
 
     /// What the engine is doing.
@@ -227,6 +253,11 @@ impl<const N: usize> Shared<N> {
         self.moves_done.load(Relaxed)
     }
 
+    /// Moves that ended above the table's first entry with nothing queued after them.
+    pub fn starved(&self) -> u32 {
+        self.starved.load(Relaxed)
+    }
+
     /// Current master step rate in steps/s (0 when idle).
     pub fn rate_hz(&self) -> u32 {
         match self.period_bits.load(Relaxed) {
@@ -239,14 +270,28 @@ impl<const N: usize> Shared<N> {
     pub fn positions(&self) -> [i32; N] {
         loop {
             let s1 = self.seq.load(Acquire);
-            let total = self.mv_total.load(Relaxed).max(1) as u64;
-            let done = self.mv_done.load(Relaxed) as u64;
-            let p = core::array::from_fn(|i| {
-                let c = self.mv_steps[i].load(Relaxed);
-                let made = ((done * c.unsigned_abs() as u64 + total / 2) / total) as i32;
-                let made = if c < 0 { -made } else { made };
-                self.base[i].load(Relaxed).wrapping_add(made)
-            });
+            let cur = self.cur.load(Relaxed) as *const Prepared<N>;
+            let done = self.mv_done.load(Relaxed);
+            let p = if cur.is_null() {
+                core::array::from_fn(|i| self.base[i].load(Relaxed))
+            } else {
+                // SAFETY: a ring slot (static storage, always valid memory); if the engine left
+                // it and the feeder rewrote it meanwhile, `seq` changed and this read is retried.
+                let (start, steps, total) = unsafe {
+                    (
+                        core::ptr::read_volatile(core::ptr::addr_of!((*cur).start)),
+                        core::ptr::read_volatile(core::ptr::addr_of!((*cur).steps)),
+                        core::ptr::read_volatile(core::ptr::addr_of!((*cur).total)),
+                    )
+                };
+                let total = total.max(1);
+                core::array::from_fn(|i| {
+                    let c = steps[i];
+                    // |c| <= total (the master has the most steps), so the quotient fits.
+                    let made = mul_div(done.min(total), c.unsigned_abs(), total / 2, total) as i32;
+                    start[i].wrapping_add(if c < 0 { -made } else { made })
+                })
+            };
             fence(Acquire);
             if s1 & 1 == 0 && self.seq.load(Relaxed) == s1 {
                 return p;
@@ -256,33 +301,25 @@ impl<const N: usize> Shared<N> {
 
     /// Sets positions (only while idle: G92 and homing).
     pub fn set_positions(&self, p: [i32; N]) {
-        self.begin_write();
-        for (a, v) in self.base.iter().zip(p) {
-            a.store(v, Relaxed);
-        }
-        self.end_write();
+        self.idle_at(|i| p[i]);
     }
 
-    /// Engine: a move of `steps` (master count `total`) starts from the current base.
-    pub(crate) fn start_move(&self, steps: &[i32; N], total: u32) {
+    /// Engine: the move in slot `p` starts (its start and steps are in the slot).
+    #[inline(always)]
+    pub(crate) fn start_move(&self, p: *const Prepared<N>) {
         self.begin_write();
-        for (a, &v) in self.mv_steps.iter().zip(steps) {
-            a.store(v, Relaxed);
-        }
-        self.mv_total.store(total, Relaxed);
+        self.cur.store(p as usize, Relaxed);
         self.mv_done.store(0, Relaxed);
         self.end_write();
     }
 
-    /// Engine: the running move ends; `made(i)` is what axis `i` made of it (signed).
-    pub(crate) fn end_move(&self, made: impl Fn(usize) -> i32) {
+    /// Engine (or a G92 while idle): no move runs, axis `i` is at `pos(i)`.
+    pub(crate) fn idle_at(&self, pos: impl Fn(usize) -> i32) {
         self.begin_write();
         for (i, a) in self.base.iter().enumerate() {
-            a.store(a.load(Relaxed).wrapping_add(made(i)), Relaxed);
+            a.store(pos(i), Relaxed);
         }
-        for a in &self.mv_steps {
-            a.store(0, Relaxed);
-        }
+        self.cur.store(0, Relaxed);
         self.mv_done.store(0, Relaxed);
         self.end_write();
     }
@@ -298,47 +335,48 @@ impl<const N: usize> Shared<N> {
     }
 }
 
-/// Producer side of the move queue: stamps moves so an immediate stop can drop them.
-pub struct Feeder<'a, const N: usize> {
-    producer: Producer<'a, Move<N>>,
-    shared: &'a Shared<N>,
-    queued: u32,
+/// `(a * b + add) / d` for a quotient that fits 32 bits (`a * b + add < d * 2^32`), without a
+/// 64-bit division: shift-subtract on the 64-bit product. Saves the ~900 B `__aeabi_uldivmod`
+/// the firmware otherwise links (only status reports and the feeder's horizon call this).
+pub fn mul_div(a: u32, b: u32, add: u32, d: u32) -> u32 {
+    let n = a as u64 * b as u64 + add as u64;
+    let d64 = d as u64;
+    let mut rem = n >> 32;
+    let mut q = 0u32;
+    for bit in (0..32).rev() {
+        rem = (rem << 1) | ((n >> bit) & 1);
+        q <<= 1;
+        if rem >= d64 {
+            rem -= d64;
+            q |= 1;
+        }
+    }
+    q
 }
 
-impl<'a, const N: usize> Feeder<'a, N> {
-    pub fn new(producer: Producer<'a, Move<N>>, shared: &'a Shared<N>) -> Self {
-        Feeder { producer, shared, queued: shared.moves_done() }
+#[cfg(test)]
+mod tests {
+    use super::mul_div;
+    use proptest::prelude::*;
+
+    fn reference(a: u32, b: u32, add: u32, d: u32) -> u64 {
+        (a as u64 * b as u64 + add as u64) / d as u64
     }
 
-    /// Queues a move; gives it back when the queue is full.
-    pub fn push(&mut self, mut mv: Move<N>) -> Result<(), Move<N>> {
-        mv.epoch = self.shared.epoch();
-        self.producer.enqueue(mv)?;
-        self.queued = self.queued.wrapping_add(1);
-        Ok(())
+    #[test]
+    fn mul_div_edges() {
+        let m = u32::MAX;
+        for (a, b, add, d) in [(0, 0, 0, 1), (m, m, m / 2, m), (m, 1, 0, 1), (m - 1, m, 0, m), (7, 3, 1, 2), (1, 1, 0, m)] {
+            assert_eq!(mul_div(a, b, add, d) as u64, reference(a, b, add, d), "{a} {b} {add} {d}");
+        }
     }
 
-    /// Moves the queue holds at most.
-    pub fn capacity(&self) -> usize {
-        self.producer.capacity()
-    }
-
-    /// True when another move fits.
-    pub fn ready(&self) -> bool {
-        self.producer.ready()
-    }
-
-    /// Moves queued or running.
-    pub fn pending(&self) -> u32 {
-        self.queued.wrapping_sub(self.shared.moves_done())
-    }
-
-    /// Immediate stop: the running move ends at the next tick and queued moves are dropped.
-    /// Positions stay equal to the pulses emitted.
-    pub fn abort(&mut self) {
-        self.shared.ctl.fetch_add(2, Relaxed);
-        // Dropped moves never count as done; forget them here.
-        self.queued = self.shared.moves_done();
+    proptest! {
+        #[test]
+        fn mul_div_matches_u64(total in 1u32.., done in any::<u32>(), c in any::<u32>()) {
+            let (done, c) = (done % (total as u64 + 1) as u32, c % (total as u64 + 1) as u32);
+            prop_assert_eq!(mul_div(done, c, total / 2, total) as u64, reference(done, c, total / 2, total));
+            prop_assert_eq!(mul_div(c, done, 0, total) as u64, reference(c, done, 0, total));
+        }
     }
 }
-

@@ -1,17 +1,22 @@
 //! Ramp tables: the master timer period for every millisecond of an acceleration.
 //!
 //! Who uses it: the firmware builds one table when settings change (outside any interrupt);
-//! the step engine walks it one entry per millisecond of timer time.
+//! the step engine walks it at a move's own fraction of an entry per millisecond (so one table
+//! built for the fastest acceleration serves every slower move), interpolating between
+//! entries; the look-ahead maps path speeds and distances onto its indices.
 //!
 //! Invariant: entry `i` holds the period (timer ticks, 1/16 resolution, [`Period`]) of the mean
 //! rate of the ideal profile during millisecond `i`: `v0 + a·(i+½) ms` for the trapezoid,
 //! clamped at `vmax` in its last entry; the S-curve uses the same mean of a normalized logistic.
 //! Entries strictly never rise in rate past `vmax` and never fall in rate along the table. The
 //! engine decelerates by walking the same entries down, so one table serves every move that
-//! shares the acceleration, and a move's step count never depends on the table. With
-//! [`RAMP_LEN`] = 1024 entries of 4 bytes the table is 4 KiB of RAM and covers 1.024 s of
+//! shares the acceleration, and a move's step count never depends on the table. Beside each
+//! period the table keeps the distance walked up to it (`sums`, 1/256 step), which is what
+//! turns "decelerate from index a to b" into steps without a division. With
+//! [`RAMP_LEN`] = 512 entries of 8 bytes the table is 4 KiB of RAM and covers 0.512 s of
 //! acceleration; a longer one is refused with [`RampError::TooLong`] naming the highest `vmax`
-//! that fits.
+//! that fits (the settings code then builds a steeper table instead, which slower moves walk at
+//! a smaller fraction: see `Settings::build_profile`).
 
 use core::cell::UnsafeCell;
 use core::sync::atomic::{AtomicBool, Ordering};
@@ -31,7 +36,15 @@ pub const MIN_RATE_HZ: u32 = 1;
 /// lower and is enforced by the engine's timing ([`crate::timing::Timing`]).
 pub const MAX_RATE_HZ: u32 = 1_000_000;
 /// Entries (milliseconds) in the firmware's table.
-pub const RAMP_LEN: usize = 1024;
+pub const RAMP_LEN: usize = 512;
+/// Fraction bits of a table index: the engine walks `walk_q / 2^20` entries per millisecond,
+/// so one table (built for the fastest acceleration) serves every slower one.
+pub const IDX_FRAC: u32 = 20;
+/// One whole entry as a Q20 index.
+pub const IDX_ONE: u32 = 1 << IDX_FRAC;
+const IDX_MASK: u32 = IDX_ONE - 1;
+/// One step in the table's distance sums.
+pub const SUM_ONE: u32 = 256;
 
 /// Shape of the acceleration.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -87,6 +100,9 @@ pub fn hz_of_period(p: Period) -> f64 {
 /// A ramp table of up to `L` milliseconds.
 pub struct RampTable<const L: usize = RAMP_LEN> {
     periods: [Period; L],
+    /// `sums[i]`: steps made walking entries `0..i` at one entry per ms, in 1/256 step
+    /// ([`SUM_ONE`]): the distance scale of the look-ahead and of the engine's decel trigger.
+    sums: [u32; L],
     len: u16,
     cfg: RampConfig,
 }
@@ -102,6 +118,7 @@ impl<const L: usize> RampTable<L> {
     pub const fn new() -> Self {
         RampTable {
             periods: [Period::ZERO; L],
+            sums: [0; L],
             len: 0,
             cfg: RampConfig { v0: 0, vmax: 0, accel: 0, shape: Shape::Trapezoid },
         }
@@ -154,9 +171,121 @@ impl<const L: usize> RampTable<L> {
                 self.periods[i] = self.periods[i - 1];
             }
         }
+        // Distance walked: the rate is interpolated between entries, so integrate each
+        // entry-to-entry stretch as a trapezoid (the last entry counts flat).
+        let per_ms = |p: Period| (TIMER_HZ / 1000 * 16 * SUM_ONE) / p.to_bits().max(1);
+        let mut sum = 0u32;
+        for i in 0..n {
+            self.sums[i] = sum;
+            let a = per_ms(self.periods[i]);
+            let b = if i + 1 < n { per_ms(self.periods[i + 1]) } else { a };
+            // (72 MHz · 16 · 256 / 1000 fits in 32 bits: no 64-bit division in the firmware.)
+            sum = sum.saturating_add((a + b) / 2);
+        }
         self.len = n as u16;
         self.cfg = cfg;
         Ok(())
+    }
+
+    /// Highest index (Q20) the table can be walked to: its last entry.
+    #[inline(always)]
+    pub fn top_q(&self) -> u32 {
+        (self.len.max(1) as u32 - 1) << IDX_FRAC
+    }
+
+    /// Period at a fractional index (Q20), interpolated between entries; `idx_q ≤ top_q()`.
+    /// Integer only (the engine calls it once per ms).
+    #[inline(always)]
+    pub fn period_at(&self, idx_q: u32) -> Period {
+        let i = (idx_q >> IDX_FRAC) as usize;
+        let f = idx_q & IDX_MASK;
+        let p = self.periods[i].to_bits();
+        if f == 0 || i + 1 >= self.len as usize {
+            return Period::from_bits(p);
+        }
+        let d = p - self.periods[i + 1].to_bits();
+        Period::from_bits(p - ((d as u64 * f as u64) >> IDX_FRAC) as u32)
+    }
+
+    /// Steps per ms at entry `idx_q >> 20` (1/256 step): the slope of [`Self::sum_at`].
+    #[inline(always)]
+    pub fn per_ms_at(&self, idx_q: u32) -> u32 {
+        let i = (idx_q >> IDX_FRAC) as usize;
+        if i + 1 < self.len as usize {
+            self.sums[i + 1] - self.sums[i]
+        } else if i > 0 && i < self.len as usize {
+            self.sums[i] - self.sums[i - 1]
+        } else {
+            0
+        }
+    }
+
+    /// Distance walked from index 0 to `idx_q` at one entry per ms, in 1/256 step.
+    #[inline(always)]
+    pub fn sum_at(&self, idx_q: u32) -> u32 {
+        let i = (idx_q >> IDX_FRAC) as usize;
+        let f = idx_q & IDX_MASK;
+        let s = self.sums[i];
+        if f == 0 || i + 1 >= self.len as usize {
+            return s;
+        }
+        let d = self.sums[i + 1] - s;
+        s + ((d as u64 * f as u64) >> IDX_FRAC) as u32
+    }
+
+    /// The fractional index (Q20) whose interpolated rate is `hz` (clamped to the table; 0
+    /// below its start). Binary search: planner side only.
+    pub fn index_of_hz(&self, hz: f64) -> u32 {
+        if self.len == 0 || !(hz > 0.0) {
+            return 0;
+        }
+        let p = TIMER_HZ as f64 * 16.0 / hz;
+        let n = self.len as usize;
+        if p >= self.periods[0].to_bits() as f64 {
+            return 0;
+        }
+        if p <= self.periods[n - 1].to_bits() as f64 {
+            return self.top_q();
+        }
+        // Last entry i with periods[i] > p (periods never rise along the table).
+        let (mut lo, mut hi) = (0usize, n - 1);
+        while hi - lo > 1 {
+            let mid = (lo + hi) / 2;
+            if self.periods[mid].to_bits() as f64 > p {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        let (a, b) = (self.periods[lo].to_bits() as f64, self.periods[hi].to_bits() as f64);
+        let f = if a > b { (a - p) / (a - b) } else { 0.0 };
+        ((lo as u32) << IDX_FRAC) + ((f.max(0.0).min(1.0) * IDX_ONE as f64) as u32).min(IDX_MASK)
+    }
+
+    /// The highest fractional index (Q20) whose [`Self::sum_at`] is at most `sum` (clamped to
+    /// the table). Integer binary search: planner side only.
+    pub fn index_of_sum(&self, sum: u32) -> u32 {
+        let n = self.len as usize;
+        if n <= 1 || sum == 0 {
+            return 0;
+        }
+        if sum >= self.sums[n - 1] {
+            return self.top_q();
+        }
+        let (mut lo, mut hi) = (0usize, n - 1);
+        while hi - lo > 1 {
+            let mid = (lo + hi) / 2;
+            if self.sums[mid] <= sum {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        let (a, b) = (self.sums[lo], self.sums[hi]);
+        // 12 fraction bits are plenty (an entry's sum is < 2^20, so this fits in 32 bits);
+        // rounded down: the index never promises more distance than there is.
+        let f = if b > a { ((sum - a) << 12) / (b - a) } else { 0 };
+        ((lo as u32) << IDX_FRAC) + (f.min(4095) << (IDX_FRAC - 12))
     }
 
     /// Number of entries (milliseconds of ramp).
@@ -277,6 +406,10 @@ fn mean_millihz(cfg: &RampConfig, i: usize, n: usize) -> u64 {
 pub struct Profile<const L: usize = RAMP_LEN> {
     pub ramp: RampTable<L>,
     pub timing: Timing,
+    /// Table rate per mm/s of path speed (steps/mm of the finest axis): a move whose master
+    /// makes `share` steps per mm of path runs at `share / per_mm` of the table's rate. Zero
+    /// (not set) means table rates are master rates.
+    pub per_mm: f32,
 }
 
 /// The profile shared between the step interrupt (reader) and the settings code (writer)
@@ -307,7 +440,7 @@ impl<const L: usize> RampSlot<L> {
     pub const fn new() -> Self {
         RampSlot {
             // Zero timing keeps the slot in .bss; the engine reads it as `Timing::DEFAULT`.
-            table: UnsafeCell::new(Profile { ramp: RampTable::new(), timing: Timing::UNSET }),
+            table: UnsafeCell::new(Profile { ramp: RampTable::new(), timing: Timing::UNSET, per_mm: 0.0 }),
             writer: AtomicBool::new(false),
             reading: AtomicBool::new(false),
         }
@@ -334,6 +467,14 @@ impl<const L: usize> RampSlot<L> {
             self.reading.store(true, Ordering::SeqCst);
             true
         }
+    }
+
+    /// Producer side (the feeder that prepares moves): the table, read in the same context
+    /// that holds the writer, so never while a write guard lives.
+    pub(crate) fn producer_view(&self) -> &Profile<L> {
+        // SAFETY: the feeder and the settings writer run in one context (the controller), so
+        // no guard exists while this reference is used; the engine only reads.
+        unsafe { &*self.table.get() }
     }
 
     /// Engine side: the table, valid from a successful [`Self::enter`] to the move's end.

@@ -7,17 +7,22 @@
 //! positions, so rounding never accumulates (a thousand G91 moves of 0.001 mm at 100 steps/mm
 //! make exactly 100 steps, in ten single steps).
 //!
-//! Rates: a G1 takes `length / F` (length over all moving axes, from the rounded steps); a G0
-//! takes as long as its slowest axis at `$110+i`; no axis may exceed its `$110+i`, so the whole
-//! move slows down when one would. The master's cruise rate is its steps over that time,
-//! rounded to milli-steps/s and clamped to `1 ..= vmax_hz` (the ramp table's top, itself at most
-//! the timing's fastest rate; both are printed by `$I`). Every move starts and ends at rest (no
-//! look-ahead).
+//! Rates (Grbl's): a G1 runs at F along its path (length over all moving axes, from the
+//! rounded steps), a G0 at the fastest speed its axes allow; no axis may exceed its `$110+i`
+//! (the path speed is at most `min $110+i / |unitᵢ|`), and its acceleration is
+//! `min $120+i / |unitᵢ|` over the axes it moves: axes that do not move never slow it. The
+//! master's cruise rate is then clamped to what the step interrupt sustains for the move's
+//! slave count (`Timing::max_rate_for`) and to the ramp table's top (both printed by `$I`).
+//! Each move also carries its junction speed with the move before it (junction deviation
+//! `$11`, Grbl's formula); the look-ahead ([`crate::lookahead`]) does the rest.
 
-use crate::timing::Timing;
 use crate::protocol::Error;
-use crate::queue::Move;
+use crate::queue::{Move, Path};
 use crate::settings::Settings;
+use crate::timing::Timing;
+
+/// Junction deviation `$11`, mm (Grbl's default; the setting is shown fixed at this value).
+pub const JUNCTION_DEVIATION_MM: f32 = 0.010;
 
 /// What the planner needs from the settings, for `N` axes.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -26,15 +31,19 @@ pub struct Limits<const N: usize> {
     pub steps_per_mm: [f64; N],
     /// `$110+i`, mm/min.
     pub max_rate: [f64; N],
-    /// Fastest master cruise, steps/s.
+    /// `$120+i`, mm/s².
+    pub accel: [f64; N],
+    /// Top of the ramp table (table rate = path speed × `per_mm`).
     pub vmax_hz: u32,
+    /// Table rate per mm/s of path speed: the largest `$100+i`.
+    pub per_mm: f64,
+    /// Junction deviation, mm.
+    pub junction_dev: f64,
+    /// Feed and rapid overrides as factors (1.0 = 100 %).
+    pub feed_ovr: f64,
+    pub rapid_ovr: f64,
     /// Step timing: a move with more slave axes has a lower ceiling (`Timing::max_rate_for`).
     pub timing: Timing,
-    /// Feed override (Grbl's 0x90–0x94, 0.1–2.0): scales a G1/G2/G3 feed; the axes' max rates
-    /// still bind.
-    pub feed_ovr: f64,
-    /// Rapid override (0x95–0x97: 1.0, 0.5, 0.25): scales a G0's axis-limited speed.
-    pub rapid_ovr: f64,
 }
 
 impl<const N: usize> Limits<N> {
@@ -43,10 +52,13 @@ impl<const N: usize> Limits<N> {
         Limits {
             steps_per_mm: core::array::from_fn(|i| s.steps_per_mm[i] as f64),
             max_rate: core::array::from_fn(|i| s.max_rate[i] as f64),
+            accel: core::array::from_fn(|i| s.accel[i] as f64),
             vmax_hz: vmax_hz.max(1),
-            timing: s.timing(),
+            per_mm: s.per_mm(N) as f64,
+            junction_dev: JUNCTION_DEVIATION_MM as f64,
             feed_ovr: 1.0,
             rapid_ovr: 1.0,
+            timing: s.timing(),
         }
     }
 }
@@ -66,6 +78,8 @@ pub struct Planned<const N: usize> {
 pub struct Planner<const N: usize> {
     mm: [f64; N],
     steps: [i64; N],
+    /// Direction and nominal speed of the last planned move (for the junction).
+    prev: Option<([f64; N], f64)>,
 }
 
 impl<const N: usize> Default for Planner<N> {
@@ -77,7 +91,7 @@ impl<const N: usize> Default for Planner<N> {
 impl<const N: usize> Planner<N> {
     /// At the origin.
     pub const fn new() -> Self {
-        Planner { mm: [0.0; N], steps: [0; N] }
+        Planner { mm: [0.0; N], steps: [0; N], prev: None }
     }
 
     /// Programmed position, mm.
@@ -94,6 +108,7 @@ impl<const N: usize> Planner<N> {
     pub fn sync(&mut self, steps: [i32; N], lim: &Limits<N>) {
         self.steps = steps.map(i64::from);
         self.mm = core::array::from_fn(|i| steps[i] as f64 / lim.steps_per_mm[i]);
+        self.prev = None;
     }
 
     /// G92: the named axes are now at the given mm. Returns the step position to publish
@@ -125,32 +140,81 @@ impl<const N: usize> Planner<N> {
             self.mm = *target;
             return Ok(None);
         }
-        // Time in minutes: the feed over the path, and each axis at no more than its max rate.
-        let mut len2 = 0.0;
-        let mut minutes = 0.0f64;
-        for ((&steps, spm), rate) in delta.iter().zip(&lim.steps_per_mm).zip(&lim.max_rate) {
-            let d = steps as f64 / spm;
-            len2 += d * d;
-            if steps != 0 {
-                minutes = minutes.max(libm::fabs(d) / rate);
+        // Path length from the rounded steps; per-axis unit vector.
+        let d: [f64; N] = core::array::from_fn(|i| delta[i] as f64 / lim.steps_per_mm[i]);
+        let len = sqrt(d.iter().map(|v| v * v).sum());
+        let unit: [f64; N] = core::array::from_fn(|i| d[i] / len);
+        // The path speed and acceleration every moving axis allows (Grbl's limit by axis).
+        let mut vmax = f64::MAX;
+        let mut accel = f64::MAX;
+        for i in 0..N {
+            let u = libm::fabs(unit[i]);
+            if delta[i] != 0 && u > 0.0 {
+                vmax = vmax.min(lim.max_rate[i] / 60.0 / u);
+                accel = accel.min(lim.accel[i] / u);
             }
         }
-        let len = sqrt(len2);
-        minutes = match feed {
-            Some(f) => minutes.max(len / (f * lim.feed_ovr)),
-            None => minutes / lim.rapid_ovr,
+        let wanted = match feed {
+            Some(f) => (f / 60.0 * lim.feed_ovr).min(vmax),
+            None => vmax * lim.rapid_ovr,
         };
-        let wanted_hz = master_steps as f64 / (minutes * 60.0);
+        let share = master_steps as f64 / len;
+        let wanted_hz = wanted * share;
         // The step handler's ceiling for this many slave axes, and the ramp table's top.
         let slaves = delta.iter().filter(|d| **d != 0).count() as u32 - 1;
-        let top = lim.vmax_hz.min(lim.timing.max_rate_for(slaves));
+        let top = (lim.timing.max_rate_for(slaves) as f64).min(lim.vmax_hz as f64 * share / lim.per_mm.max(1e-9));
         // max/min, not f64::clamp: its panic message would link float formatting into the firmware.
-        let cruise_millihz = libm::round(wanted_hz.max(1.0).min(top as f64) * 1000.0) as u64;
+        // Milli-steps/s: G93 times need more than whole steps/s at low rates.
+        let top_millihz = crate::ramp::MAX_RATE_HZ as u64 * 1000;
+        let cruise_millihz = (libm::round(wanted_hz.max(1.0).min(top) * 1000.0) as u64).min(top_millihz);
         let mv = Move::new_millihz(delta, cruise_millihz).map_err(|_| Error::InvalidTarget)?;
+        let speed = cruise_millihz as f64 / 1000.0 / share;
+        let junction = match self.prev {
+            Some((pu, pspeed)) => junction_speed(&pu, &unit, &lim.accel, lim.junction_dev).min(pspeed),
+            None => 0.0,
+        };
+        self.prev = Some((unit, speed));
+        let path = Path {
+            len: len as f32,
+            share: share as f32,
+            speed: speed as f32,
+            accel: accel.min(1e12) as f32,
+            junction: junction.min(speed) as f32,
+        };
         self.mm = *target;
         self.steps = to;
-        Ok(Some(Planned { mv, mm_per_step: (len / master_steps as f64) as f32, wanted_hz }))
+        Ok(Some(Planned { mv: mv.with_path(path), mm_per_step: (len / master_steps as f64) as f32, wanted_hz }))
     }
+}
+
+/// Grbl's junction speed (mm/s) from direction `a` into direction `b` (unit vectors): the
+/// speed at which a circle of deviation `dev` tangent to both moves is driven at the largest
+/// acceleration the axes allow along the change of direction,
+/// `v² = acc·dev·sin(θ/2)/(1 − sin(θ/2))`; 0 for a reversal, unlimited straight on.
+/// In f64 like the rest of the planner: f32 arithmetic would link a second soft-float set.
+pub fn junction_speed<const N: usize>(a: &[f64; N], b: &[f64; N], axis_accel: &[f64; N], dev: f64) -> f64 {
+    let mut cos = 0.0f64;
+    let mut ju = [0.0f64; N];
+    for i in 0..N {
+        cos -= a[i] * b[i];
+        ju[i] = b[i] - a[i];
+    }
+    if cos > 0.999_999 {
+        return 0.0;
+    }
+    if cos < -0.999_999 {
+        return f64::MAX;
+    }
+    let n = sqrt(ju.iter().map(|v| v * v).sum::<f64>());
+    let mut acc = f64::MAX;
+    for i in 0..N {
+        let u = libm::fabs(ju[i]) / n;
+        if u > 1e-9 {
+            acc = acc.min(axis_accel[i] / u);
+        }
+    }
+    let sin_d2 = sqrt(0.5 * (1.0 - cos));
+    sqrt(acc * dev * sin_d2 / (1.0 - sin_d2))
 }
 
 /// Square root, correctly rounded like `libm::sqrt`, in ~100 bytes of flash instead of ~700
@@ -211,8 +275,10 @@ mod tests {
     use super::*;
     use crate::ramp::period_of_hz;
 
+    /// The bench settings with the table top the firmware would build for 3 axes.
     fn lim() -> Limits<3> {
-        Limits::new(&Settings::BENCH, 60_000)
+        let s = Settings::BENCH;
+        Limits::new(&s, s.ramp_config(3, &s.timing()).vmax)
     }
 
     #[test]

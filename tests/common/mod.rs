@@ -7,7 +7,7 @@ use ddastep::queue::{Feeder, Move, Shared, State};
 use ddastep::ramp::{RampConfig, RampSlot, Shape};
 use ddastep::sim::{apply_bsrr, Edge, TimerSim};
 use ddastep::timing::Timing;
-use heapless::spsc::Queue;
+use ddastep::ring::MoveRing;
 
 /// One step edge of one axis.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -35,14 +35,27 @@ pub struct Rig<const N: usize> {
 
 impl<const N: usize> Rig<N> {
     pub fn new(cfg: RampConfig, timing: Timing) -> Self {
+        Self::with_profile(|p| {
+            p.ramp.build(cfg).expect("ramp builds");
+            p.timing = timing;
+        })
+    }
+
+    /// A rig whose profile (table in path units, timing) comes from Grbl settings.
+    pub fn with_settings(s: &ddastep::settings::Settings) -> Self {
+        Self::with_profile(|p| {
+            s.build_profile(N, p);
+        })
+    }
+
+    fn with_profile(build: impl FnOnce(&mut ddastep::ramp::Profile)) -> Self {
         let shared: &'static Shared<N> = Box::leak(Box::new(Shared::new()));
         let slot: &'static RampSlot = Box::leak(Box::new(RampSlot::new()));
         {
             let mut p = slot.try_write().expect("fresh slot is parked");
-            p.ramp.build(cfg).expect("ramp builds");
-            p.timing = timing;
+            build(&mut p);
         }
-        let q: &'static mut Queue<Move<N>, 16> = Box::leak(Box::new(Queue::new()));
+        let q: &'static mut MoveRing<N> = Box::leak(Box::new(MoveRing::new()));
         let (prod, cons) = q.split();
         let pins = pin_map::<N>(0, 0);
         let engine = Engine::new(shared, cons, slot, pins);
@@ -52,7 +65,7 @@ impl<const N: usize> Rig<N> {
         Rig {
             shared,
             slot,
-            feeder: Feeder::new(prod, shared),
+            feeder: Feeder::new(prod, Box::leak(Box::new(ddastep::lookahead::Buffer::new())), shared, slot, pins),
             engine,
             timer: TimerSim::new(),
             pins,
@@ -78,6 +91,8 @@ impl<const N: usize> Rig<N> {
 
     /// One update event: decode the word into step edges and direction changes.
     pub fn update(&mut self) -> Edge {
+        // The feeder hands moves over as the firmware's idle loop would (between ticks).
+        self.feeder.service();
         let e = self.timer.update(&mut self.engine);
         self.updates += 1;
         let after = apply_bsrr(self.odr, e.word);

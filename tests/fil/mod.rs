@@ -24,7 +24,15 @@ pub fn boot_with(stored: Option<Stored>) -> Board {
     }
     let up = b.run_until(HZ / 2, |b| b.serial_output().contains("Grbl")).expect("runs");
     assert!(up, "no banner: {:?}", b.serial_output());
+    assert_stack_fits(&b);
     b
+}
+
+/// The deepest stack use so far left at least 256 bytes untouched above the statics (the
+/// emulator paints RAM at power-up, `Board::stack_peak`).
+pub fn assert_stack_fits(b: &Board) {
+    let (used, room) = b.stack_peak().expect("ELF has _stack_end");
+    assert!(used + 256 <= room, "stack: {used} B used of {room} B between the statics and the top of RAM");
 }
 
 /// Sends a line and expects `ok`.

@@ -5,13 +5,15 @@
 use ddastep::board::pin_map;
 use ddastep::controller::{Actions, Controller};
 use ddastep::engine::Engine;
-use ddastep::protocol::{realtime, Out, Realtime};
-use ddastep::queue::{Feeder, Move, Shared, State};
+use ddastep::protocol::Out;
+use ddastep::shell::{dispatch, idle_step, Requests};
+use heapless::spsc::{Consumer, Producer, Queue};
+use ddastep::queue::{Feeder, Shared, State};
 use ddastep::ramp::RampSlot;
 use ddastep::settings::Settings;
 use ddastep::sim::TimerSim;
 use ddastep::TICKS_PER_MS;
-use heapless::spsc::Queue;
+use ddastep::ring::MoveRing;
 
 /// A TX ring: bytes beyond `cap` are dropped, as the firmware's would be.
 pub struct Tx {
@@ -40,11 +42,13 @@ pub struct EncoderModel {
     pub slipped: f64,
     history: std::collections::VecDeque<i32>,
     sampler: ddastep::encoder::count::Sampler,
+    /// The last sample: extended count, counts of the window.
+    last: (i32, i32),
 }
 
 impl EncoderModel {
     pub fn new(axis: usize, counts_per_step: f64, lag_ms: usize) -> Self {
-        EncoderModel { axis, counts_per_step, lag_ms, slipped: 0.0, history: Default::default(), sampler: Default::default() }
+        EncoderModel { axis, counts_per_step, lag_ms, slipped: 0.0, history: Default::default(), sampler: Default::default(), last: (0, 0) }
     }
 }
 
@@ -64,16 +68,28 @@ pub struct Bench<const N: usize> {
     pub peak_hz: u32,
     pub stepped_while_disabled: bool,
     pub enabled: bool,
+    /// The RX ring and the requests, as the firmware's USART interrupt leaves them.
+    rx_in: Producer<'static, u8>,
+    rx_out: Consumer<'static, u8>,
+    req: &'static Requests,
 }
 
 impl<const N: usize> Bench<N> {
     pub fn new(settings: Settings) -> Self {
+        Self::with_stored(settings)
+    }
+
+    /// A rig whose controller boots from a persistent image (settings, coordinates, startup
+    /// lines, build info), as the firmware does from flash.
+    pub fn with_stored(stored: impl Into<ddastep::store::Stored>) -> Self {
         let shared: &'static Shared<N> = Box::leak(Box::new(Shared::new()));
         let slot: &'static RampSlot = Box::leak(Box::new(RampSlot::new()));
-        let q: &'static mut Queue<Move<N>, 16> = Box::leak(Box::new(Queue::new()));
+        let q: &'static mut MoveRing<N> = Box::leak(Box::new(MoveRing::new()));
         let (prod, cons) = q.split();
         let engine = Engine::new(shared, cons, slot, pin_map::<N>(0, 0));
-        let ctl = Controller::new(Feeder::new(prod, shared), shared, slot, settings);
+        let ctl = Controller::new(Feeder::new(prod, Box::leak(Box::new(ddastep::lookahead::Buffer::new())), shared, slot, pin_map::<N>(0, 0)), shared, slot, stored);
+        let rxq: &'static mut Queue<u8, 256> = Box::leak(Box::new(Queue::new()));
+        let (rx_in, rx_out) = rxq.split();
         let mut b = Bench {
             encoder: None,
             shared,
@@ -87,6 +103,9 @@ impl<const N: usize> Bench<N> {
             peak_hz: 0,
             stepped_while_disabled: false,
             enabled: false,
+            rx_in,
+            rx_out,
+            req: Box::leak(Box::new(Requests::new())),
         };
         b.ctl.welcome(&mut b.tx);
         b.drain();
@@ -122,15 +141,24 @@ impl<const N: usize> Bench<N> {
             self.stepped_while_disabled = true;
         }
         if let Some(e) = &mut self.encoder {
+            // SysTick's sample, once a millisecond.
             e.history.push_back(self.shared.positions()[e.axis]);
             while e.history.len() > e.lag_ms + 1 {
                 e.history.pop_front();
             }
             let counts = (e.history[0] as f64 * e.counts_per_step - e.slipped).floor() as i64;
-            let (count, window) = e.sampler.sample(counts as u16);
-            self.ctl.encoder(count, window, &mut self.tx);
+            e.last = e.sampler.sample(counts as u16);
         }
-        let a = self.ctl.poll(self.now_ms, &mut self.tx);
+        self.idle_step();
+    }
+
+    /// One pass of the firmware's idle loop (the encoder check, then the library's
+    /// `idle_step`).
+    fn idle_step(&mut self) {
+        if let Some(e) = &self.encoder {
+            self.ctl.encoder(e.last.0, e.last.1, &mut self.tx);
+        }
+        let a = idle_step(&mut self.ctl, &mut self.rx_out, &mut self.tx, self.now_ms, self.req);
         self.enabled = a.enable;
         self.actions.push(a);
         self.drain();
@@ -142,29 +170,19 @@ impl<const N: usize> Bench<N> {
         }
     }
 
-    /// One received byte, as the RX interrupt and the serial task treat it; waits (in 1 ms
-    /// steps) while the controller holds a line.
+    /// One received byte through the library's RX dispatch (realtime bytes act at once, line
+    /// bytes go to the RX ring), then a pass of the idle loop; waits (in 1 ms steps) while the
+    /// ring is full.
     pub fn byte(&mut self, b: u8) {
-        match realtime(b) {
-            Some(Realtime::Status) => self.ctl.status_request(),
-            Some(Realtime::Hold) => self.shared.set_hold(true),
-            Some(Realtime::Resume) => self.shared.set_hold(false),
-            Some(Realtime::Reset) => {
-                self.ctl.soft_reset(&mut self.tx);
-                self.drain();
-            }
-            Some(Realtime::JogCancel) => self.ctl.jog_cancel(),
-            Some(Realtime::Extended(x)) => self.shared.set_overrides(self.shared.overrides().apply(x)),
-            None => {
-                let mut waited = 0;
-                while !self.ctl.byte(b, &mut self.tx) {
-                    self.tick_ms();
-                    waited += 1;
-                    assert!(waited < 600_000, "line held for 10 min");
-                }
-                self.drain();
+        if let Some(b) = dispatch(b, self.shared, self.req) {
+            let mut waited = 0;
+            while self.rx_in.enqueue(b).is_err() {
+                self.tick_ms();
+                waited += 1;
+                assert!(waited < 600_000, "RX ring full for 10 min");
             }
         }
+        self.idle_step();
     }
 
     pub fn send(&mut self, s: &str) {
@@ -185,7 +203,7 @@ impl<const N: usize> Bench<N> {
     /// Runs until the held line, if any, is accepted.
     pub fn finish(&mut self) {
         let mut waited = 0;
-        while self.ctl.busy() {
+        while self.ctl.busy() || self.rx_out.len() > 0 {
             self.tick_ms();
             waited += 1;
             assert!(waited < 600_000, "line held for 10 min");
@@ -196,7 +214,7 @@ impl<const N: usize> Bench<N> {
     pub fn run_to_idle(&mut self, max_ms: u32) {
         for _ in 0..max_ms {
             self.tick_ms();
-            if !self.ctl.busy() && self.shared.state() == State::Idle && self.queue_empty() {
+            if !self.ctl.busy() && self.rx_out.len() == 0 && self.shared.state() == State::Idle && self.queue_empty() {
                 return;
             }
         }

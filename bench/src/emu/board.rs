@@ -126,6 +126,17 @@ impl Board {
         u32::from_le_bytes(b)
     }
 
+    /// Deepest stack use since reset and the room the stack has (bytes from `_stack_end` to the
+    /// top of RAM), found from the power-up paint ([`cpu::STACK_PAINT`]): `used == room` means
+    /// the stack reached the statics (and may have overwritten them).
+    pub fn stack_peak(&self) -> Option<(u32, u32)> {
+        let floor = self.image.stack_end?;
+        let top = cpu::RAM_BASE + cpu::RAM_SIZE;
+        let ram = self.read_mem(floor, (top - floor) as usize);
+        let untouched = ram.iter().take_while(|&&b| b == cpu::STACK_PAINT).count() as u32;
+        Some((top - floor - untouched, top - floor))
+    }
+
     // read memory
     pub fn read_mem(&self, addr: u32, len: usize) -> Vec<u8> {
         self.cpu.mem_read_as_vec(addr as u64, len).unwrap_or_default()

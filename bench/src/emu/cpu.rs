@@ -19,12 +19,17 @@ pub const FLASH_BASE: u32 = 0x0800_0000;
 pub const FLASH_SIZE: u32 = 64 * 1024;
 pub const RAM_BASE: u32 = 0x2000_0000;
 pub const RAM_SIZE: u32 = 20 * 1024;
+/// Byte RAM holds at power-up in the emulator, so the deepest stack use shows as the lowest
+/// byte that no longer holds it ([`Image::stack_end`] up to the top of RAM).
+pub const STACK_PAINT: u8 = 0xA5;
 
 /// The loaded program: entry state and symbols the bench uses.
 pub struct Image {
     pub initial_sp: u32,
     pub reset: u32,
     pub rtt: Option<u32>,
+    /// Lowest address the stack may use (cortex-m-rt's `_stack_end`: the end of the statics).
+    pub stack_end: Option<u32>,
     pub symbols: Symbols,
 }
 
@@ -38,6 +43,7 @@ pub fn build(elf: &[u8]) -> Result<(Cpu, Image)> {
     uc.mem_map(0, FLASH_SIZE as u64, Prot::READ | Prot::EXEC).map_err(e)?;
     uc.mem_map(FLASH_BASE as u64, FLASH_SIZE as u64, Prot::ALL).map_err(e)?;
     uc.mem_map(RAM_BASE as u64, RAM_SIZE as u64, Prot::ALL).map_err(e)?;
+    uc.mem_write(RAM_BASE as u64, &[STACK_PAINT; RAM_SIZE as usize]).map_err(e)?;
     uc.mem_map(0x1FFF_F000, 0x1000, Prot::READ).map_err(e)?;
     let mut sys = vec![0u8; 0x1000];
     sys[0x7E0..0x7E2].copy_from_slice(&64u16.to_le_bytes()); // F_SIZE: 64 KiB
@@ -146,10 +152,12 @@ fn load_elf(uc: &mut Cpu, elf: &[u8]) -> Result<Image> {
     let mut vt = [0u8; 8];
     uc.mem_read(FLASH_BASE as u64, &mut vt).map_err(|err| anyhow!("{err:?}"))?;
     let rtt = file.symbols().find(|s| s.name() == Ok("_SEGGER_RTT")).map(|s| s.address() as u32);
+    let stack_end = file.symbols().find(|s| s.name() == Ok("_stack_end")).map(|s| s.address() as u32);
     Ok(Image {
         initial_sp: u32::from_le_bytes(vt[0..4].try_into().unwrap()),
         reset: u32::from_le_bytes(vt[4..8].try_into().unwrap()),
         rtt,
+        stack_end,
         symbols: Symbols::from_elf(elf),
     })
 }

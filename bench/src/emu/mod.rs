@@ -32,6 +32,7 @@ pub mod pwm;
 pub mod qenc;
 mod report;
 mod stats;
+pub mod stream;
 pub mod sweep;
 mod systick;
 mod timer;

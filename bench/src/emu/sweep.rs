@@ -610,6 +610,24 @@ pub fn results_markdown(s: &Sweep, command: &str, firmware: &str, elf: &Path) ->
     writeln!(m, "end of return). Per axis count the search scans up from {0} kHz in {0} kHz steps until the step", o.grid_hz / 1000)?;
     writeln!(m, "ISR fails, then bisects each criterion between its last pass and first failure of the scan to")?;
     writeln!(m, "{} kHz: \"max\" is sustainable at every scanned rate up to it.\n", o.resolution_hz / 1000)?;
+    writeln!(m, "## Continuous motion (look-ahead)\n")?;
+    {
+        let mut b = super::Board::load(elf)?;
+        b.run_until(super::HZ / 2, |b| b.serial_output().contains("Grbl"))?;
+        let r = super::stream::stream_segments(&mut b, 300, 0x2545_F491_4F6C_DD1D)?;
+        writeln!(m, "300 G1 segments of 0.1–0.5 mm at F3000 (turning up to ±30° each, default settings), sent")?;
+        writeln!(m, "like a sender (line, wait for `ok`) at 115200 baud; `cargo bench -p ddastep-bench --target")?;
+        writeln!(m, "host-tuple --bench plan_line` prints the same.\n")?;
+        writeln!(m, "| what | figure (modeled) |")?;
+        writeln!(m, "|---|---|")?;
+        writeln!(m, "| thread-mode cycles per streamed line (parse, plan, look-ahead, feeder, polls, replies) | {:.0} ({:.3} ms) |", r.thread_cycles_per_line, r.thread_cycles_per_line / 72_000.0)?;
+        writeln!(m, "| step ISR during the back-to-back moves: mean / max cycles | {:.1} / {} (max/mean {:.2}) |", r.isr.mean_cycles, r.isr.max_cycles, r.isr.max_cycles as f64 / r.isr.mean_cycles.max(1.0))?;
+        writeln!(m, "| 10 ms windows without a step while streaming | {} |", r.starved_windows)?;
+        writeln!(m, "| motion time | {:.3} s |\n", r.seconds)?;
+        writeln!(m, "The max is a move change (pointer switch, position record, the new move's deceleration")?;
+        writeln!(m, "trigger and period) or a ramp millisecond (walk, trigger, interpolated period) landing on a")?;
+        writeln!(m, "step tick; at this feed (5 kHz master) it never delays an edge.\n")?;
+    }
     writeln!(m, "## Results\n")?;
     m += &s.table();
     writeln!(m, "\nLoad cells: busiest measured window, CPU / step ISR; ¹ sustained except the CPU load (over 95 %),")?;

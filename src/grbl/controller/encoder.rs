@@ -13,7 +13,7 @@ use crate::protocol::{Error, Out};
 use crate::report;
 
 impl<const N: usize> Controller<'_, N> {
-    /// One encoder reading (call before each [`Self::poll`]): `counts` the extended count read
+    /// One encoder reading (call each idle-loop turn, before the poll): `counts` the extended count read
     /// now, `window` the counts of the last [`crate::encoder::count::WINDOW_MS`] ms. Checks for
     /// step loss and acts on it.
     #[inline(never)]

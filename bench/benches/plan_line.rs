@@ -1,0 +1,32 @@
+//! Planner throughput on the virtual bench: modeled cycles per streamed G1 line (parsing,
+//! planning, look-ahead, feeder: everything outside interrupts) with the look-ahead full, and
+//! the step interrupt's mean and max during back-to-back moves at speed. 300 segments of
+//! 0.1–0.5 mm at F3000 sent like a sender (line, wait for `ok`) at 115200 baud.
+//!
+//! `cargo bench -p ddastep-bench --target host-tuple --bench plan_line` (about 20 s).
+
+use ddastep_bench::emu::{firmware_elf, stream, Board, HZ};
+
+fn main() -> anyhow::Result<()> {
+    if !std::env::args().any(|a| a == "--bench") {
+        return Ok(());
+    }
+    let mut b = Board::load(firmware_elf()?)?;
+    b.run_until(HZ / 2, |b| b.serial_output().contains("Grbl"))?;
+    let r = stream::stream_segments(&mut b, 300, 0x2545_F491_4F6C_DD1D)?;
+    println!("{} lines of 0.1-0.5 mm at F3000 in {:.3} s of motion (modeled)", r.lines, r.seconds);
+    println!(
+        "thread mode per line: {:.0} modeled cycles = {:.3} ms at 72 MHz",
+        r.thread_cycles_per_line,
+        r.thread_cycles_per_line / 72_000.0
+    );
+    println!(
+        "step ISR at speed: mean {:.1}, max {} modeled cycles (max/mean {:.2}), {} entries",
+        r.isr.mean_cycles,
+        r.isr.max_cycles,
+        r.isr.max_cycles as f64 / r.isr.mean_cycles.max(1.0),
+        r.isr.entries
+    );
+    println!("10 ms windows without a step while streaming: {}", r.starved_windows);
+    Ok(())
+}

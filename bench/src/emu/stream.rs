@@ -1,0 +1,96 @@
+//! Streaming short segments to the firmware like a sender (line, wait for `ok`): the planner's
+//! throughput per G-code line and the step interrupt during back-to-back moves at speed.
+//!
+//! Every figure is *modeled* (cycles of the emulated Cortex-M3, see bench/README.md).
+
+use anyhow::{ensure, Result};
+
+use super::{Board, StepIsr, HZ};
+
+/// What one stream measured.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct StreamResult {
+    /// Segments streamed.
+    pub lines: usize,
+    /// Thread-mode cycles (everything but interrupts: line parsing, planning, look-ahead,
+    /// feeder, polls, replies) per streamed line.
+    pub thread_cycles_per_line: f64,
+    /// The step interrupt while the segments ran at speed (after the first 40 lines, until
+    /// the last was sent).
+    pub isr: StepIsr,
+    /// 10 ms windows without a step between the first step and the last line's `ok`.
+    pub starved_windows: usize,
+    /// Motion time of the segments, s.
+    pub seconds: f64,
+}
+
+/// `n` segments of 0.1–0.5 mm at `feed` mm/min, turning by up to ±30° each (xorshift from
+/// `seed`), on default settings.
+pub fn segments(n: usize, feed: f64, seed: u64) -> Vec<String> {
+    let mut r = seed | 1;
+    let mut next = || {
+        r ^= r << 13;
+        r ^= r >> 7;
+        r ^= r << 17;
+        (r >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let (mut x, mut y, mut a) = (0.0f64, 0.0f64, 0.0f64);
+    let mut out = vec![format!("G90 G1 F{feed}")];
+    for _ in 0..n {
+        a += (next() - 0.5) * std::f64::consts::PI / 3.0;
+        let len = 0.1 + 0.4 * next();
+        x += len * a.cos();
+        y += len * a.sin();
+        out.push(format!("X{x:.3} Y{y:.3}"));
+    }
+    out
+}
+
+/// Streams `segments(n, 3000, seed)` into a booted `board` and measures.
+pub fn stream_segments(board: &mut Board, n: usize, seed: u64) -> Result<StreamResult> {
+    let lines = segments(n, 3000.0, seed);
+    board.set_profile(true);
+    let mut first_step = None;
+    let mut last_ok = 0;
+    for (i, l) in lines.iter().enumerate() {
+        if i == 40 {
+            board.reset_step_isr_stats();
+        }
+        let r = board.send_line_wait_ok(l)?;
+        ensure!(r.contains("ok"), "{l}: {r}");
+        if first_step.is_none() {
+            first_step = board.edges().iter().find(|e| e.port == 1 && e.level).map(|e| e.cycle);
+        }
+        last_ok = board.cycles();
+    }
+    let isr = board.step_isr();
+    let prof = board.profile(0);
+    if std::env::var_os("STREAM_PROFILE").is_some() {
+        for f in prof.iter().take(25) {
+            eprintln!("{:>10} {:>5.1}% {}", f.cycles, f.share * 100.0, f.function);
+        }
+    }
+    let thread: u64 = prof.iter().map(|f| f.cycles).sum();
+    if std::env::var_os("STREAM_PROFILE").is_some() {
+        for f in board.profile(16 + super::TIM2_IRQ).iter().take(12) {
+            eprintln!("TIM2 {:>10} {:>8} runs {:>5.1}% {}", f.cycles, f.block_runs, f.share * 100.0, f.function);
+        }
+    }
+    board.set_profile(false);
+    board.run_until_quiet(HZ / 10, 30 * HZ)?;
+    let first = first_step.unwrap_or(last_ok);
+    let last_step = board.edges().iter().rev().find(|e| e.port == 1 && e.level).map_or(first, |e| e.cycle);
+    let w = HZ / 100;
+    let mut busy = vec![false; ((last_ok.saturating_sub(first)) / w) as usize + 1];
+    for e in board.edges().iter().filter(|e| e.port == 1 && e.level && e.cycle >= first && e.cycle < last_ok) {
+        busy[((e.cycle - first) / w) as usize] = true;
+    }
+    let starved = busy.iter().take(busy.len().saturating_sub(1)).filter(|b| !**b).count();
+    Ok(StreamResult {
+        lines: n,
+        thread_cycles_per_line: thread as f64 / lines.len() as f64,
+        isr,
+        starved_windows: starved,
+        seconds: (last_step - first) as f64 / HZ as f64,
+    })
+}

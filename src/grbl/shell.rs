@@ -1,0 +1,83 @@
+//! What the firmware shell runs around the controller, kept here so the host rigs run the same
+//! code: the RX interrupt's realtime-byte dispatch and one pass of the idle loop.
+//!
+//! Who uses it: `src/firmware` (USART1 interrupt and `idle`) and `tests/protocol_rig`.
+
+use core::sync::atomic::{AtomicBool, Ordering::Relaxed};
+
+use heapless::spsc::Consumer;
+
+use crate::controller::{Actions, Controller};
+use crate::protocol::{realtime, Out, Realtime};
+use crate::queue::Shared;
+
+/// Requests the RX interrupt leaves for the idle loop (lock-free flags).
+pub struct Requests {
+    status: AtomicBool,
+    reset: AtomicBool,
+    jog_cancel: AtomicBool,
+}
+
+impl Default for Requests {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Requests {
+    pub const fn new() -> Self {
+        Requests { status: AtomicBool::new(false), reset: AtomicBool::new(false), jog_cancel: AtomicBool::new(false) }
+    }
+
+    /// A Ctrl-X is waiting for the idle loop (the firmware restarts after a hard limit on it).
+    pub fn reset_pending(&self) -> bool {
+        self.reset.load(Relaxed)
+    }
+}
+
+/// One received byte in the RX interrupt: realtime bytes act at once (feed hold, resume,
+/// overrides) or leave a request (`?`, Ctrl-X, 0x85 jog cancel); a line byte comes back for
+/// the RX ring.
+pub fn dispatch<const N: usize>(b: u8, shared: &Shared<N>, req: &Requests) -> Option<u8> {
+    match realtime(b) {
+        Some(Realtime::Hold) => shared.set_hold(true),
+        Some(Realtime::Resume) => shared.set_hold(false),
+        Some(Realtime::Status) => req.status.store(true, Relaxed),
+        Some(Realtime::Reset) => req.reset.store(true, Relaxed),
+        Some(Realtime::JogCancel) => req.jog_cancel.store(true, Relaxed),
+        Some(Realtime::Extended(x)) => shared.set_overrides(shared.overrides().apply(x)),
+        None => return Some(b),
+    }
+    None
+}
+
+/// One pass of the idle loop: a pending soft reset (dropping the RX bytes before it), a status
+/// request, a jog cancel, line bytes into the controller while it takes them (and the RX
+/// ring's free room for `Bf:`), then its poll.
+pub fn idle_step<const N: usize>(
+    ctl: &mut Controller<'_, N>,
+    rx: &mut Consumer<'_, u8>,
+    out: &mut impl Out,
+    now_ms: u32,
+    req: &Requests,
+) -> Actions {
+    if req.reset.swap(false, Relaxed) {
+        // Bytes before the Ctrl-X belong to the old stream.
+        while rx.dequeue().is_some() {}
+        ctl.soft_reset(out);
+    }
+    if req.status.swap(false, Relaxed) {
+        ctl.status_request();
+    }
+    if req.jog_cancel.swap(false, Relaxed) {
+        ctl.jog_cancel();
+    }
+    while let Some(&b) = rx.peek() {
+        if !ctl.byte(b, out) {
+            break;
+        }
+        rx.dequeue();
+    }
+    ctl.set_rx_free(rx.capacity() - rx.len());
+    ctl.poll(now_ms, out)
+}

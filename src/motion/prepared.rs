@@ -1,0 +1,159 @@
+//! A prepared move: everything the step interrupt needs, computed by the feeder outside it.
+//!
+//! Who uses it: the feeder builds one per move ([`Prepared::new`]) and publishes it in the
+//! ring; the engine runs it in place. The interrupt never searches, divides or loops over
+//! axes to start a move: the slaves' DDA start, the direction word (and so whether a
+//! direction-setup gap is due), the ramp positions and the step timing are all here.
+//!
+//! Ramp positions are Q20 indices into the one ramp table, which is in *path* units: the
+//! table's rate `T` is the path speed times `per_mm` (the profile's steps per mm), the same
+//! for every move, so the index at a junction means the same speed on both sides and carries
+//! over from move to move. The move's master runs at `T / scale` (`scale` ≥ 1, Q16: the
+//! share of the path speed its master sees) and walks `walk_q / 2^20` entries per ms (its
+//! own acceleration as a fraction of the table's).
+
+use core::sync::atomic::AtomicU32;
+
+use crate::board::PinMap;
+use crate::interp::Dda;
+use crate::ramp::Period;
+use crate::timing::{Timing, STORE_JITTER_TICKS};
+
+/// One slave axis of a move.
+#[derive(Clone, Copy, Debug)]
+pub struct Slave {
+    pub(crate) dda: Dda,
+    pub(crate) on: u32,
+    pub(crate) axis: u8,
+}
+
+/// Where a move runs on the ramp table (all indices Q20).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RampPlan {
+    /// Highest index the move accelerates to (its cruise).
+    pub cruise_q: u32,
+    /// Index to end at when a successor is queued (otherwise 0: a stop).
+    pub exit_q: u32,
+    /// Entries per ms, Q20 (≤ 1 entry).
+    pub walk_q: u32,
+    /// Master period = table period × `scale` / 2^16.
+    pub scale: u32,
+    /// Master steps per table distance unit (1/256 step) at this walk rate, Q24:
+    /// `scale⁻¹ / walk`, so a deceleration from `a` to `b` takes
+    /// `(sum(a) − sum(b)) · dist_q / 2^24` master steps.
+    pub dist_q: u32,
+    /// Master period at cruise (the move's own rate, which the table may not hold exactly).
+    pub cruise: Period,
+}
+
+impl RampPlan {
+    /// A move whose master is the table (scale 1, full walk rate) cruising at `cruise`, from
+    /// and to a stop: the seed paper's single move.
+    pub const fn lone(cruise_q: u32, cruise: Period) -> Self {
+        RampPlan { cruise_q, exit_q: 0, walk_q: crate::ramp::IDX_ONE, scale: 1 << 16, dist_q: 1 << 16, cruise }
+    }
+}
+
+/// A move ready for the step interrupt.
+#[derive(Debug)]
+pub struct Prepared<const N: usize> {
+    // The step path.
+    pub(crate) total: u32,
+    pub(crate) master_on: u32,
+    pub(crate) n_slaves: u8,
+    pub(crate) master: u8,
+    pub(crate) slaves: [Slave; N],
+    // The ramp.
+    pub(crate) ramp: RampPlan,
+    /// The feeder raises this (from `ramp.exit_q`) while the move is the last one queued.
+    pub(crate) exit_q: AtomicU32,
+    pub(crate) min_period: Period,
+    // Edges.
+    /// Direction pins to change before the first step (0: none, no setup gap).
+    pub(crate) dir_word: u32,
+    pub(crate) dir_setup: u32,
+    /// Shortest gap between two edges (the pulse and its low time).
+    pub(crate) min_gap: u32,
+    // The position record.
+    pub(crate) start: [i32; N],
+    pub(crate) steps: [i32; N],
+    pub(crate) epoch: u32,
+}
+
+/// Direction pins as the feeder last left them (per axis: known, negative).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct DirState {
+    known: u32,
+    neg: u32,
+}
+
+impl DirState {
+    /// Nothing known (after boot or an immediate stop): the next move sets every pin it uses.
+    pub const UNKNOWN: DirState = DirState { known: 0, neg: 0 };
+}
+
+impl<const N: usize> Prepared<N> {
+    /// Prepares `steps` (signed, master `master`) starting at absolute `start`, for the pins,
+    /// timing and ramp plan given; `dir` is updated to the pins after this move.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        steps: [i32; N],
+        master: usize,
+        start: [i32; N],
+        ramp: RampPlan,
+        timing: &Timing,
+        pins: &PinMap<N>,
+        dir: &mut DirState,
+        epoch: u32,
+    ) -> Self {
+        let total = steps[master].unsigned_abs();
+        let mut slaves = [Slave { dda: Dda::new(0, 0), on: 0, axis: 0 }; N];
+        let mut n = 0;
+        let mut dir_word = 0;
+        for (i, &s) in steps.iter().enumerate() {
+            if s == 0 {
+                continue;
+            }
+            let neg = (s < 0) as u32;
+            if dir.known >> i & 1 == 0 || dir.neg >> i & 1 != neg {
+                dir_word |= if neg == 1 { pins.dir_neg[i] } else { pins.dir_pos[i] };
+                dir.neg = (dir.neg & !(1 << i)) | neg << i;
+                dir.known |= 1 << i;
+            }
+            if i != master {
+                slaves[n] = Slave { dda: Dda::new(s.unsigned_abs(), total), on: pins.step_on[i], axis: i as u8 };
+                n += 1;
+            }
+        }
+        let t = match *timing {
+            Timing::UNSET => Timing::DEFAULT,
+            t => t,
+        };
+        Prepared {
+            total,
+            master_on: pins.step_on[master],
+            n_slaves: n as u8,
+            master: master as u8,
+            slaves,
+            ramp,
+            exit_q: AtomicU32::new(ramp.exit_q),
+            min_period: Period::from_bits(t.min_period_for(n as u32).saturating_mul(16)),
+            dir_word,
+            dir_setup: (t.dir_setup_ticks + STORE_JITTER_TICKS).max(t.min_period_ticks),
+            min_gap: t.min_period_ticks,
+            start,
+            steps,
+            epoch,
+        }
+    }
+
+    /// Signed steps per axis.
+    pub fn steps(&self) -> &[i32; N] {
+        &self.steps
+    }
+
+    /// The ramp plan.
+    pub fn ramp(&self) -> &RampPlan {
+        &self.ramp
+    }
+}

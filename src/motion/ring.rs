@@ -1,0 +1,132 @@
+//! The ring of prepared moves between the feeder (producer, thread mode) and the step engine
+//! (consumer, TIM2 interrupt): single producer, single consumer, lock-free.
+//!
+//! Unlike a plain queue, the consumer runs a move *in its slot* (its DDA accumulators live
+//! there) and releases the slot only when the move ends, so a move change costs the interrupt
+//! a pointer, not a copy. The producer may still raise the exit speed of the last move it
+//! pushed ([`Prepared::exit_q`], an atomic) before it publishes the next one.
+//!
+//! Invariant: slots `head..tail` (mod [`RING`]) hold published moves; the producer writes only
+//! slot `tail` and publishes it with a release store of `tail`; the consumer reads only
+//! published slots and frees the oldest with a release store of `head`.
+
+use core::cell::UnsafeCell;
+use core::mem::MaybeUninit;
+use core::sync::atomic::{AtomicU32, Ordering::{Acquire, Relaxed, Release}};
+
+use crate::prepared::Prepared;
+
+/// Prepared moves the ring holds (a power of two). The look-ahead keeps its own, longer
+/// buffer of moves not yet prepared; this only needs to cover the feeder's poll interval.
+pub const RING: usize = 8;
+const _: () = assert!(RING.is_power_of_two());
+
+/// The ring's storage (a `static` in the firmware).
+pub struct MoveRing<const N: usize> {
+    slots: [UnsafeCell<MaybeUninit<Prepared<N>>>; RING],
+    head: AtomicU32,
+    tail: AtomicU32,
+}
+
+// SAFETY: slots are shared under the protocol above (one writer per slot at a time, published
+// with release/acquire); only the producer and consumer handles touch them.
+unsafe impl<const N: usize> Sync for MoveRing<N> {}
+
+impl<const N: usize> Default for MoveRing<N> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const N: usize> MoveRing<N> {
+    /// An empty ring (all zero: lives in .bss).
+    pub const fn new() -> Self {
+        MoveRing {
+            slots: [const { UnsafeCell::new(MaybeUninit::uninit()) }; RING],
+            head: AtomicU32::new(0),
+            tail: AtomicU32::new(0),
+        }
+    }
+
+    /// The two ends; the `&mut` makes sure there is one of each.
+    pub fn split(&mut self) -> (RingProducer<'_, N>, RingConsumer<'_, N>) {
+        let ring: &Self = self;
+        (RingProducer { ring }, RingConsumer { ring })
+    }
+
+    fn slot(&self, i: u32) -> *mut Prepared<N> {
+        self.slots[i as usize & (RING - 1)].get().cast()
+    }
+}
+
+/// Producer end.
+pub struct RingProducer<'a, const N: usize> {
+    ring: &'a MoveRing<N>,
+}
+
+impl<const N: usize> RingProducer<'_, N> {
+    /// Moves published and not yet finished (the running one included).
+    pub fn len(&self) -> usize {
+        self.ring.tail.load(Relaxed).wrapping_sub(self.ring.head.load(Acquire)) as usize
+    }
+
+    /// True when nothing is published.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Publishes a move; gives it back when the ring is full.
+    pub fn push(&mut self, mv: Prepared<N>) -> Result<(), Prepared<N>> {
+        if self.len() >= RING {
+            return Err(mv);
+        }
+        let t = self.ring.tail.load(Relaxed);
+        // SAFETY: slot `tail` is not published, so the consumer does not touch it.
+        unsafe { self.ring.slot(t).write(mv) };
+        self.ring.tail.store(t.wrapping_add(1), Release);
+        Ok(())
+    }
+
+    /// Raises (or sets) the exit index of the last published move, if it is still in the
+    /// ring; call before publishing its successor.
+    pub fn set_last_exit(&mut self, exit_q: u32) {
+        if self.is_empty() {
+            return;
+        }
+        let t = self.ring.tail.load(Relaxed).wrapping_sub(1);
+        // SAFETY: the slot is published and not freed (or freed and unused: the store is then
+        // harmless); only its atomic field is touched, never through a reference to the move.
+        unsafe { (*core::ptr::addr_of!((*self.ring.slot(t)).exit_q)).store(exit_q, Relaxed) };
+    }
+}
+
+/// Consumer end (the step engine).
+pub struct RingConsumer<'a, const N: usize> {
+    ring: &'a MoveRing<N>,
+}
+
+impl<const N: usize> RingConsumer<'_, N> {
+    /// The oldest published move, if any; it stays in the ring until [`Self::pop`].
+    #[inline(always)]
+    pub fn front(&self) -> Option<*mut Prepared<N>> {
+        let h = self.ring.head.load(Relaxed);
+        if self.ring.tail.load(Acquire) == h {
+            None
+        } else {
+            Some(self.ring.slot(h))
+        }
+    }
+
+    /// True when a move is published after the front one.
+    #[inline(always)]
+    pub fn has_next(&self) -> bool {
+        self.ring.tail.load(Acquire).wrapping_sub(self.ring.head.load(Relaxed)) >= 2
+    }
+
+    /// Frees the front slot (its move is finished or dropped).
+    #[inline(always)]
+    pub fn pop(&mut self) {
+        let h = self.ring.head.load(Relaxed);
+        self.ring.head.store(h.wrapping_add(1), Release);
+    }
+}

@@ -1,0 +1,163 @@
+//! The ramp walk: where on the ramp table the running motion is, one update per millisecond.
+//!
+//! Who uses it: the step engine, at each millisecond of timer time and when a move starts.
+//!
+//! The index (Q20) is a path speed, the same across moves (see [`crate::prepared`]), so it
+//! simply carries over from one move to the next. Each millisecond the walk moves it by the
+//! running move's walk rate: up towards the move's cruise index while accelerating, down
+//! towards the exit index once decelerating (to 0 under a feed hold or when no successor is
+//! queued yet). The deceleration starts when the master steps left are at most the distance
+//! from the current index down to the exit, from the table's distance sums (an integer
+//! multiply, no division): it steps one walk down at once and restarts the millisecond, so the
+//! way down samples the table exactly as the distance assumes (a left Riemann sum: the sums'
+//! integral less half the end slopes). The walk goes up only if the way down from one walk up
+//! still fits in the steps left, otherwise it stays (cruises) until the trigger fires.
+//!
+//! Cost: a ramp millisecond only moves the index and sets the period; the distances it needs
+//! next (the trigger here, the one from a walk up) are computed one per tick on the ticks that
+//! follow ([`Walk::settle`]), and a move change computes none, so no tick pays for two
+//! distances (below one step per ms the walk does it all at once; time is not short there).
+
+use crate::prepared::RampPlan;
+use crate::ramp::{Period, RampTable};
+
+/// Steps added to the deceleration distance (0: an early start would leave steps to crawl at
+/// the table's first entry; a late one ends at most a step's worth of walk high).
+pub const DECEL_MARGIN: u32 = 0;
+
+/// What a millisecond of walking did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Step {
+    /// The index (or the trigger) changed: set the period again.
+    Moved,
+    /// Nothing changed.
+    Same,
+    /// Walking down to 0 has come to rest.
+    AtRest,
+}
+
+/// Trigger work left for the next tick (one distance per tick, so no tick pays for two).
+const SETTLED: u8 = 0;
+const TRIGGER: u8 = 1;
+const UP: u8 = 2;
+
+/// The walk's state.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Walk {
+    /// Table index, Q20.
+    pub idx: u32,
+    /// Walking down (towards the exit, or 0 under a hold).
+    pub decel: bool,
+    /// Start walking down once the master steps left are at most this.
+    pub decel_at: u32,
+    /// The target `decel_at` and `up_at` were computed for.
+    pub decel_for: u32,
+    /// The deceleration distance from one walk up: going up needs at least this many steps
+    /// left (and it becomes `decel_at` there).
+    pub up_at: u32,
+    /// Trigger work for the next tick ([`Walk::settle`]).
+    pending: u8,
+}
+
+impl Walk {
+    /// From rest.
+    pub const REST: Walk = Walk { idx: 0, decel: false, decel_at: 0, decel_for: u32::MAX, up_at: u32::MAX, pending: SETTLED };
+
+    /// True when [`Self::settle`] has work for this tick.
+    #[inline(always)]
+    pub fn unsettled(&self) -> bool {
+        self.pending != SETTLED
+    }
+
+    /// One millisecond has passed: move the index. Returns what changed. The distances it
+    /// needs were computed on earlier ticks; the new ones are left to [`Self::settle`].
+    #[inline(always)]
+    pub fn per_ms(&mut self, plan: &RampPlan, target: u32, left: u32) -> Step {
+        if self.decel {
+            if self.idx > target {
+                self.idx = self.idx.saturating_sub(plan.walk_q).max(target);
+                return Step::Moved;
+            }
+            return if target == 0 { Step::AtRest } else { Step::Same };
+        }
+        if target != self.decel_for {
+            self.pending = TRIGGER; // a successor came (or went): both distances again
+            return Step::Same;
+        }
+        // Up one walk only if the way down from there still fits in the steps left;
+        // otherwise stay (cruise) until the trigger for this index.
+        if self.idx < plan.cruise_q && left >= self.up_at {
+            self.idx = (self.idx + plan.walk_q).min(plan.cruise_q);
+            self.decel_at = self.up_at;
+            self.pending = UP;
+            return Step::Moved;
+        }
+        Step::Same
+    }
+
+    /// The trigger for the current index and target, at once (a move start, a resume).
+    #[inline(always)]
+    pub fn plan_decel<const L: usize>(&mut self, plan: &RampPlan, target: u32, table: &RampTable<L>) {
+        self.decel_at = decel_steps(self.idx, target, plan, table);
+        self.decel_for = target;
+        self.up_at = u32::MAX;
+        self.pending = UP;
+    }
+
+    /// The trigger for a new move at the next tick; until then it cannot fire.
+    #[inline(always)]
+    pub fn defer_decel(&mut self) {
+        self.decel_at = 0;
+        self.decel_for = u32::MAX;
+        self.up_at = u32::MAX;
+        self.pending = TRIGGER;
+    }
+
+    /// One distance of pending trigger work (a tick without a ramp millisecond).
+    #[inline(always)]
+    pub fn settle<const L: usize>(&mut self, plan: &RampPlan, target: u32, table: &RampTable<L>) {
+        if self.pending == TRIGGER {
+            self.decel_at = decel_steps(self.idx, target, plan, table);
+            self.decel_for = target;
+            self.pending = UP;
+        } else {
+            self.up_at = if self.idx < plan.cruise_q {
+                decel_steps((self.idx + plan.walk_q).min(plan.cruise_q), self.decel_for, plan, table)
+            } else {
+                u32::MAX
+            };
+            self.pending = SETTLED;
+        }
+    }
+}
+
+/// Master steps walking down from `idx` to `target` (samples at idx − walk, …, target, one per
+/// ms: the table distance less half the end slopes), plus [`DECEL_MARGIN`].
+#[inline(always)]
+fn decel_steps<const L: usize>(idx: u32, target: u32, plan: &RampPlan, table: &RampTable<L>) -> u32 {
+    let t = target.min(idx);
+    let d = table.sum_at(idx) - table.sum_at(t);
+    let ends = (table.per_ms_at(idx).saturating_sub(table.per_ms_at(t)) as u64 * plan.walk_q as u64) >> 21;
+    let steps = ((d as u64).saturating_sub(ends).min(u32::MAX as u64) * plan.dist_q as u64) >> 24;
+    (steps.min(u32::MAX as u64 - DECEL_MARGIN as u64) as u32) + DECEL_MARGIN
+}
+
+impl Walk {
+    /// Starts walking down now: one walk down at once (the caller restarts the millisecond).
+    #[inline(always)]
+    pub fn start_decel(&mut self, plan: &RampPlan, target: u32) {
+        self.decel = true;
+        self.decel_at = 0;
+        self.pending = SETTLED;
+        if self.idx > target {
+            self.idx = self.idx.saturating_sub(plan.walk_q).max(target);
+        }
+    }
+    /// The master period at the current index for a move's plan, never below `min`.
+    #[inline(always)]
+    pub fn period<const L: usize>(&self, plan: &RampPlan, min: Period, table: &RampTable<L>) -> Period {
+        let p = if table.is_empty() { Period::ZERO } else { table.period_at(self.idx) };
+        let scaled = ((p.to_bits() as u64 * plan.scale as u64) >> 16).min(u32::MAX as u64) as u32;
+        Period::from_bits(scaled).max(plan.cruise).max(min)
+    }
+}

@@ -1,0 +1,199 @@
+//! The feeder: the producer side of the move ring. It keeps the look-ahead buffer, replans it
+//! as moves arrive, and prepares moves for the step interrupt just in time.
+//!
+//! Who uses it: the controller (one [`Feeder::push`] per planned move, [`Feeder::service`] at
+//! every poll) and host rigs.
+//!
+//! Just in time: a move leaves the look-ahead (where later moves can still raise its speeds)
+//! only when the engine needs it: when the engine has less than [`HORIZON_US`] of motion
+//! prepared, or fewer than two moves, or the buffer is full. When it hands a move over, it
+//! first raises the exit of the last prepared move to the new move's entry, then publishes the
+//! new move; until then the engine plans that last move's exit as a stop. So the engine never
+//! runs out of moves at speed: at worst it slows to rest at the end of what it has.
+
+use crate::board::PinMap;
+use crate::lookahead::{replan, Block, Buffer, Tail, LOOKAHEAD};
+use crate::prepared::{DirState, Prepared};
+use crate::queue::{Move, Shared, State};
+use crate::ramp::RampSlot;
+use crate::ring::{RingProducer, RING};
+
+/// Motion the feeder keeps prepared ahead of the engine, µs (several poll intervals).
+pub const HORIZON_US: u32 = 8_000;
+
+/// Producer side of the move queue.
+pub struct Feeder<'a, const N: usize> {
+    ring: RingProducer<'a, N>,
+    shared: &'a Shared<N>,
+    slot: &'a RampSlot,
+    pins: PinMap<N>,
+    /// The look-ahead buffer, oldest first.
+    blocks: &'a mut Buffer<N>,
+    /// The last move handed to the engine (for the forward pass).
+    tail: Option<Tail>,
+    dir: DirState,
+    /// Absolute position after the last move handed over.
+    pos: [i32; N],
+    resync: bool,
+    /// Moves handed over (wrapping), and per ring slot their estimated µs and master steps.
+    pushed: u32,
+    est: [(u32, u32); RING],
+    accepted: u32,
+}
+
+impl<'a, const N: usize> Feeder<'a, N> {
+    /// A feeder at the engine's current position.
+    pub fn new(
+        ring: RingProducer<'a, N>,
+        blocks: &'a mut Buffer<N>,
+        shared: &'a Shared<N>,
+        slot: &'a RampSlot,
+        pins: PinMap<N>,
+    ) -> Self {
+        blocks.clear();
+        Feeder {
+            ring,
+            shared,
+            slot,
+            pins,
+            blocks,
+            tail: None,
+            dir: DirState::UNKNOWN,
+            pos: shared.positions(),
+            resync: false,
+            pushed: shared.moves_done(),
+            est: [(0, 1); RING],
+            accepted: shared.moves_done(),
+        }
+    }
+
+    /// Takes a move into the look-ahead; gives it back when the buffer is full (or the engine
+    /// is still stopping after an abort).
+    pub fn push(&mut self, mv: Move<N>) -> Result<(), Move<N>> {
+        if !self.synced() {
+            return Err(mv);
+        }
+        if self.blocks.is_full() {
+            self.service();
+            if self.blocks.is_full() {
+                return Err(mv);
+            }
+        }
+        let profile = self.slot.producer_view();
+        let joins = !(self.blocks.is_empty() && self.ring.is_empty());
+        let block = Block::new(mv, profile, joins);
+        if self.blocks.push_back(block).is_err() {
+            return Err(mv); // unreachable: checked above
+        }
+        self.accepted = self.accepted.wrapping_add(1);
+        self.replan();
+        self.service();
+        Ok(())
+    }
+
+    /// Hands moves to the engine as it needs them (call at every poll).
+    pub fn service(&mut self) {
+        if !self.synced() {
+            return;
+        }
+        while !self.blocks.is_empty() && self.ring.len() < RING {
+            let must = self.blocks.is_full() || self.ring.len() < 2 || self.horizon_us() < HORIZON_US;
+            if !must {
+                break;
+            }
+            self.commit();
+        }
+    }
+
+    /// Moves queued (in the look-ahead or the ring) or running.
+    pub fn pending(&self) -> u32 {
+        self.accepted.wrapping_sub(self.shared.moves_done())
+    }
+
+    /// Moves the look-ahead and the ring hold at most.
+    pub fn capacity(&self) -> usize {
+        LOOKAHEAD + RING
+    }
+
+    /// True when another move fits.
+    pub fn ready(&self) -> bool {
+        !self.blocks.is_full()
+    }
+
+    /// Immediate stop: the running move ends at the next tick and every queued one is dropped.
+    /// Positions stay equal to the pulses emitted.
+    pub fn abort(&mut self) {
+        self.shared.ctl.stop();
+        self.blocks.clear();
+        self.tail = None;
+        self.dir = DirState::UNKNOWN;
+        self.resync = true;
+        // Dropped moves never count as done; forget them here.
+        self.accepted = self.shared.moves_done();
+        self.pushed = self.accepted;
+    }
+
+    /// Sets positions while idle (G92): the engine's record and the next move's start.
+    pub fn set_positions(&mut self, p: [i32; N]) {
+        self.shared.set_positions(p);
+        self.pos = p;
+    }
+
+    /// After an abort: true once the engine has stopped (positions are final).
+    fn synced(&mut self) -> bool {
+        if self.resync && self.shared.state() == State::Idle {
+            self.pos = self.shared.positions();
+            self.pushed = self.shared.moves_done();
+            self.accepted = self.pushed;
+            self.resync = false;
+        }
+        !self.resync
+    }
+
+    fn replan(&mut self) {
+        let tail = if self.ring.is_empty() { None } else { self.tail };
+        let (front, back) = self.blocks.as_mut_slices();
+        replan(front, back, tail.as_ref(), &self.slot.producer_view().ramp);
+    }
+
+    /// Prepares the oldest buffered move and publishes it.
+    /// (No replan here: handing over the front block leaves the plan of the rest as it was.)
+    fn commit(&mut self) {
+        let Some(b) = self.blocks.pop_front() else { return };
+        let profile = self.slot.producer_view();
+        let mut ramp = b.ramp;
+        ramp.exit_q = b.exit_q;
+        let start = self.pos;
+        let steps = b.mv.steps;
+        let p = Prepared::new(steps, b.mv.master as usize, start, ramp, &profile.timing, &self.pins, &mut self.dir, self.shared.epoch());
+        // The last prepared move may now run through into this one.
+        self.ring.set_last_exit(b.entry_q);
+        if self.ring.push(p).is_err() {
+            return; // unreachable: the caller checked for room
+        }
+        for (q, s) in self.pos.iter_mut().zip(steps) {
+            *q = q.wrapping_add(s);
+        }
+        self.est[self.pushed as usize % RING] = (b.est_us, steps[b.mv.master as usize].unsigned_abs().max(1));
+        self.pushed = self.pushed.wrapping_add(1);
+        self.tail = Some(b.tail());
+    }
+
+    /// Estimated motion the engine has left, µs.
+    fn horizon_us(&self) -> u32 {
+        let done = self.shared.moves_done();
+        let queued = self.pushed.wrapping_sub(done);
+        let mut us = 0u32;
+        for k in 0..queued.min(RING as u32) {
+            let (est, total) = self.est[done.wrapping_add(k) as usize % RING];
+            let left = if k == 0 {
+                let made = self.shared.mv_done.load(core::sync::atomic::Ordering::Relaxed).min(total);
+                crate::queue::mul_div(est, total - made, 0, total)
+            } else {
+                est
+            };
+            us = us.saturating_add(left);
+        }
+        us
+    }
+}

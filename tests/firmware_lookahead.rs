@@ -1,0 +1,74 @@
+//! Firmware in the loop, continuous motion: look-ahead junctions on the release ELF.
+
+mod fil;
+
+use ddastep_bench::emu::{gcode_lines, HZ};
+use fil::*;
+
+/// Path speed (mm/s at 100 steps/mm) over each 10 ms window between `from` and `to` cycles.
+fn speeds(s: &[Step], from: u64, to: u64) -> Vec<f64> {
+    let w = HZ / 100;
+    let n = ((to - from) / w) as usize + 1;
+    let mut d = vec![[0i64; 2]; n];
+    for st in s.iter().filter(|st| st.cycle >= from && st.cycle < to && st.axis < 2) {
+        d[((st.cycle - from) / w) as usize][st.axis] += 1;
+    }
+    d.iter().map(|c| ((c[0] * c[0] + c[1] * c[1]) as f64).sqrt() / 100.0 / 0.01).collect()
+}
+
+#[test]
+fn circle_of_360_segments_runs_near_its_feed() {
+    let mut b = boot();
+    let g = std::fs::read_to_string(ddastep_bench::emu::repo_root().join("bench/demo/circle360.gcode")).unwrap();
+    let lines: Vec<String> = gcode_lines(&g);
+    // Settings and the move to the start point, then wait, so the circle starts from rest.
+    let start = lines.iter().position(|l| l.starts_with("G1")).unwrap();
+    for l in &lines[..=start] {
+        ok(&mut b, l);
+    }
+    wait_idle(&mut b, 2.0);
+    let t0 = b.cycles();
+    for l in &lines[start + 1..] {
+        ok(&mut b, l);
+    }
+    wait_idle(&mut b, 10.0);
+    let s: Vec<Step> = steps(&b).into_iter().filter(|s| s.cycle >= t0).collect();
+    let (first, last) = (s[0].cycle, s[s.len() - 1].cycle);
+    let took = (last - first) as f64 / HZ as f64;
+    // Ideal: the polygon's length at F3000 plus one acceleration and one deceleration at 500 mm/s².
+    let len = 360.0 * 2.0 * 20.0 * (std::f64::consts::PI / 360.0).sin();
+    let ideal = len / 50.0 + 50.0 / 500.0;
+    let v = speeds(&s, first, last);
+    eprintln!("circle: {took:.3} s, ideal {ideal:.3} s ({:.3}x); speeds per 10 ms: {:?}", took / ideal,
+        v.iter().map(|x| x.round() as i64).collect::<Vec<_>>());
+    assert_eq!(&net(&steps(&b))[..2], &[2000, 0]);
+    assert!(took <= 1.1 * ideal, "circle took {took:.3} s, ideal {ideal:.3} s");
+    assert_eq!(b.report().overruns, 0);
+}
+
+#[test]
+fn fast_532_reaches_200_khz_on_the_seven_axis_firmware() {
+    let mut b = boot();
+    let g = std::fs::read_to_string(ddastep_bench::emu::repo_root().join("bench/demo/fast_532.gcode")).unwrap();
+    for l in gcode_lines(&g) {
+        ok(&mut b, &l);
+    }
+    wait_idle(&mut b, 3.0);
+    let s = steps(&b);
+    eprintln!("{} | overruns {} | {}", status(&mut b), b.report().overruns, (0..3).map(|a| s.iter().filter(|s| s.axis == a).count().to_string()).collect::<Vec<_>>().join(","));
+    assert_eq!(s.iter().filter(|s| s.axis == 0).count(), 10_000);
+    assert_eq!(net(&s), [0; 7]);
+    // Cruise: X at 200 kHz (± 0.5 %) over 1000 master steps in the middle of the first move.
+    let x: Vec<u64> = s.iter().filter(|s| s.axis == 0).map(|s| s.cycle).collect();
+    let rate = 1000.0 * HZ as f64 / (x[3000] - x[2000]) as f64;
+    assert!((rate - 200_000.0).abs() < 1_000.0, "cruise {rate} Hz");
+    assert_eq!(b.report().overruns, 0);
+}
+
+#[test]
+fn streamed_short_segments_never_starve() {
+    let mut b = boot();
+    let r = ddastep_bench::emu::stream::stream_segments(&mut b, 150, 7).unwrap();
+    assert_eq!(r.starved_windows, 0, "{r:?}");
+    assert_eq!(b.report().overruns, 0);
+}
