@@ -2,8 +2,8 @@
 //! its position and speed, and step-loss detection against the step engine's position.
 //!
 //! Who uses it: the firmware shell samples TIM3 ([`count`]: every SysTick, and fresh in the
-//! idle loop), the controller checks for step loss ([`loss::Monitor`]), reports `|Enc:` in
-//! status reports and answers `$ENC`; the settings below are Grbl-numbered (`$87`–`$89`,
+//! idle loop), the controller checks for step loss ([`loss::Monitor`]) and reports `|Enc:` in
+//! status reports; the settings below are Grbl-numbered (`$87`–`$89`,
 //! `$97`–`$99`: numbers neither Grbl 1.1 nor grblHAL gives a meaning).
 //!
 //! Everything is integer math but the reports (which reuse the status formatter).

@@ -530,7 +530,7 @@ impl Settings {
         let arrays = [&self.steps_per_mm, &self.max_rate, &self.accel, &self.max_travel];
         for (row, arr) in b[24..TAIL].chunks_exact_mut(4 * MAX_AXES).zip(arrays) {
             for (w, v) in row.chunks_exact_mut(4).zip(arr) {
-                w.copy_from_slice(&v.to_le_bytes());
+                put4(w, 0, v.to_le_bytes());
             }
         }
         put4(&mut b, TAIL, self.arc_tolerance.to_le_bytes());
@@ -538,7 +538,9 @@ impl Settings {
         put4(&mut b, TAIL + 8, self.spindle_min.to_le_bytes());
         put4(&mut b, TAIL + 12, self.spindle_pwm_hz.to_le_bytes());
         b[TAIL + 16] = self.laser_mode as u8;
-        b[TAIL + 20..TAIL + 20 + encoder::IMAGE_LEN].copy_from_slice(&self.encoder.to_bytes());
+        for (i, v) in self.encoder.0.iter().enumerate() {
+            put4(&mut b, TAIL + 20 + 4 * i, v.to_le_bytes());
+        }
         let crc = crc32(&b[..SETTINGS_LEN - 4]);
         put4(&mut b, SETTINGS_LEN - 4, crc.to_le_bytes());
         b

@@ -1,5 +1,6 @@
-//! Encoder feedback in the controller: the step-loss check each turn of the idle loop, the
-//! `|Enc:` status field and `$ENC` (see [`crate::encoder`]).
+//! Encoder feedback in the controller: the step-loss check each turn of the idle loop and the
+//! `|Enc:` status field (see [`crate::encoder`]). The status report shows the commanded
+//! position (`MPos:`) beside the measured one (`Enc:`).
 //!
 //! A loss prints `[MSG:Step loss X 37]` (axis, commanded − measured steps) at once, then per
 //! `$98`: a feed hold (the check re-arms, accepting the position, when the hold is released
@@ -9,7 +10,7 @@
 
 use super::Controller;
 use crate::encoder::loss::Reading;
-use crate::protocol::{Error, Out};
+use crate::protocol::Out;
 use crate::report;
 
 impl<const N: usize> Controller<'_, N> {
@@ -46,12 +47,9 @@ impl<const N: usize> Controller<'_, N> {
         Some((self.enc.measured_steps() / spm, self.enc.speed_steps_per_s() * 60.0 / spm))
     }
 
-    /// `$ENC`: `[ENC:X,commanded mm,measured mm,commanded - measured steps]`.
-    pub(super) fn encoder_report(&self, out: &mut impl Out) -> Result<(), Error> {
-        let axis = self.enc.axis().ok_or(Error::SettingDisabled)?;
-        let spm = *self.limits.steps_per_mm.get(axis).ok_or(Error::SettingDisabled)?;
-        let e = &self.enc;
-        report::encoder(out, axis, e.commanded_steps() as f64 / spm, e.measured_steps() / spm, e.error_steps());
-        Ok(())
+    /// Commanded − measured position of the watched axis at the last reading, steps (what a
+    /// step-loss report prints; for tests and tools).
+    pub fn encoder_error_steps(&self) -> Option<f64> {
+        self.enc.axis().map(|_| self.enc.error_steps())
     }
 }
