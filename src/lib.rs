@@ -20,6 +20,7 @@
 pub mod board;
 pub mod grbl;
 pub mod motion;
+pub mod num;
 pub mod planning;
 pub mod steptime;
 pub mod watchdog;

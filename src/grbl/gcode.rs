@@ -11,6 +11,7 @@
 
 use crate::arc::{Arc, Center};
 use crate::coords::{Offsets, G28};
+use crate::num::{round_u32, u32_of};
 use crate::protocol::Error;
 use crate::spindle::{SpindleDir, FLOOD, MIST};
 use crate::AXIS_NAMES;
@@ -254,7 +255,7 @@ fn split_code(v: f64) -> Result<(u32, u32), Error> {
         return Err(Error::UnsupportedCommand);
     }
     let int = libm::trunc(v);
-    Ok((int as u32, libm::round(100.0 * (v - int)) as u32))
+    Ok((u32_of(int), round_u32(100.0 * (v - int))))
 }
 
 fn g_word<const N: usize>(b: &mut Block<N>, v: f64) -> Result<(), Error> {
@@ -536,7 +537,7 @@ impl Modal {
             if t > 255.0 {
                 return Err(Error::MaxValueExceeded);
             }
-            m.tool = t as u32;
+            m.tool = u32_of(t);
         }
         let mut fx = Effects {
             drivers: b.drivers,
@@ -556,7 +557,7 @@ impl Modal {
         match (nm, b.p) {
             (Some(NonModal::Dwell), None) => return Err(Error::ValueWordMissing),
             (Some(NonModal::Dwell), Some(p)) if p > MAX_DWELL_S => return Err(Error::BadNumberFormat),
-            (Some(NonModal::Dwell), Some(p)) => fx.dwell_ms = Some(libm::round(p * 1000.0) as u32),
+            (Some(NonModal::Dwell), Some(p)) => fx.dwell_ms = Some(round_u32(p * 1000.0)),
             (Some(NonModal::SetCoordData), _) => {}
             (_, Some(_)) => return Err(Error::UnusedWords),
             _ => {}

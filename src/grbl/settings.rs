@@ -14,6 +14,7 @@ use crate::protocol::Error;
 use crate::ramp::{Profile, RampConfig, RampError, RampTable, Shape, MAX_RATE_HZ};
 #[allow(unused_imports)]
 use crate::ramp::MAX_RATE_HZ as _;
+use crate::num::{round_u32, u32_of};
 use crate::timing::{ns_to_ticks, Timing};
 use crate::MAX_AXES;
 
@@ -262,7 +263,7 @@ impl Settings {
             return Err(Error::NegativeValue);
         }
         let int = libm::trunc(value);
-        let byte = || if int <= 255.0 { Ok(int as u8) } else { Err(Error::InvalidStatement) };
+        let byte = || if int <= 255.0 { Ok(u32_of(int) as u8) } else { Err(Error::InvalidStatement) };
         let range = |lo: f64, hi: f64| {
             if (lo..=hi).contains(&value) {
                 Ok(value as f32)
@@ -337,7 +338,7 @@ impl Settings {
             }
             SPINDLE_PWM_HZ => {
                 range(1.0, 100_000.0)?;
-                self.spindle_pwm_hz = value as u32;
+                self.spindle_pwm_hz = u32_of(value);
                 Ok(Change::Shell)
             }
             DIR_SETUP => {
@@ -346,11 +347,11 @@ impl Settings {
             }
             RAMP_START => {
                 range(1.0, MAX_RATE_HZ as f64)?;
-                self.ramp_start_hz = value as u32;
+                self.ramp_start_hz = u32_of(value);
                 Ok(Change::Profile)
             }
             RAMP_SHAPE => {
-                self.shape = match int as u32 {
+                self.shape = match u32_of(int) {
                     0 => Shape::Trapezoid,
                     1 => Shape::SCurve,
                     _ => return Err(Error::InvalidStatement),
@@ -365,7 +366,7 @@ impl Settings {
                 if !(3.0..=axes.min(MAX_AXES) as f64).contains(&int) {
                     return Err(Error::InvalidStatement);
                 }
-                self.axes = int as u8;
+                self.axes = u32_of(int) as u8;
                 Ok(Change::Profile)
             }
             100..=139 => {
@@ -410,8 +411,8 @@ impl Settings {
     /// Step timing in timer ticks.
     pub fn timing(&self) -> Timing {
         // f64 like the rest of the settings math: f32 arithmetic would link a second soft-float set.
-        let pulse = ns_to_ticks(libm::round(self.pulse_us as f64 * 1000.0) as u32);
-        let dir = ns_to_ticks(libm::round(self.dir_setup_us as f64 * 1000.0) as u32);
+        let pulse = ns_to_ticks(round_u32(self.pulse_us as f64 * 1000.0));
+        let dir = ns_to_ticks(round_u32(self.dir_setup_us as f64 * 1000.0));
         Timing::new(pulse, dir, ISR_FLOOR_TICKS)
     }
 
@@ -447,11 +448,11 @@ impl Settings {
             top2 += v * v;
         }
         let accel = accel * c;
-        let vmax = ((crate::planner::sqrt(top2) * c) as u32).max(1).min(crate::ramp::MAX_RATE_HZ);
+        let vmax = u32_of(crate::planner::sqrt(top2) * c).max(1).min(crate::ramp::MAX_RATE_HZ);
         RampConfig {
             v0: self.ramp_start_hz.max(1).min(vmax),
             vmax,
-            accel: (accel.min(u32::MAX as f64) as u32).max(1),
+            accel: u32_of(accel.min(u32::MAX as f64)).max(1),
             shape: self.shape,
         }
     }
@@ -470,7 +471,7 @@ impl Settings {
                 // fraction, so no move runs faster), down to a lower top only as a last resort.
                 Err(RampError::TooLong { .. }) if attempt < 4 => {
                     let ms = RampTable::<L>::ramp_ms(&cfg) as f64;
-                    cfg.accel = (cfg.accel as f64 * ms / (L as f64 - 2.0).max(1.0)).min(u32::MAX as f64 / 2.0) as u32 + 1;
+                    cfg.accel = u32_of((cfg.accel as f64 * ms / (L as f64 - 2.0).max(1.0)).min(u32::MAX as f64 / 2.0)) + 1;
                 }
                 Err(RampError::TooLong { reachable_vmax }) => {
                     table_limited = true;
