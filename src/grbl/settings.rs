@@ -42,22 +42,86 @@ pub const STATUS_MASK: u16 = 10;
 pub const SPINDLE_PWM_HZ: u16 = 33; // grblHAL's number for the spindle PWM frequency
 
 /// Grbl settings we report but do not implement, with the only value they accept.
-const FIXED: [(u16, f32, u8); 7] = [
-    (11, 0.010, 3),  // junction deviation: every move stops (no look-ahead)
-    (13, 0.0, 0),    // report inches: no
-    (23, 0.0, 0),    // homing direction mask
-    (24, 25.0, 3),   // homing feed
-    (25, 500.0, 3),  // homing seek
-    (26, 250.0, 0),  // homing debounce
-    (27, 1.0, 3),    // homing pull-off
+/// (Their decimals for `$$` are in [`LOW`].)
+const FIXED: [(u16, f32); 7] = [
+    (11, 0.010), // junction deviation (the look-ahead's)
+    (13, 0.0),   // report inches: no
+    (23, 0.0),   // homing direction mask
+    (24, 25.0),  // homing feed
+    (25, 500.0), // homing seek
+    (26, 250.0), // homing debounce
+    (27, 1.0),   // homing pull-off
 ];
 
-/// Setting numbers below 100 in `$$` order: Grbl's, ours and the [`FIXED`] ones. (A table
-/// rather than an iterator chain over `FIXED`: ~400 bytes less flash.)
-const LOW_IDS: [u16; 27] = [
-    0, 1, 2, 3, 4, 5, 6, STATUS_MASK, 11, 12, 13, 20, 21, 22, 23, 24, 25, 26, 27, DIR_SETUP, 30,
-    31, 32, SPINDLE_PWM_HZ, RAMP_START, RAMP_SHAPE, AXIS_COUNT,
+/// How `$N=` checks one setting: the value range (an index into [`RANGES`]; bytes, flags and
+/// the fixed settings have their own rules), the decimals `$$` shows, what a change redoes.
+#[derive(Clone, Copy)]
+struct Spec {
+    id: u16,
+    range: u8,
+    decimals: u8,
+    change: Change,
+}
+
+/// Value ranges of the `f32` and `u32` settings (inclusive).
+const RANGES: [(f64, f64); 9] = [
+    (0.0, 0.0),                  // 0: no range (bytes, flags, fixed)
+    (0.2, 100.0),                // 1: $0 pulse (0.2 µs: TMC drivers need 100 ns; shorter no driver takes)
+    (1e-4, 1000.0),              // 2: $12 arc tolerance (below 0.1 µm a chord is far below a step)
+    (0.0, 1e6),                  // 3: $30/$31 spindle, $130+ travel
+    (1.0, 100_000.0),            // 4: $33 PWM frequency
+    (0.0, 1000.0),               // 5: $29 direction setup
+    (1.0, MAX_RATE_HZ as f64),   // 6: $40 ramp start
+    (1e-3, 1e5),                 // 7: $100+ steps per unit
+    (1e-3, 1e8),                 // 8: $110+ max rate, $120+ acceleration
 ];
+
+const fn spec(id: u16, range: u8, decimals: u8, change: Change) -> Spec {
+    Spec { id, range, decimals, change }
+}
+
+/// Settings below 100 in `$$` order: Grbl's, ours and the [`FIXED`] ones.
+const LOW: [Spec; 27] = {
+    use Change::{None as Fixed, Pins, Profile, Shell};
+    [
+        spec(0, 1, 3, Profile),
+        spec(1, 0, 0, Shell),
+        spec(2, 0, 0, Pins),
+        spec(3, 0, 0, Pins),
+        spec(4, 0, 0, Shell),
+        spec(5, 0, 0, Shell),
+        spec(6, 0, 0, Shell),
+        spec(STATUS_MASK, 0, 0, Shell),
+        spec(11, 0, 3, Fixed),
+        spec(12, 2, 3, Shell),
+        spec(13, 0, 0, Fixed),
+        spec(20, 0, 0, Shell),
+        spec(21, 0, 0, Shell),
+        spec(22, 0, 0, Shell),
+        spec(23, 0, 0, Fixed),
+        spec(24, 0, 3, Fixed),
+        spec(25, 0, 3, Fixed),
+        spec(26, 0, 0, Fixed),
+        spec(27, 0, 3, Fixed),
+        spec(DIR_SETUP, 5, 3, Profile),
+        spec(30, 3, 0, Shell),
+        spec(31, 3, 0, Shell),
+        spec(32, 0, 0, Shell),
+        spec(SPINDLE_PWM_HZ, 4, 0, Shell),
+        spec(RAMP_START, 6, 0, Profile),
+        spec(RAMP_SHAPE, 0, 0, Profile),
+        spec(AXIS_COUNT, 0, 0, Profile),
+    ]
+};
+
+/// A setting's field, for the one read and write path of `$$` and `$N=`.
+enum Slot<'a> {
+    Real(&'a mut f32),
+    Whole(&'a mut u32),
+    Byte(&'a mut u8),
+    Flag(&'a mut bool),
+    Shape(&'a mut Shape),
+}
 
 /// Persistent settings. Axis arrays are indexed X Y Z A B C U; only the firmware's first N
 /// axes are reported and used.
@@ -202,8 +266,8 @@ impl Settings {
     /// Setting number `i` of the `$$` listing for `axes` axes (`None` past the end).
     pub fn id(i: usize, axes: usize) -> Option<u16> {
         let axes = axes.min(MAX_AXES);
-        match i.checked_sub(LOW_IDS.len()) {
-            None => LOW_IDS.get(i).copied(),
+        match i.checked_sub(LOW.len()) {
+            None => LOW.get(i).map(|s| s.id),
             Some(j) if j < 4 * axes => Some(100 + 10 * (j / axes) as u16 + (j % axes) as u16),
             Some(_) => None,
         }
@@ -214,43 +278,76 @@ impl Settings {
         (0..).map_while(move |i| Self::id(i, axes))
     }
 
-    /// Value of setting `id` and its decimals for `$$`, if it exists for `axes` axes.
-    pub fn get(&self, id: u16, axes: usize) -> Option<(f64, u32)> {
-        let v = match id {
-            0 => (self.pulse_us as f64, 3),
-            1 => (self.idle_delay_ms as f64, 0),
-            2 => (self.step_invert as f64, 0),
-            3 => (self.dir_invert as f64, 0),
-            4 => (self.enable_invert as u8 as f64, 0),
-            5 => (self.limit_invert as u8 as f64, 0),
-            6 => (self.probe_invert as u8 as f64, 0),
-            12 => (self.arc_tolerance as f64, 3),
-            20 => (self.soft_limits as u8 as f64, 0),
-            21 => (self.hard_limits as u8 as f64, 0),
-            22 => (self.homing as u8 as f64, 0),
-            30 => (self.spindle_max as f64, 0),
-            31 => (self.spindle_min as f64, 0),
-            32 => (self.laser_mode as u8 as f64, 0),
-            SPINDLE_PWM_HZ => (self.spindle_pwm_hz as f64, 0),
-            DIR_SETUP => (self.dir_setup_us as f64, 3),
-            RAMP_START => (self.ramp_start_hz as f64, 0),
-            RAMP_SHAPE => ((self.shape == Shape::SCurve) as u8 as f64, 0),
-            STATUS_MASK => (self.status_mask as f64, 0),
-            AXIS_COUNT => (self.axes as f64, 0),
+    /// How setting `id` is checked, if it exists for `axes` axes (and the settings' own count).
+    fn spec(&self, id: u16, axes: usize) -> Option<Spec> {
+        use Change::{Profile, Shell};
+        match id {
             100..=139 => {
                 let (g, i) = ((id - 100) / 10, (id % 10) as usize);
                 if i >= axes.min(self.axes as usize).min(MAX_AXES) {
                     return None;
                 }
-                let arr = [&self.steps_per_mm, &self.max_rate, &self.accel, &self.max_travel];
-                (arr[g as usize][i] as f64, 3)
+                // $100+ steps/unit, $110+ max rate, $120+ acceleration, $130+ travel.
+                Some(match g {
+                    0 => spec(id, 7, 3, Profile),
+                    1 | 2 => spec(id, 8, 3, Profile),
+                    _ => spec(id, 3, 3, Shell),
+                })
             }
-            _ => {
-                let f = FIXED.iter().find(|f| f.0 == id)?;
-                (f.1 as f64, f.2 as u32)
+            _ => LOW.iter().find(|s| s.id == id).copied(),
+        }
+    }
+
+    /// The field of setting `id` (`None` for the fixed ones and unknown numbers).
+    fn slot(&mut self, id: u16) -> Option<Slot<'_>> {
+        use Slot::*;
+        Some(match id {
+            0 => Real(&mut self.pulse_us),
+            1 => Byte(&mut self.idle_delay_ms),
+            2 => Byte(&mut self.step_invert),
+            3 => Byte(&mut self.dir_invert),
+            4 => Flag(&mut self.enable_invert),
+            5 => Flag(&mut self.limit_invert),
+            6 => Flag(&mut self.probe_invert),
+            STATUS_MASK => Byte(&mut self.status_mask),
+            12 => Real(&mut self.arc_tolerance),
+            20 => Flag(&mut self.soft_limits),
+            21 => Flag(&mut self.hard_limits),
+            22 => Flag(&mut self.homing),
+            DIR_SETUP => Real(&mut self.dir_setup_us),
+            30 => Real(&mut self.spindle_max),
+            31 => Real(&mut self.spindle_min),
+            32 => Flag(&mut self.laser_mode),
+            SPINDLE_PWM_HZ => Whole(&mut self.spindle_pwm_hz),
+            RAMP_START => Whole(&mut self.ramp_start_hz),
+            RAMP_SHAPE => Shape(&mut self.shape),
+            AXIS_COUNT => Byte(&mut self.axes),
+            100..=139 => {
+                let arr = match (id - 100) / 10 {
+                    0 => &mut self.steps_per_mm,
+                    1 => &mut self.max_rate,
+                    2 => &mut self.accel,
+                    _ => &mut self.max_travel,
+                };
+                Real(arr.get_mut((id % 10) as usize)?)
             }
+            _ => return None,
+        })
+    }
+
+    /// Value of setting `id` and its decimals for `$$`, if it exists for `axes` axes.
+    pub fn get(&self, id: u16, axes: usize) -> Option<(f64, u32)> {
+        let spec = self.spec(id, axes)?;
+        let mut s = *self;
+        let v = match s.slot(id) {
+            Some(Slot::Real(v)) => *v as f64,
+            Some(Slot::Whole(v)) => *v as f64,
+            Some(Slot::Byte(v)) => *v as f64,
+            Some(Slot::Flag(v)) => *v as u8 as f64,
+            Some(Slot::Shape(v)) => (*v == Shape::SCurve) as u8 as f64,
+            None => FIXED.iter().find(|f| f.0 == id)?.1 as f64,
         };
-        Some(v)
+        Some((v, spec.decimals as u32))
     }
 
     /// `$id=value`: checks and stores one setting (Grbl's rules: negative values refused,
@@ -263,149 +360,56 @@ impl Settings {
             return Err(Error::NegativeValue);
         }
         let int = libm::trunc(value);
-        let byte = || if int <= 255.0 { Ok(u32_of(int) as u8) } else { Err(Error::InvalidStatement) };
-        let range = |lo: f64, hi: f64| {
-            if (lo..=hi).contains(&value) {
-                Ok(value as f32)
-            } else {
-                Err(Error::InvalidStatement)
-            }
-        };
-        match id {
-            0 => {
-                // 0.2 µs: TMC drivers need 100 ns; shorter than that no driver takes.
-                if value < 0.2 {
-                    return Err(Error::StepPulseMin);
-                }
-                self.pulse_us = range(0.2, 100.0)?;
-                Ok(Change::Profile)
-            }
-            1 => {
-                self.idle_delay_ms = byte()?;
-                Ok(Change::Shell)
-            }
-            2 => {
-                self.step_invert = byte()?;
-                Ok(Change::Pins)
-            }
-            3 => {
-                self.dir_invert = byte()?;
-                Ok(Change::Pins)
-            }
-            4 => {
-                self.enable_invert = int != 0.0;
-                Ok(Change::Shell)
-            }
-            5 => {
-                self.limit_invert = int != 0.0;
-                Ok(Change::Shell)
-            }
-            6 => {
-                self.probe_invert = int != 0.0;
-                Ok(Change::Shell)
-            }
-            20 => {
-                // Grbl's rule: soft limits need homing (a known machine position).
-                if int != 0.0 && !self.homing {
-                    return Err(Error::SoftLimitNeedsHoming);
-                }
-                self.soft_limits = int != 0.0;
-                Ok(Change::Shell)
-            }
-            21 => {
-                self.hard_limits = int != 0.0;
-                Ok(Change::Shell)
-            }
-            22 => {
-                // Turning homing off turns soft limits off too (Grbl).
-                self.homing = int != 0.0;
-                self.soft_limits &= self.homing;
-                Ok(Change::Shell)
-            }
-            12 => {
-                // Grbl takes any positive value; below 0.1 µm a chord is far below a step.
-                self.arc_tolerance = range(1e-4, 1000.0)?;
-                Ok(Change::Shell)
-            }
-            30 | 31 => {
-                let v = range(0.0, 1e6)?;
-                *(if id == 30 { &mut self.spindle_max } else { &mut self.spindle_min }) = v;
-                Ok(Change::Shell)
-            }
-            32 => {
-                self.laser_mode = int != 0.0;
-                Ok(Change::Shell)
-            }
-            SPINDLE_PWM_HZ => {
-                range(1.0, 100_000.0)?;
-                self.spindle_pwm_hz = u32_of(value);
-                Ok(Change::Shell)
-            }
-            DIR_SETUP => {
-                self.dir_setup_us = range(0.0, 1000.0)?;
-                Ok(Change::Profile)
-            }
-            RAMP_START => {
-                range(1.0, MAX_RATE_HZ as f64)?;
-                self.ramp_start_hz = u32_of(value);
-                Ok(Change::Profile)
-            }
-            RAMP_SHAPE => {
-                self.shape = match u32_of(int) {
-                    0 => Shape::Trapezoid,
-                    1 => Shape::SCurve,
-                    _ => return Err(Error::InvalidStatement),
-                };
-                Ok(Change::Profile)
-            }
-            STATUS_MASK => {
-                self.status_mask = byte()? & 3;
-                Ok(Change::Shell)
-            }
-            AXIS_COUNT => {
-                if !(3.0..=axes.min(MAX_AXES) as f64).contains(&int) {
-                    return Err(Error::InvalidStatement);
-                }
-                self.axes = u32_of(int) as u8;
-                Ok(Change::Profile)
-            }
-            100..=139 => {
-                let (g, i) = ((id - 100) / 10, (id % 10) as usize);
-                if i >= axes.min(self.axes as usize).min(MAX_AXES) {
-                    return Err(Error::InvalidStatement);
-                }
-                let (arr, v) = match g {
-                    0 => (&mut self.steps_per_mm, range(1e-3, 1e5)?),
-                    1 => (&mut self.max_rate, range(1e-3, 1e8)?),
-                    2 => (&mut self.accel, range(1e-3, 1e8)?),
-                    _ => (&mut self.max_travel, range(0.0, 1e6)?),
-                };
-                arr[i] = v;
-                Ok(if g == 3 { Change::Shell } else { Change::Profile })
-            }
-            _ => {
+        let spec = self.spec(id, axes).ok_or(Error::InvalidStatement)?;
+        let bad = Err(Error::InvalidStatement);
+        if id == 0 && value < 0.2 {
+            return Err(Error::StepPulseMin);
+        }
+        // Grbl's rule: soft limits need homing (a known machine position).
+        if id == 20 && int != 0.0 && !self.homing {
+            return Err(Error::SoftLimitNeedsHoming);
+        }
+        if id == AXIS_COUNT && !(3.0..=axes.min(MAX_AXES) as f64).contains(&int) {
+            return bad;
+        }
+        let (lo, hi) = RANGES[spec.range as usize];
+        let in_range = (lo..=hi).contains(&value);
+        match self.slot(id) {
+            Some(Slot::Real(v)) if in_range => *v = value as f32,
+            Some(Slot::Whole(v)) if in_range => *v = u32_of(value),
+            Some(Slot::Byte(v)) if int <= 255.0 => *v = u32_of(int) as u8,
+            Some(Slot::Flag(v)) => *v = int != 0.0,
+            Some(Slot::Shape(v)) if int <= 1.0 => *v = if int == 0.0 { Shape::Trapezoid } else { Shape::SCurve },
+            Some(_) => return bad,
+            None => {
                 let f = FIXED.iter().find(|f| f.0 == id).ok_or(Error::InvalidStatement)?;
-                if libm::fabs(value - f.1 as f64) < 1e-6 {
-                    Ok(Change::None)
-                } else {
-                    Err(Error::InvalidStatement)
-                }
+                return if libm::fabs(value - f.1 as f64) < 1e-6 { Ok(Change::None) } else { bad };
             }
         }
+        if id == STATUS_MASK {
+            self.status_mask &= 3;
+        }
+        // Turning homing off turns soft limits off too (Grbl).
+        if id == 22 {
+            self.soft_limits &= self.homing;
+        }
+        Ok(spec.change)
     }
 
     /// True when every field is in the range [`Self::set`] accepts.
     pub fn is_valid(&self) -> bool {
-        // Every axis is checked, also those beyond the axis count.
+        // Every axis is checked, also those beyond the axis count. Each value must come back
+        // unchanged from `set` (compared as bits: no f32 compare routines in the firmware).
         let full = Settings { axes: MAX_AXES as u8, ..*self };
         let mut probe = full;
         let mut ok = (3..=MAX_AXES as u8).contains(&self.axes);
         for id in Self::ids(MAX_AXES).filter(|&id| id != AXIS_COUNT) {
             if let Some((v, _)) = full.get(id, MAX_AXES) {
-                ok &= probe.set(id, v, MAX_AXES).is_ok();
+                ok &= probe.set(id, v, MAX_AXES).is_ok()
+                    && probe.get(id, MAX_AXES).map(|g| g.0.to_bits()) == Some(v.to_bits());
             }
         }
-        ok && probe == full
+        ok
     }
 
     /// Step timing in timer ticks.
@@ -599,7 +603,7 @@ mod tests {
             0, 1, 2, 3, 4, 5, 6, STATUS_MASK, 12, 20, 21, 22, 30, 31, 32, SPINDLE_PWM_HZ, DIR_SETUP, RAMP_START, RAMP_SHAPE,
             AXIS_COUNT,
         ];
-        assert_eq!(LOW_IDS.len(), ours.len() + FIXED.len());
-        assert!(ours.iter().chain(FIXED.iter().map(|f| &f.0)).all(|id| LOW_IDS.contains(id)));
+        assert_eq!(LOW.len(), ours.len() + FIXED.len());
+        assert!(ours.iter().chain(FIXED.iter().map(|f| &f.0)).all(|id| LOW.iter().any(|s| s.id == *id)));
     }
 }
