@@ -119,22 +119,26 @@ struct Job<const N: usize> {
 }
 
 impl<const N: usize> Job<N> {
-    const NONE: Self = Job {
-        listing: None,
-        dwell_ms: None,
-        dwell_end: None,
-        mv: None,
-        mv2: None,
-        jog: false,
-        arc: None,
-        rate: Rate::Rapid,
-        tool: None,
-        power: Power { speed: 0.0, dynamic: false, cruise_hz: 0.0 },
-        drivers_off: false,
-        pause: false,
-        end: false,
-        save: false,
-    };
+    /// Nothing to do. (A function, not a constant: a constant of this size would be copied
+    /// from flash whole, payloads of its `None`s included.)
+    fn none() -> Self {
+        Job {
+            listing: None,
+            dwell_ms: None,
+            dwell_end: None,
+            mv: None,
+            mv2: None,
+            jog: false,
+            arc: None,
+            rate: Rate::Rapid,
+            tool: None,
+            power: Power { speed: 0.0, dynamic: false, cruise_hz: 0.0 },
+            drivers_off: false,
+            pause: false,
+            end: false,
+            save: false,
+        }
+    }
 }
 
 /// The Grbl-compatible controller for up to `N` axes (`$42` of them in use).
@@ -674,7 +678,7 @@ impl<'a, const N: usize> Controller<'a, N> {
     fn save_later(&mut self, out: &mut impl Out) {
         match &mut self.job {
             Some(j) => j.save = true,
-            None => self.start(Job { save: true, ..Job::NONE }, out),
+            None => self.start(Job { save: true, ..Job::none() }, out),
         }
     }
 
@@ -771,7 +775,7 @@ impl<'a, const N: usize> Controller<'a, N> {
             pause: fx.stop == Some(Stop::Pause),
             end: fx.stop == Some(Stop::End),
             save: store,
-            ..Job::NONE
+            ..Job::none()
         };
         self.start(job, out);
         Ok(())

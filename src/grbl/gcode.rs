@@ -175,31 +175,34 @@ pub struct Block<const N: usize> {
 }
 
 impl<const N: usize> Block<N> {
-    const EMPTY: Self = Block {
-        groups: 0,
-        axis_cmd: false,
-        motion: None,
-        non_modal: None,
-        plane: None,
-        relative: None,
-        inches: None,
-        stop: None,
-        drivers: None,
-        coord: None,
-        tool_length: None,
-        inverse_time: None,
-        spindle: None,
-        coolant: None,
-        axes: [None; N],
-        ijk: [None; 3],
-        r: None,
-        f: None,
-        l: None,
-        p: None,
-        s: None,
-        t: None,
-        n: None,
-    };
+    /// No words. (A function, not a constant: see `Job::none` in the controller.)
+    fn empty() -> Self {
+        Block {
+            groups: 0,
+            axis_cmd: false,
+            motion: None,
+            non_modal: None,
+            plane: None,
+            relative: None,
+            inches: None,
+            stop: None,
+            drivers: None,
+            coord: None,
+            tool_length: None,
+            inverse_time: None,
+            spindle: None,
+            coolant: None,
+            axes: [None; N],
+            ijk: [None; 3],
+            r: None,
+            f: None,
+            l: None,
+            p: None,
+            s: None,
+            t: None,
+            n: None,
+        }
+    }
 
     /// Claims a modal group: a second command of one group is an error.
     fn claim(&mut self, g: u16) -> Result<(), Error> {
@@ -231,7 +234,7 @@ impl<const N: usize> Block<N> {
 
 /// Parses a cleaned line (upper case, no whitespace or comments) into a block.
 pub fn parse<const N: usize>(line: &[u8]) -> Result<Block<N>, Error> {
-    let mut b = Block::<N>::EMPTY;
+    let mut b = Block::<N>::empty();
     let mut i = 0;
     while i < line.len() {
         let letter = line[i];

@@ -33,7 +33,7 @@ impl<const N: usize> Controller<'_, N> {
         let mut planner = self.planner;
         let mv = planner.line(&j.target, Some(j.feed), &self.limits)?;
         self.planner = planner;
-        self.start(Job { mv, jog: true, ..Job::NONE }, out);
+        self.start(Job { mv, jog: true, ..Job::none() }, out);
         Ok(())
     }
 

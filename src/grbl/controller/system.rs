@@ -38,11 +38,11 @@ impl<const N: usize> Controller<'_, N> {
             }
             b"$" => {
                 need_idle(idle || self.check)?;
-                self.start(Job { listing: Some(Listing::Settings(0)), ..Job::NONE }, out);
+                self.start(Job { listing: Some(Listing::Settings(0)), ..Job::none() }, out);
             }
             b"#" => {
                 need_idle(idle)?;
-                self.start(Job { listing: Some(Listing::Params(0)), ..Job::NONE }, out);
+                self.start(Job { listing: Some(Listing::Params(0)), ..Job::none() }, out);
             }
             b"I" => {
                 need_idle(idle)?;
