@@ -25,6 +25,8 @@ const VERSION: u8 = 3;
 /// Byte offset of the settings after the axis arrays: `$12`, `$30`, `$31`, `$33` (f32, u32),
 /// `$32` (flag byte); CRC last.
 const TAIL: usize = 24 + 4 * 4 * MAX_AXES;
+/// Byte offset of the flag bits (`$4`, `$5`, `$6`, `$20`, `$22`, `$21` as bits 0..=5).
+const FLAGS: usize = 19;
 /// Absolute floor of the step period (ticks; 144 = 500 kHz, the engine's design limit). The
 /// binding limits are the pulse rule and the step handler's measured cost, both applied by
 /// `Timing::min_period_for`.
@@ -54,14 +56,21 @@ const FIXED: [(u16, f32); 7] = [
 ];
 
 /// How `$N=` checks one setting: the value range (an index into [`RANGES`]; bytes, flags and
-/// the fixed settings have their own rules), the decimals `$$` shows, what a change redoes.
+/// the fixed settings have their own rules), the decimals `$$` shows, what a change redoes;
+/// and where the flash image keeps it: byte `at`, and for a flag its bit (`WHOLE`: the byte is
+/// 0 or 1).
 #[derive(Clone, Copy)]
 struct Spec {
     id: u16,
     range: u8,
     decimals: u8,
     change: Change,
+    at: u8,
+    bit: u8,
 }
+
+/// [`Spec::bit`] of a flag (or the shape) that has a byte of its own.
+const WHOLE: u8 = 8;
 
 /// Value ranges of the `f32` and `u32` settings (inclusive).
 const RANGES: [(f64, f64); 9] = [
@@ -76,41 +85,41 @@ const RANGES: [(f64, f64); 9] = [
     (1e-3, 1e8),                 // 8: $110+ max rate, $120+ acceleration
 ];
 
-const fn spec(id: u16, range: u8, decimals: u8, change: Change) -> Spec {
-    Spec { id, range, decimals, change }
+const fn spec(id: u16, range: u8, decimals: u8, change: Change, at: usize, bit: u8) -> Spec {
+    Spec { id, range, decimals, change, at: at as u8, bit }
 }
 
 /// Settings below 100 in `$$` order: Grbl's, ours and the [`FIXED`] ones.
 const LOW: [Spec; 27] = {
     use Change::{None as Fixed, Pins, Profile, Shell};
     [
-        spec(0, 1, 3, Profile),
-        spec(1, 0, 0, Shell),
-        spec(2, 0, 0, Pins),
-        spec(3, 0, 0, Pins),
-        spec(4, 0, 0, Shell),
-        spec(5, 0, 0, Shell),
-        spec(6, 0, 0, Shell),
-        spec(STATUS_MASK, 0, 0, Shell),
-        spec(11, 0, 3, Fixed),
-        spec(12, 2, 3, Shell),
-        spec(13, 0, 0, Fixed),
-        spec(20, 0, 0, Shell),
-        spec(21, 0, 0, Shell),
-        spec(22, 0, 0, Shell),
-        spec(23, 0, 0, Fixed),
-        spec(24, 0, 3, Fixed),
-        spec(25, 0, 3, Fixed),
-        spec(26, 0, 0, Fixed),
-        spec(27, 0, 3, Fixed),
-        spec(DIR_SETUP, 5, 3, Profile),
-        spec(30, 3, 0, Shell),
-        spec(31, 3, 0, Shell),
-        spec(32, 0, 0, Shell),
-        spec(SPINDLE_PWM_HZ, 4, 0, Shell),
-        spec(RAMP_START, 6, 0, Profile),
-        spec(RAMP_SHAPE, 0, 0, Profile),
-        spec(AXIS_COUNT, 0, 0, Profile),
+        spec(0, 1, 3, Profile, 4, 0),
+        spec(1, 0, 0, Shell, 16, 0),
+        spec(2, 0, 0, Pins, 17, 0),
+        spec(3, 0, 0, Pins, 18, 0),
+        spec(4, 0, 0, Shell, FLAGS, 0),
+        spec(5, 0, 0, Shell, FLAGS, 1),
+        spec(6, 0, 0, Shell, FLAGS, 2),
+        spec(STATUS_MASK, 0, 0, Shell, 22, 0),
+        spec(11, 0, 3, Fixed, 0, 0),
+        spec(12, 2, 3, Shell, TAIL, 0),
+        spec(13, 0, 0, Fixed, 0, 0),
+        spec(20, 0, 0, Shell, FLAGS, 3),
+        spec(21, 0, 0, Shell, FLAGS, 5),
+        spec(22, 0, 0, Shell, FLAGS, 4),
+        spec(23, 0, 0, Fixed, 0, 0),
+        spec(24, 0, 3, Fixed, 0, 0),
+        spec(25, 0, 3, Fixed, 0, 0),
+        spec(26, 0, 0, Fixed, 0, 0),
+        spec(27, 0, 3, Fixed, 0, 0),
+        spec(DIR_SETUP, 5, 3, Profile, 8, 0),
+        spec(30, 3, 0, Shell, TAIL + 4, 0),
+        spec(31, 3, 0, Shell, TAIL + 8, 0),
+        spec(32, 0, 0, Shell, TAIL + 16, WHOLE),
+        spec(SPINDLE_PWM_HZ, 4, 0, Shell, TAIL + 12, 0),
+        spec(RAMP_START, 6, 0, Profile, 12, 0),
+        spec(RAMP_SHAPE, 0, 0, Profile, 20, WHOLE),
+        spec(AXIS_COUNT, 0, 0, Profile, 21, 0),
     ]
 };
 
@@ -278,20 +287,22 @@ impl Settings {
         (0..).map_while(move |i| Self::id(i, axes))
     }
 
-    /// How setting `id` is checked, if it exists for `axes` axes (and the settings' own count).
-    fn spec(&self, id: u16, axes: usize) -> Option<Spec> {
+    /// How setting `id` is checked and stored, if it exists for `axes` axes.
+    fn spec(id: u16, axes: usize) -> Option<Spec> {
         use Change::{Profile, Shell};
         match id {
             100..=139 => {
                 let (g, i) = ((id - 100) / 10, (id % 10) as usize);
-                if i >= axes.min(self.axes as usize).min(MAX_AXES) {
+                if i >= axes.min(MAX_AXES) {
                     return None;
                 }
-                // $100+ steps/unit, $110+ max rate, $120+ acceleration, $130+ travel.
+                // $100+ steps/unit, $110+ max rate, $120+ acceleration, $130+ travel: from
+                // byte 24, in that order.
+                let at = 24 + 4 * (g as usize * MAX_AXES + i);
                 Some(match g {
-                    0 => spec(id, 7, 3, Profile),
-                    1 | 2 => spec(id, 8, 3, Profile),
-                    _ => spec(id, 3, 3, Shell),
+                    0 => spec(id, 7, 3, Profile, at, 0),
+                    1 | 2 => spec(id, 8, 3, Profile, at, 0),
+                    _ => spec(id, 3, 3, Shell, at, 0),
                 })
             }
             _ => LOW.iter().find(|s| s.id == id).copied(),
@@ -337,7 +348,7 @@ impl Settings {
 
     /// Value of setting `id` and its decimals for `$$`, if it exists for `axes` axes.
     pub fn get(&self, id: u16, axes: usize) -> Option<(f64, u32)> {
-        let spec = self.spec(id, axes)?;
+        let spec = Self::spec(id, axes.min(self.axes as usize))?;
         let mut s = *self;
         let v = match s.slot(id) {
             Some(Slot::Real(v)) => *v as f64,
@@ -360,7 +371,7 @@ impl Settings {
             return Err(Error::NegativeValue);
         }
         let int = libm::trunc(value);
-        let spec = self.spec(id, axes).ok_or(Error::InvalidStatement)?;
+        let spec = Self::spec(id, axes.min(self.axes as usize)).ok_or(Error::InvalidStatement)?;
         let bad = Err(Error::InvalidStatement);
         if id == 0 && value < 0.2 {
             return Err(Error::StepPulseMin);
@@ -490,37 +501,28 @@ impl Settings {
         Ramped { cfg, max_rate_hz: timing.max_rate_hz(), table_limited }
     }
 
-    /// The flash image: magic, version, fields (little-endian), CRC-32.
+    /// The flash image: magic, version, fields (little-endian, where [`LOW`] and
+    /// [`Self::spec`] put them), CRC-32.
     pub fn to_bytes(&self) -> [u8; SETTINGS_LEN] {
         let mut b = [0u8; SETTINGS_LEN];
-        b[0] = MAGIC;
-        b[1] = VERSION;
-        b[2..4].copy_from_slice(&(SETTINGS_LEN as u16).to_le_bytes());
-        b[4..8].copy_from_slice(&self.pulse_us.to_le_bytes());
-        b[8..12].copy_from_slice(&self.dir_setup_us.to_le_bytes());
-        b[12..16].copy_from_slice(&self.ramp_start_hz.to_le_bytes());
-        b[16] = self.idle_delay_ms;
-        b[17] = self.step_invert;
-        b[18] = self.dir_invert;
-        b[19] = self.enable_invert as u8
-            | (self.limit_invert as u8) << 1
-            | (self.probe_invert as u8) << 2
-            | (self.soft_limits as u8) << 3
-            | (self.homing as u8) << 4
-            | (self.hard_limits as u8) << 5;
-        b[20] = (self.shape == Shape::SCurve) as u8;
-        b[21] = self.axes;
-        b[22] = self.status_mask;
-        // Axis arrays from byte 24, in field order (chunks, not computed indices: no panic path).
-        let values = [&self.steps_per_mm, &self.max_rate, &self.accel, &self.max_travel].into_iter().flatten();
-        for (w, v) in b[24..].chunks_exact_mut(4).zip(values) {
-            w.copy_from_slice(&v.to_le_bytes());
+        b[..4].copy_from_slice(&[MAGIC, VERSION, SETTINGS_LEN as u8, (SETTINGS_LEN >> 8) as u8]);
+        let mut s = *self;
+        for id in Self::ids(MAX_AXES) {
+            let (Some(spec), Some(slot)) = (Self::spec(id, MAX_AXES), s.slot(id)) else { continue };
+            let at = spec.at as usize;
+            // Bytes and flags share their word with their neighbours: OR them in.
+            let (word, own) = match slot {
+                Slot::Real(v) => (v.to_bits(), true),
+                Slot::Whole(v) => (*v, true),
+                Slot::Byte(v) => (*v as u32, false),
+                Slot::Flag(v) => ((*v as u32) << (spec.bit & 7), false),
+                Slot::Shape(v) => ((*v == Shape::SCurve) as u32, false),
+            };
+            if let Some(w) = b.get_mut(at..at + 4) {
+                let old = u32::from_le_bytes([w[0], w[1], w[2], w[3]]);
+                w.copy_from_slice(&(if own { word } else { old | word }).to_le_bytes());
+            }
         }
-        b[TAIL..TAIL + 4].copy_from_slice(&self.arc_tolerance.to_le_bytes());
-        b[TAIL + 4..TAIL + 8].copy_from_slice(&self.spindle_max.to_le_bytes());
-        b[TAIL + 8..TAIL + 12].copy_from_slice(&self.spindle_min.to_le_bytes());
-        b[TAIL + 12..TAIL + 16].copy_from_slice(&self.spindle_pwm_hz.to_le_bytes());
-        b[TAIL + 16] = self.laser_mode as u8;
         let crc = crc32(&b[..SETTINGS_LEN - 4]);
         b[SETTINGS_LEN - 4..].copy_from_slice(&crc.to_le_bytes());
         b
@@ -530,47 +532,30 @@ impl Settings {
     /// checksum, a value out of range).
     pub fn decode(b: &[u8]) -> Option<Settings> {
         let b: &[u8; SETTINGS_LEN] = b.get(..SETTINGS_LEN)?.try_into().ok()?;
-        let word = |at: usize| [b[at], b[at + 1], b[at + 2], b[at + 3]];
-        if b[0] != MAGIC || b[1] != VERSION || b[2..4] != (SETTINGS_LEN as u16).to_le_bytes() {
+        let word = |at: usize| u32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]]);
+        if word(0) != u32::from_le_bytes([MAGIC, VERSION, SETTINGS_LEN as u8, (SETTINGS_LEN >> 8) as u8]) {
             return None;
         }
-        if crc32(&b[..SETTINGS_LEN - 4]) != u32::from_le_bytes(word(SETTINGS_LEN - 4)) {
+        if crc32(&b[..SETTINGS_LEN - 4]) != word(SETTINGS_LEN - 4) {
             return None;
         }
-        let mut s = Settings {
-            pulse_us: f32::from_le_bytes(word(4)),
-            dir_setup_us: f32::from_le_bytes(word(8)),
-            ramp_start_hz: u32::from_le_bytes(word(12)),
-            arc_tolerance: f32::from_le_bytes(word(TAIL)),
-            spindle_max: f32::from_le_bytes(word(TAIL + 4)),
-            spindle_min: f32::from_le_bytes(word(TAIL + 8)),
-            spindle_pwm_hz: u32::from_le_bytes(word(TAIL + 12)),
-            laser_mode: match b[TAIL + 16] {
-                0 => false,
-                1 => true,
-                _ => return None,
-            },
-            idle_delay_ms: b[16],
-            step_invert: b[17],
-            dir_invert: b[18],
-            enable_invert: b[19] & 1 != 0,
-            limit_invert: b[19] & 2 != 0,
-            probe_invert: b[19] & 4 != 0,
-            soft_limits: b[19] & 8 != 0,
-            homing: b[19] & 16 != 0,
-            hard_limits: b[19] & 32 != 0,
-            shape: match b[20] {
-                0 => Shape::Trapezoid,
-                1 => Shape::SCurve,
-                _ => return None,
-            },
-            axes: b[21],
-            status_mask: b[22],
-            ..Settings::DEFAULT
-        };
-        let values = [&mut s.steps_per_mm, &mut s.max_rate, &mut s.accel, &mut s.max_travel].into_iter().flatten();
-        for (w, v) in b[24..].chunks_exact(4).zip(values) {
-            *v = f32::from_le_bytes([w[0], w[1], w[2], w[3]]);
+        let mut s = Settings::DEFAULT;
+        for id in Self::ids(MAX_AXES) {
+            let (Some(spec), Some(slot)) = (Self::spec(id, MAX_AXES), s.slot(id)) else { continue };
+            let at = (spec.at as usize).min(SETTINGS_LEN - 8);
+            let byte = b[at];
+            let flag = match spec.bit {
+                WHOLE if byte > 1 => return None,
+                WHOLE => byte != 0,
+                bit => byte >> (bit & 7) & 1 != 0,
+            };
+            match slot {
+                Slot::Real(v) => *v = f32::from_bits(word(at)),
+                Slot::Whole(v) => *v = word(at),
+                Slot::Byte(v) => *v = byte,
+                Slot::Flag(v) => *v = flag,
+                Slot::Shape(v) => *v = if flag { Shape::SCurve } else { Shape::Trapezoid },
+            }
         }
         s.is_valid().then_some(s)
     }
