@@ -689,22 +689,23 @@ impl<'a, const N: usize> Controller<'a, N> {
         if block.axes[self.axes..].iter().any(Option::is_some) {
             return Err(Error::UnsupportedCommand);
         }
-        let (modal, fx) = self.modal.interpret_with(&block, self.planner.position_mm(), &self.offsets)?;
+        let mut fx = gcode::Effects::none();
+        let modal = self.modal.interpret_into(&block, self.planner.position_mm(), &self.offsets, &mut fx)?;
         let mut planner = self.planner;
         let mut offsets = self.offsets;
         // G93: F is 1/minutes (checked positive where a motion needs it).
         let rate = if modal.inverse_time { Rate::Minutes(1.0 / modal.feed) } else { Rate::Feed(modal.feed) };
         let cfg = self.ramped.cfg;
         let lim = self.move_limits();
-        let mv = match fx.motion {
-            Some((t, rapid)) => plan(&mut planner, &t, if rapid { Rate::Rapid } else { rate }, &lim, &cfg)?,
+        let mv = match &fx.motion {
+            Some((t, rapid)) => plan(&mut planner, t, if *rapid { Rate::Rapid } else { rate }, &lim, &cfg)?,
             None => None,
         };
-        let mv2 = match fx.home {
-            Some(t) => planner.line(&t, None, &lim)?,
+        let mv2 = match &fx.home {
+            Some(t) => planner.line(t, None, &lim)?,
             None => None,
         };
-        let (arc, rate) = match fx.arc {
+        let (arc, rate) = match &fx.arc {
             Some(a) => {
                 a.check_range(&self.limits.steps_per_mm)?;
                 let seg = a.segments(self.settings.arc_tolerance as f64);
@@ -720,18 +721,18 @@ impl<'a, const N: usize> Controller<'a, N> {
         // Soft limits: every target this line moves to, arc chord ends included (a chord
         // between two points in the box stays in it).
         let arc_out = arc.is_some_and(|mut seg| seg.any(|p| self.beyond_travel(&p)));
-        let home_out = fx.home.is_some_and(|t| self.beyond_travel(&t));
-        if arc_out || home_out || fx.motion.is_some_and(|(t, _)| self.beyond_travel(&t)) {
+        let home_out = fx.home.as_ref().is_some_and(|t| self.beyond_travel(t));
+        if arc_out || home_out || fx.motion.as_ref().is_some_and(|(t, _)| self.beyond_travel(t)) {
             self.soft_limit_trip();
             return Ok(());
         }
         let mut store = false;
-        if let Some((slot, v)) = fx.coord_write {
-            offsets.stored.set(slot, &v);
+        if let Some((slot, v)) = &fx.coord_write {
+            offsets.stored.set(*slot, v);
             store = true;
         }
-        if let Some(g) = fx.g92 {
-            offsets.g92 = g;
+        if let Some(g) = &fx.g92 {
+            offsets.g92 = *g;
         }
         if let Some(t) = fx.tlo {
             offsets.tlo = t;
@@ -746,7 +747,7 @@ impl<'a, const N: usize> Controller<'a, N> {
         self.planner = planner;
         self.offsets = offsets;
         if self.check {
-            if let Some(a) = fx.arc {
+            if let Some(a) = &fx.arc {
                 // Check mode: only the position follows the arc.
                 // (Infallible after `check_range`: nothing may fail once committed.)
                 let _ = self.planner.line(a.target(), None, &self.limits);

@@ -437,6 +437,13 @@ pub struct Effects<const N: usize> {
     pub stop: Option<Stop>,
 }
 
+impl<const N: usize> Effects<N> {
+    /// Nothing to do.
+    pub fn none() -> Self {
+        Effects { drivers: None, dwell_ms: None, coord_write: None, g92: None, tlo: None, motion: None, arc: None, home: None, stop: None }
+    }
+}
+
 /// The parser state that outlives a line (Grbl's `gc_state.modal` plus F, S, T).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Modal {
@@ -497,6 +504,20 @@ impl Modal {
         pos: &[f64; N],
         off: &Offsets<N>,
     ) -> Result<(Modal, Effects<N>), Error> {
+        let mut fx = Effects::none();
+        let m = self.interpret_into(b, pos, off, &mut fx)?;
+        Ok((m, fx))
+    }
+
+    /// [`Self::interpret_with`] writing what to do into `fx` (given as [`Effects::none`]), so
+    /// the effects, half a kilobyte on seven axes, are not copied on the way out.
+    pub fn interpret_into<const N: usize>(
+        &self,
+        b: &Block<N>,
+        pos: &[f64; N],
+        off: &Offsets<N>,
+        fx: &mut Effects<N>,
+    ) -> Result<Modal, Error> {
         let mut m = *self;
         if b.n.is_some_and(|n| n > MAX_LINE_NUMBER) {
             return Err(Error::InvalidLineNumber);
@@ -542,17 +563,8 @@ impl Modal {
             }
             m.tool = u32_of(t);
         }
-        let mut fx = Effects {
-            drivers: b.drivers,
-            dwell_ms: None,
-            coord_write: None,
-            g92: None,
-            tlo: None,
-            motion: None,
-            arc: None,
-            home: None,
-            stop: b.stop,
-        };
+        fx.drivers = b.drivers;
+        fx.stop = b.stop;
         let nm = b.non_modal;
         if b.l.is_some() && nm != Some(NonModal::SetCoordData) {
             return Err(Error::UnusedWords);
@@ -638,7 +650,7 @@ impl Modal {
                 ..m
             };
         }
-        Ok((m, fx))
+        Ok(m)
     }
 }
 
