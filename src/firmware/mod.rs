@@ -3,6 +3,7 @@
 mod boot;
 mod hw;
 mod limits;
+mod mem;
 mod panic;
 mod watchdog;
 
