@@ -134,6 +134,17 @@ fn g93_duration(settings: Settings, line: &str) -> (u64, u64, Bench<3>) {
     (steps[0], *steps.last().unwrap(), b)
 }
 
+/// The ramp the engine walks for a move of `steps` (per axis) on the settings `s` and the
+/// table `cfg`, from its geometry: the master's steps per mm of path and the path acceleration
+/// every moving axis allows (`min $120+i / |unitᵢ|`), as Grbl limits a move.
+fn master_ramp(s: &Settings, steps: [u32; 3], cfg: &ddastep::ramp::RampConfig) -> inverse_time::MasterRamp {
+    let d: Vec<f64> = (0..3).map(|i| steps[i] as f64 / s.steps_per_mm[i] as f64).collect();
+    let len = d.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let accel = (0..3).filter(|&i| steps[i] != 0).map(|i| s.accel[i] as f64 * len / d[i]).fold(f64::MAX, f64::min);
+    let master = *steps.iter().max().unwrap() as f64;
+    inverse_time::MasterRamp::new(master / len, accel, s.per_mm(3) as f64, cfg)
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(24))]
 
@@ -148,18 +159,19 @@ proptest! {
         let line = format!("G1 X{}.{:02} Y-{}.{:02} Z{}.{:02} F{:.9}", x / 100, x % 100, y / 100, y % 100, z / 100, z % 100, 1.0 / (seconds / 60.0));
         let (first, last, b) = g93_duration(s, &line);
         let master = x.max(y).max(z) as u64;
-        let cfg = b.ctl.ramped().cfg;
-        let v = inverse_time::cruise_hz(master, seconds, &cfg);
-        let feasible = (inverse_time::duration_s(master, v, &cfg) - seconds).abs() < 1e-9;
+        let ramp = master_ramp(&s, [x, y, z], &b.ctl.ramped().cfg);
+        let v = inverse_time::cruise_hz(master, seconds, &ramp);
+        let feasible = (inverse_time::duration_s(master, v, &ramp) - seconds).abs() < 1e-9;
         // Faster than the axes allow ($110 = 60 kHz on every axis): Grbl's clamp to the max
         // rate; shorter than the ramp allows: the fastest triangle. Either runs longer.
         let v = v.min(60_000.0);
-        let expected = inverse_time::duration_s(master, v, &cfg);
+        let expected = inverse_time::duration_s(master, v, &ramp);
         prop_assert!(feasible || expected > seconds);
+        prop_assert!(!feasible || (expected - seconds).abs() < 1e-9);
         // The first step marks the end of the first step period: add that period back.
-        let measured = (last - first) as f64 / TIMER_HZ as f64 + 1.0 / v.max(cfg.v0 as f64);
+        let measured = (last - first) as f64 / TIMER_HZ as f64 + 1.0 / v.max(ramp.v0);
         let err = (measured - expected).abs();
-        let period = 1.0 / (cfg.v0 as f64).min(v);
+        let period = 1.0 / ramp.v0.min(v);
         prop_assert!(err <= period + 1e-3, "{}: measured {} s, expected {} s, asked {} s (cruise {} Hz)", line, measured, expected, seconds, v);
     }
 }
@@ -167,9 +179,10 @@ proptest! {
 #[test]
 fn g93_time_too_short_is_clamped_to_the_max_rate() {
     // 100 mm in 0.1 s would need 60 000 mm/min on X: the move runs at X's 36 000 mm/min.
-    let (first, last, _) = g93_duration(Settings::BENCH, "G1 X100 F600");
+    let (first, last, b) = g93_duration(Settings::BENCH, "G1 X100 F600");
     let measured = (last - first) as f64 / TIMER_HZ as f64;
-    let at_max = inverse_time::duration_s(10_000, 60_000.0, &Settings::BENCH.ramp_config(3, &Settings::BENCH.timing()));
+    let ramp = master_ramp(&Settings::BENCH, [10_000, 0, 0], &b.ctl.ramped().cfg);
+    let at_max = inverse_time::duration_s(10_000, 60_000.0, &ramp);
     assert!((measured - at_max).abs() < 2e-3, "measured {measured} s, at the max rate {at_max} s");
     assert!(measured > 0.1 + 0.05);
 }
@@ -181,8 +194,8 @@ fn g93_arc_lasts_one_over_f_minutes() {
     let (first, last, b) = g93_duration(s, "G2 X0 Y0 I10 F30");
     let measured = (last - first) as f64 / TIMER_HZ as f64;
     assert_eq!(b.shared.positions(), [0, 0, 0]);
-    // Each chord starts and ends at rest (no look-ahead yet) and its time is solved for that;
-    // what the engine adds between two moves (up to one idle tick, 0.5 ms) comes on top.
+    // Each chord starts and ends at rest (G93 moves do not join: their time is solved for
+    // that); what the engine adds between two moves (up to one idle tick, 0.5 ms) comes on top.
     let chords = 23.0;
     assert!(measured >= 2.0 - 2e-3 && measured <= 2.0 + chords * 0.5e-3 + 2e-3, "measured {measured} s");
 }

@@ -192,17 +192,36 @@ fn build_info_names_us_and_the_rate_limit() {
     let limit = 72_000_000 / (2 * 216 + ddastep::timing::STORE_LATENCY_TICKS);
     assert_eq!(
         b.line("$I"),
-        "[VER:1.1h.ddastep:]\r\n[OPT:,24,128]\r\n[MSG:max step rate 150000 Hz]\r\n\
-         [MSG:ramp 1000-103923 Hz 2000000 Hz/s trapezoid]\r\nok\r\n"
+        format!(
+            "[VER:1.1h.ddastep:]\r\n[OPT:,{},128]\r\n[MSG:max step rate {limit} Hz]\r\n\
+             [MSG:ramp 1000-103923 Hz 2000000 Hz/s trapezoid]\r\nok\r\n",
+            protocol_rig::BLOCKS
+        )
     );
-    // Slow accel on every axis: the table (path units, twice the largest acceleration)
-    // cannot reach the axes' top in 1.024 s.
+    // Slow accel on every axis: the table (path units, twice the largest acceleration,
+    // 20 000 /s²) cannot reach the axes' top (√3 × 600 mm/s) within its length: either the
+    // top is lowered to what fits (and `$I` says so) or the table is made steeper.
     for l in ["$120=100", "$121=100", "$122=100"] {
         assert_eq!(b.line(l), "ok\r\n");
     }
     b.run_ms(2);
     let info = b.line("$I");
-    assert!(info.contains("[MSG:ramp 1000-21479 Hz 20000 Hz/s trapezoid (table-limited)]"), "{info}");
+    let len = ddastep::ramp::RAMP_LEN as u64;
+    let ramp = info.lines().find(|l| l.starts_with("[MSG:ramp ")).expect("ramp line");
+    let nums: Vec<u64> = ramp["[MSG:ramp ".len()..]
+        .split(|c: char| !c.is_ascii_digit())
+        .filter(|w| !w.is_empty())
+        .map(|w| w.parse().unwrap())
+        .collect();
+    let (v0, vmax, accel) = (nums[0], nums[1], nums[2]);
+    assert_eq!(v0, 1000, "{info}");
+    assert!((vmax - v0) * 1000 <= accel * len, "the ramp fits in the table: {info}");
+    if vmax < 103_923 {
+        assert_eq!(ramp, format!("[MSG:ramp 1000-{} Hz 20000 Hz/s trapezoid (table-limited)]", 1000 + 20 * len - 1));
+    } else {
+        assert_eq!(vmax, 103_923, "{info}");
+        assert!(accel > 20_000, "{info}");
+    }
     assert!(b.line("$#").starts_with("[G54:0.000,0.000,0.000]\r\n[G55:"));
     assert_eq!(b.line("$"), "[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $SLP $C $X $H ~ ! ? ctrl-x]\r\nok\r\n");
 }
@@ -383,4 +402,20 @@ fn flash_write_comes_before_the_next_line_moves() {
     b.run_to_idle(1000);
     assert_eq!(b.shared.positions(), [200, 0, 0]);
     assert!(b.actions.iter().filter(|a| a.save).count() == 1);
+}
+
+#[test]
+fn axes_beyond_the_count_do_not_scale_the_table() {
+    // A 7-axis firmware set to 3 axes ($42) keeps a finer steps/mm on its unused A axis: the
+    // table's path units come from X, Y, Z only, and so must the planner's clamp to its top.
+    let mut b = Bench::<7>::with_defaults();
+    b.take();
+    assert_eq!(b.line("$103=1000"), "ok\r\n");
+    assert_eq!(b.line("$42=3"), "ok\r\n");
+    b.run_ms(2);
+    b.peak_hz = 0;
+    assert_eq!(b.line("G91 G0 X100"), "ok\r\n");
+    b.run_to_idle(10_000);
+    assert_eq!(b.shared.positions()[0], 10_000);
+    assert_eq!(b.peak_hz, 60_000, "X's $110 = 36 000 mm/min at 100 steps/mm");
 }

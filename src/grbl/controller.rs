@@ -783,9 +783,10 @@ impl<'a, const N: usize> Controller<'a, N> {
     }
 }
 
-/// Plans one straight move at `rate`. G93: the move's master steps decide the cruise rate that
-/// makes it last its time on the ramp `cfg` ([`inverse_time::cruise_hz`]), given to the planner
-/// as the equivalent feed, so its axis-rate clamps apply as to any feed.
+/// Plans one straight move at `rate`. G93: the move starts and ends at rest (junction speed 0
+/// on both sides) and its master steps decide the cruise rate that makes it last its time on
+/// the ramp the engine will walk for it ([`inverse_time::cruise_hz`]), given to the planner as
+/// the equivalent feed, so its axis-rate clamps apply as to any feed.
 fn plan<const N: usize>(
     planner: &mut Planner<N>,
     target: &[f64; N],
@@ -799,11 +800,22 @@ fn plan<const N: usize>(
         Rate::Minutes(t) => {
             // At 1 mm/min no axis limit binds: the planner's rate is exactly master / (len·60).
             let mut dry = *planner;
-            let Some(probe) = dry.line(target, Some(1.0), lim)? else {
-                return planner.line(target, Some(1.0), lim);
+            let feed = match dry.line(target, Some(1.0), lim)? {
+                Some(probe) => {
+                    let master = probe.mv.steps().iter().map(|s| s.unsigned_abs()).max().unwrap_or(0);
+                    let ramp = match probe.mv.path() {
+                        Some(p) => inverse_time::MasterRamp::new(p.share as f64, p.accel as f64, lim.per_mm, cfg),
+                        None => inverse_time::MasterRamp::new(1.0, 0.0, 0.0, cfg),
+                    };
+                    inverse_time::cruise_hz(master as u64, t * 60.0, &ramp) / probe.wanted_hz
+                }
+                None => 1.0,
             };
-            let master = probe.mv.steps().iter().map(|s| s.unsigned_abs()).max().unwrap_or(0);
-            inverse_time::cruise_hz(master as u64, t * 60.0, cfg) / probe.wanted_hz
+            // From rest to rest: no junction speed on either side.
+            planner.rest();
+            let planned = planner.line(target, Some(feed), lim);
+            planner.rest();
+            return planned;
         }
     };
     planner.line(target, Some(feed), lim)

@@ -4,10 +4,13 @@
 //! Who uses it: the controller, for each G93 line or arc chord, before planning it as a feed
 //! move.
 //!
-//! A move of `N` master steps that starts and ends at rest on the ramp table (start rate `v0`,
-//! acceleration `a`) and cruises at `v ≥ v0` lasts `T(v) = 2(v - v0)/a + (N - (v² - v0²)/a)/v`,
-//! i.e. `a·v·T = (v - v0)² + N·a`. For a requested `T` that is a quadratic in `v`; its smaller
-//! root is the trapezoid (the larger one would need more steps for the ramps than the move has):
+//! A G93 move starts and ends at rest (the controller plans it with junction speed 0 on both
+//! sides), so its profile is the engine's ramp up from rest, a cruise and the mirrored ramp
+//! down. That ramp is the table walked at the move's own fraction ([`MasterRamp`]): in master
+//! steps it starts at `v0` and accelerates at `a`. A move of `N` master steps that cruises at
+//! `v ≥ v0` lasts `T(v) = 2(v - v0)/a + (N - (v² - v0²)/a)/v`, i.e. `a·v·T = (v - v0)² + N·a`.
+//! For a requested `T` that is a quadratic in `v`; its smaller root is the trapezoid (the
+//! larger one would need more steps for the ramps than the move has):
 //! `v = 2c / (b + √(b² - 4c))` with `b = 2·v0 + a·T`, `c = v0² + N·a` (this form loses no digits
 //! when `a·T ≫ v0`). A rate at or below `v0` needs no ramp: `v = N/T`. When the discriminant is
 //! negative even the triangle (peak `√c`) is too slow: the move gets that peak, and the planner
@@ -18,20 +21,52 @@
 //! `(vmax - v0) / ramp time`: exact for moves that reach the table's top, approximate (the
 //! logistic's slow start) for moves that turn back earlier.
 
-use crate::ramp::{RampConfig, RampTable, Shape};
+use crate::lookahead::walk_of;
+use crate::ramp::{RampConfig, RampTable, Shape, IDX_ONE};
+
+/// The ramp a move's master runs on, in master steps: start rate (steps/s) and acceleration
+/// (steps/s²).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MasterRamp {
+    pub v0: f64,
+    pub accel: f64,
+}
+
+impl MasterRamp {
+    /// The ramp the engine runs for a move whose master makes `share` steps per mm of path,
+    /// with path acceleration `accel` (mm/s²), on the table `cfg` (path units, `per_mm` table
+    /// steps per mm/s; 0: the table is in master steps and every move walks it whole).
+    ///
+    /// The move walks `r` entries per ms (its acceleration over the table's, [`walk_of`]) and
+    /// runs at `s` times the table's rate. Entry `i` holds the mean rate of millisecond `i`,
+    /// `v0 + A·(i + ½) ms`, and millisecond `k` of the walk sits at index `k·r`, so the master
+    /// runs `s·(v0 + A·(k·r + ½) ms)`: the mean of millisecond `k` of a ramp from
+    /// `s·(v0 + A·(1 − r)/2 ms)` at `s·r·A`.
+    pub fn new(share: f64, accel: f64, per_mm: f64, cfg: &RampConfig) -> Self {
+        let v0 = cfg.v0 as f64;
+        let a = match cfg.shape {
+            Shape::Trapezoid => cfg.accel as f64,
+            Shape::SCurve => {
+                let ms = RampTable::<1>::ramp_ms(cfg).max(1) as f64;
+                (cfg.vmax as f64 - v0).max(1.0) * 1000.0 / ms
+            }
+        };
+        let (s, r) = if per_mm > 0.0 {
+            let (s, walk_q) = walk_of(share, accel, per_mm, cfg.accel.max(1) as f64);
+            (s, walk_q as f64 * (1.0 / IDX_ONE as f64))
+        } else {
+            (1.0, 1.0)
+        };
+        let sa = s * a;
+        MasterRamp { v0: s * v0 + sa * (1.0 - r) * 0.0005, accel: sa * r }
+    }
+}
 
 /// Master cruise rate (steps/s) for `steps` master steps to take `seconds`, starting and ending
-/// at rest on the ramp `cfg`.
-pub fn cruise_hz(steps: u64, seconds: f64, cfg: &RampConfig) -> f64 {
+/// at rest on the ramp `ramp`.
+pub fn cruise_hz(steps: u64, seconds: f64, ramp: &MasterRamp) -> f64 {
     let n = steps as f64;
-    let v0 = cfg.v0 as f64;
-    let a = match cfg.shape {
-        Shape::Trapezoid => cfg.accel as f64,
-        Shape::SCurve => {
-            let ms = RampTable::<1>::ramp_ms(cfg).max(1) as f64;
-            (cfg.vmax as f64 - v0).max(1.0) * 1000.0 / ms
-        }
-    };
+    let (v0, a) = (ramp.v0, ramp.accel);
     let flat = n / seconds;
     if flat <= v0 || a <= 0.0 {
         return flat;
@@ -45,10 +80,10 @@ pub fn cruise_hz(steps: u64, seconds: f64, cfg: &RampConfig) -> f64 {
     2.0 * c / (b + crate::planner::sqrt(d))
 }
 
-/// How long a move of `steps` master steps at cruise `v` lasts on the ramp `cfg`, s (the
+/// How long a move of `steps` master steps at cruise `v` lasts on the ramp `ramp`, s (the
 /// forward formula the solver inverts; for tests and reports).
-pub fn duration_s(steps: u64, v: f64, cfg: &RampConfig) -> f64 {
-    let (n, v0, a) = (steps as f64, cfg.v0 as f64, cfg.accel as f64);
+pub fn duration_s(steps: u64, v: f64, ramp: &MasterRamp) -> f64 {
+    let (n, v0, a) = (steps as f64, ramp.v0, ramp.accel);
     if v <= v0 {
         return n / v;
     }

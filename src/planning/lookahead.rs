@@ -73,23 +73,25 @@ impl<const N: usize> Block<N> {
             t => t,
         };
         let slaves = mv.steps.iter().filter(|s| **s != 0).count().saturating_sub(1) as u32;
+        let min_bits = timing.min_period_for(slaves).saturating_mul(16);
         let cruise_hz = (crate::ramp::hz_of_period(mv.cruise) as f64).min(timing.max_rate_for(slaves) as f64);
+        // The period the engine holds at cruise (its own, never below the timing's floor).
+        let cruise_bits = mv.cruise.to_bits().max(min_bits);
         let t_accel = table.config().accel.max(1) as f64;
         // `per_mm > 0.0` on the f32's bits (positive: 1 ..= +inf): LLVM would narrow an f64 compare of
         // a widened f32 back to an f32 one and link the f32 compare routines for it.
         let positive = (1..=0x7F80_0000).contains(&profile.per_mm.to_bits());
         let (ramp, budget, max_entry_q, est_us) = match (&mv.path, positive) {
             (Some(p), true) => {
-                let s = (p.share as f64 / per_mm).clamp(1e-6, 1.0);
-                let r = (p.accel as f64 * per_mm / t_accel).clamp(0.0, 1.0);
-                let walk_q = u32_of(r * IDX_ONE as f64).max(1);
+                let (s, walk_q) = walk_of(p.share as f64, p.accel as f64, per_mm, t_accel);
                 let r = walk_q as f64 / IDX_ONE as f64;
-                let cruise_q = table.index_of_hz(cruise_hz / s);
+                let scale = u32_of((65536.0 / s).min(u32::MAX as f64));
+                let cruise_q = cruise_index(table, scale, cruise_bits);
                 let plan = RampPlan {
                     cruise_q,
                     exit_q: 0,
                     walk_q,
-                    scale: u32_of((65536.0 / s).min(u32::MAX as f64)),
+                    scale,
                     dist_q: u32_of(((s / r) * 65536.0).min(u32::MAX as f64)),
                     cruise: mv.cruise,
                 };
@@ -101,7 +103,7 @@ impl<const N: usize> Block<N> {
                 (plan, budget, table.index_of_hz(v_j).min(cruise_q), est)
             }
             _ => {
-                let plan = RampPlan::lone(table.index_of_hz(cruise_hz), mv.cruise);
+                let plan = RampPlan::lone(cruise_index(table, 1 << 16, cruise_bits), mv.cruise);
                 (plan, usable(total) * 256.0, 0, total as f64 / cruise_hz.max(1.0) * 1e6)
             }
         };
@@ -113,6 +115,42 @@ impl<const N: usize> Block<N> {
     pub fn tail(&self) -> Tail {
         Tail { entry_q: self.entry_q, budget: self.budget, cruise_q: self.ramp.cruise_q }
     }
+}
+
+/// How a move walks the table: its master's share of the table rate `s` (≤ 1: master steps
+/// per mm of path `share` over the table's `per_mm`) and its walk rate (Q20 entries per ms,
+/// at least one unit: its path acceleration `accel`, mm/s², as a fraction of the table's
+/// `t_accel`, table steps/s²).
+pub fn walk_of(share: f64, accel: f64, per_mm: f64, t_accel: f64) -> (f64, u32) {
+    let s = (share / per_mm).clamp(1e-6, 1.0);
+    let r = (accel * per_mm / t_accel).clamp(0.0, 1.0);
+    (s, u32_of(r * IDX_ONE as f64).max(1))
+}
+
+/// The lowest index (Q20) where the table, scaled by `scale` (Q16), is at least as fast as a
+/// period of `cruise_bits` (1/16 tick); the top when it never is. So the table never holds a
+/// move below its own cruise: a rate's index rounded down (`index_of_hz`) and the
+/// interpolation's truncation would leave it slower by a 1/16 tick or more (59 996 Hz for a
+/// 60 kHz G0). Integer binary search (the interpolated period never rises with the index).
+fn cruise_index<const L: usize>(table: &RampTable<L>, scale: u32, cruise_bits: u32) -> u32 {
+    let fast = |q: u32| (table.period_at(q).to_bits() as u64 * scale as u64) >> 16 <= cruise_bits as u64;
+    let (mut lo, mut hi) = (0u32, table.top_q());
+    if table.is_empty() || fast(lo) {
+        return 0;
+    }
+    if !fast(hi) {
+        return hi;
+    }
+    // Invariant: !fast(lo), fast(hi).
+    while hi - lo > 1 {
+        let mid = lo + (hi - lo) / 2;
+        if fast(mid) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    hi
 }
 
 /// Master steps a deceleration may plan on: the engine's trigger is conservative by
@@ -155,5 +193,47 @@ pub fn replan<const N: usize, const L: usize>(
         let next_rev = it.peek().map_or(0, |n| n.rev_entry_q);
         b.exit_q = next_rev.min(reach(table, b.entry_q, b.budget)).min(b.ramp.cruise_q);
         entry = b.exit_q;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ramp::{period_of_hz, RampConfig, Shape};
+
+    /// The cruise index is the lowest one at which the scaled table is at least as fast as
+    /// the cruise, for random tables, scales and rates (also between entries, where rounding
+    /// the index down used to leave the table a 1/16 tick slow).
+    #[test]
+    fn cruise_index_is_the_first_index_fast_enough() {
+        let mut r = 0x9E37_79B9_7F4A_7C15u64;
+        let mut next = |n: u64| {
+            r ^= r << 13;
+            r ^= r >> 7;
+            r ^= r << 17;
+            r % n
+        };
+        let mut table = RampTable::<1024>::new();
+        for _ in 0..300 {
+            let v0 = 1 + next(5_000) as u32;
+            let vmax = v0 + next(300_000) as u32;
+            let accel = 1_000 + next(20_000_000) as u32;
+            let shape = if next(2) == 0 { Shape::Trapezoid } else { Shape::SCurve };
+            if table.build(RampConfig { v0, vmax, accel, shape }).is_err() {
+                continue;
+            }
+            for _ in 0..50 {
+                let scale = (1 << 16) + next(3 << 16) as u32;
+                let hz = 1 + next(vmax as u64 + 1_000) as u32;
+                let cruise = period_of_hz(hz).to_bits();
+                let fast = |q: u32| (table.period_at(q).to_bits() as u64 * scale as u64) >> 16 <= cruise as u64;
+                let q = cruise_index(&table, scale, cruise);
+                assert!(q <= table.top_q());
+                if q > 0 {
+                    assert!(!fast(q - 1), "{hz} Hz: {q} is not the first");
+                }
+                assert!(fast(q) || q == table.top_q(), "{hz} Hz: the table at {q} is slower");
+            }
+        }
     }
 }

@@ -54,7 +54,8 @@ impl<const N: usize> Limits<N> {
             max_rate: core::array::from_fn(|i| s.max_rate[i] as f64),
             accel: core::array::from_fn(|i| s.accel[i] as f64),
             vmax_hz: vmax_hz.max(1),
-            per_mm: s.per_mm(N) as f64,
+            // The table's own path units: the axes in use ($42), as `Settings::build_profile`.
+            per_mm: s.per_mm(s.axis_count(N)) as f64,
             junction_dev: JUNCTION_DEVIATION_MM as f64,
             feed_ovr: 1.0,
             rapid_ovr: 1.0,
@@ -102,6 +103,12 @@ impl<const N: usize> Planner<N> {
     /// Absolute step position of the last planned target.
     pub fn position_steps(&self) -> &[i64; N] {
         &self.steps
+    }
+
+    /// The next move starts from rest: its junction speed with the last one is 0 (G93 moves,
+    /// whose closed-form time assumes rest at both ends, call it before and after planning).
+    pub fn rest(&mut self) {
+        self.prev = None;
     }
 
     /// Takes the engine's step counters as the position (after a reset or new steps/mm).

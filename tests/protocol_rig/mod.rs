@@ -197,6 +197,11 @@ impl<const N: usize> Bench<N> {
     }
 }
 
+/// Moves the controller buffers (look-ahead plus prepared ring): `[OPT:]`'s block count and
+/// `Bf:`'s free blocks at rest.
+#[allow(dead_code, reason = "not every test file uses it")]
+pub const BLOCKS: usize = ddastep::lookahead::LOOKAHEAD + ddastep::ring::RING;
+
 /// Counts `ok` and `error:` replies.
 pub fn replies(text: &str) -> (usize, usize) {
     let oks = text.lines().filter(|l| l.trim_end() == "ok").count();
