@@ -497,7 +497,11 @@ impl<'a, const N: usize> Controller<'a, N> {
     /// uses `self.limits`: overrides do not apply to jogs, as in Grbl).
     fn move_limits(&self) -> Limits<N> {
         let o = self.shared.overrides();
-        Limits { feed_ovr: o.feed as f64 / 100.0, rapid_ovr: o.rapid as f64 / 100.0, ..self.limits }
+        // (Copy, then set: `Limits { .., ..self.limits }` copies field by field.)
+        let mut l = self.limits;
+        l.feed_ovr = o.feed as f64 / 100.0;
+        l.rapid_ovr = o.rapid as f64 / 100.0;
+        l
     }
 
     /// Queue empty and engine idle (not held): G4, flash writes, `$` settings may act.
@@ -678,7 +682,11 @@ impl<'a, const N: usize> Controller<'a, N> {
     fn save_later(&mut self, out: &mut impl Out) {
         match &mut self.job {
             Some(j) => j.save = true,
-            None => self.start(Job { save: true, ..Job::none() }, out),
+            None => {
+                let mut job = Job::none();
+                job.save = true;
+                self.start(job, out);
+            }
         }
     }
 
@@ -764,20 +772,19 @@ impl<'a, const N: usize> Controller<'a, N> {
             self.drivers_on = true;
             self.m17 = true;
         }
-        let job = Job {
-            dwell_ms: fx.dwell_ms,
-            mv,
-            mv2,
-            arc,
-            rate,
-            tool,
-            power,
-            drivers_off: fx.drivers == Some(false),
-            pause: fx.stop == Some(Stop::Pause),
-            end: fx.stop == Some(Stop::End),
-            save: store,
-            ..Job::none()
-        };
+        // (Set field by field on `Job::none()`: struct-update syntax copies every field.)
+        let mut job = Job::none();
+        job.dwell_ms = fx.dwell_ms;
+        job.mv = mv;
+        job.mv2 = mv2;
+        job.arc = arc;
+        job.rate = rate;
+        job.tool = tool;
+        job.power = power;
+        job.drivers_off = fx.drivers == Some(false);
+        job.pause = fx.stop == Some(Stop::Pause);
+        job.end = fx.stop == Some(Stop::End);
+        job.save = store;
         self.start(job, out);
         Ok(())
     }

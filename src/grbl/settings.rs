@@ -411,7 +411,9 @@ impl Settings {
     pub fn is_valid(&self) -> bool {
         // Every axis is checked, also those beyond the axis count. Each value must come back
         // unchanged from `set` (compared as bits: no f32 compare routines in the firmware).
-        let full = Settings { axes: MAX_AXES as u8, ..*self };
+        // (A copy and one store, not `Settings { axes, ..*self }`: that copies field by field.)
+        let mut full = *self;
+        full.axes = MAX_AXES as u8;
         let mut probe = full;
         let mut ok = (3..=MAX_AXES as u8).contains(&self.axes);
         for id in Self::ids(MAX_AXES).filter(|&id| id != AXIS_COUNT) {

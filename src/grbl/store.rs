@@ -71,7 +71,9 @@ pub struct Stored {
 
 impl From<Settings> for Stored {
     fn from(settings: Settings) -> Self {
-        Stored { settings, ..Stored::defaults() }
+        let mut s = Stored::defaults();
+        s.settings = settings;
+        s
     }
 }
 
@@ -126,12 +128,10 @@ impl Stored {
         if b[..4] != MAGIC || crc32(&b[..IMAGE_LEN - 4]) != crc {
             return None;
         }
-        let mut s = Stored {
-            seq: u32::from_le_bytes(b[4..8].try_into().ok()?),
-            settings: Settings::decode(&b[SETTINGS_AT..COORDS_AT])?,
-            coords: Coords::from_bytes(&b[COORDS_AT..TEXT_AT])?,
-            ..Stored::defaults()
-        };
+        let mut s = Stored::defaults();
+        s.seq = u32::from_le_bytes(b[4..8].try_into().ok()?);
+        s.settings = Settings::decode(&b[SETTINGS_AT..COORDS_AT])?;
+        s.coords = Coords::from_bytes(&b[COORDS_AT..TEXT_AT])?;
         let texts = s.startup.iter_mut().chain(core::iter::once(&mut s.build_info));
         for (w, t) in b[TEXT_AT..].chunks_exact(TEXT_LEN + 1).zip(texts) {
             *t = Text::new(w.get(1..1 + w[0] as usize)?)?;
