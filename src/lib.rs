@@ -22,6 +22,7 @@ pub mod board;
 pub mod encoder;
 pub mod grbl;
 pub mod motion;
+pub mod num;
 pub mod planning;
 pub mod steptime;
 pub mod watchdog;

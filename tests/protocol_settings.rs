@@ -111,10 +111,11 @@ fn profile_is_in_path_units_at_twice_the_fastest_accel() {
     }
     // Main's timing model: 3 µs pulses, twice that plus the store latency.
     assert_eq!(r.max_rate_hz, 72_000_000 / floor);
-    // The bench's own settings fit: 52 ms to √3 × 600 mm/s.
+    // The bench's own settings fit: 52 ms to √3 × 600 mm/s, then the entry at the top itself.
     let r = Settings::BENCH.build_profile(3, &mut g);
     assert!(!r.table_limited);
-    assert_eq!((r.cfg.vmax, g.ramp.len()), (103_923, 52));
+    assert_eq!((r.cfg.vmax, g.ramp.len()), (103_923, 53));
+    assert_eq!(g.ramp.periods()[52], ddastep::ramp::period_of_hz(103_923));
 }
 
 #[test]

@@ -75,6 +75,9 @@ pub fn save_store(parts: &mut flash::Parts, image: &[u8; IMAGE_LEN]) {
     let target = Stored::newest([store_page(0), store_page(1)]).map_or(0, |i| 1 - i);
     let at = STORE_OFFSETS[target];
     let mut w = parts.writer(flash::SectorSize::Sz1K, flash::FlashSize::Sz64K);
+    // The read-back below compares the whole image: the HAL's own per-halfword and erase checks
+    // would only repeat it (and cost flash).
+    w.change_verification(false);
     let ok = w.erase(at, 1024).is_ok() && w.write(at, image).is_ok();
     if !ok || store_page(target).get(..IMAGE_LEN) != Some(&image[..]) {
         defmt::warn!("store: flash write failed; the previous image stays in force");

@@ -4,6 +4,7 @@ mod boot;
 mod encoder;
 mod hw;
 mod limits;
+mod mem;
 mod panic;
 mod watchdog;
 

@@ -71,13 +71,15 @@ pub struct Stored {
 
 impl From<Settings> for Stored {
     fn from(settings: Settings) -> Self {
-        Stored { settings, ..Stored::DEFAULT }
+        let mut s = Stored::defaults();
+        s.settings = settings;
+        s
     }
 }
 
 impl Default for Stored {
     fn default() -> Self {
-        Self::DEFAULT
+        Self::defaults()
     }
 }
 
@@ -89,6 +91,18 @@ impl Stored {
         startup: [Text::EMPTY; STARTUP_LINES],
         build_info: Text::EMPTY,
     };
+
+    /// [`Self::DEFAULT`] built in place: the constant would be copied from flash whole (its
+    /// kilobyte of zeros included), where zeroing takes a few instructions.
+    pub fn defaults() -> Stored {
+        Stored {
+            seq: 0,
+            settings: Settings::DEFAULT,
+            coords: Coords::ZERO,
+            startup: [Text::EMPTY; STARTUP_LINES],
+            build_info: Text::EMPTY,
+        }
+    }
 
     /// The flash image.
     #[inline(never)]
@@ -115,12 +129,10 @@ impl Stored {
         if b[..4] != MAGIC || crc32(&b[..IMAGE_LEN - 4]) != crc {
             return None;
         }
-        let mut s = Stored {
-            seq: u32::from_le_bytes(b[4..8].try_into().ok()?),
-            settings: Settings::decode(&b[SETTINGS_AT..COORDS_AT])?,
-            coords: Coords::from_bytes(&b[COORDS_AT..TEXT_AT])?,
-            ..Stored::DEFAULT
-        };
+        let mut s = Stored::defaults();
+        s.seq = u32::from_le_bytes(b[4..8].try_into().ok()?);
+        s.settings = Settings::decode(&b[SETTINGS_AT..COORDS_AT])?;
+        s.coords = Coords::from_bytes(&b[COORDS_AT..TEXT_AT])?;
         let texts = s.startup.iter_mut().chain(core::iter::once(&mut s.build_info));
         for (w, t) in b[TEXT_AT..].chunks_exact(TEXT_LEN + 1).zip(texts) {
             *t = Text::new(w.get(1..1 + w[0] as usize)?)?;
@@ -132,8 +144,8 @@ impl Stored {
     /// other one). Nothing valid: the defaults, and page 0.
     pub fn load(pages: [&[u8]; 2]) -> (Stored, usize) {
         match Self::newest(pages) {
-            Some(i) => (Stored::decode(pages[i]).unwrap_or(Stored::DEFAULT), 1 - i),
-            None => (Stored::DEFAULT, 0),
+            Some(i) => (Stored::decode(pages[i]).unwrap_or_else(Stored::defaults), 1 - i),
+            None => (Stored::defaults(), 0),
         }
     }
 

@@ -38,11 +38,11 @@ impl<const N: usize> Controller<'_, N> {
             }
             b"$" => {
                 need_idle(idle || self.check)?;
-                self.start(Job { listing: Some(Listing::Settings(0)), ..Job::NONE }, out);
+                self.start_listing(Listing::Settings(0), out);
             }
             b"#" => {
                 need_idle(idle)?;
-                self.start(Job { listing: Some(Listing::Params(0)), ..Job::NONE }, out);
+                self.start_listing(Listing::Params(0), out);
             }
             b"I" => {
                 need_idle(idle)?;
@@ -114,6 +114,13 @@ impl<const N: usize> Controller<'_, N> {
             _ => return Err(Error::InvalidStatement),
         }
         Ok(())
+    }
+
+    /// Starts a long listing (`$$`, `$#`).
+    fn start_listing(&mut self, l: Listing, out: &mut impl Out) {
+        let mut job = Job::none();
+        job.listing = Some(l);
+        self.start(job, out);
     }
 
     /// `$Nn=line`: the line runs (as Grbl checks it, by executing it) and is stored if valid.
