@@ -18,6 +18,7 @@
 //! handed to the engine and lowers each exit to what its move can reach. So the buffer always
 //! ends at rest, and a starved buffer never means an abrupt stop from speed.
 
+use crate::num::u32_of;
 use crate::prepared::RampPlan;
 use crate::queue::Move;
 use crate::ramp::{Profile, RampTable, IDX_ONE};
@@ -84,14 +85,14 @@ impl<const N: usize> Block<N> {
             (Some(p), true) => {
                 let (s, walk_q) = walk_of(p.share as f64, p.accel as f64, per_mm, t_accel);
                 let r = walk_q as f64 / IDX_ONE as f64;
-                let scale = (65536.0 / s).min(u32::MAX as f64) as u32;
+                let scale = u32_of((65536.0 / s).min(u32::MAX as f64));
                 let cruise_q = cruise_index(table, scale, cruise_bits);
                 let plan = RampPlan {
                     cruise_q,
                     exit_q: 0,
                     walk_q,
                     scale,
-                    dist_q: ((s / r) * 65536.0).min(u32::MAX as f64) as u32,
+                    dist_q: u32_of(((s / r) * 65536.0).min(u32::MAX as f64)),
                     cruise: mv.cruise,
                 };
                 let budget = usable(total) * 256.0 * r / s;
@@ -106,8 +107,8 @@ impl<const N: usize> Block<N> {
                 (plan, usable(total) * 256.0, 0, total as f64 / cruise_hz.max(1.0) * 1e6)
             }
         };
-        let budget = budget.clamp(0.0, u32::MAX as f64) as u32;
-        Block { mv, ramp, budget, max_entry_q, rev_entry_q: u32::MAX, entry_q: 0, exit_q: 0, est_us: est_us.min(4e9) as u32 }
+        let budget = u32_of(budget.clamp(0.0, u32::MAX as f64));
+        Block { mv, ramp, budget, max_entry_q, rev_entry_q: u32::MAX, entry_q: 0, exit_q: 0, est_us: u32_of(est_us.min(4e9)) }
     }
 
     /// What the passes keep of it once it is handed over.
@@ -123,7 +124,7 @@ impl<const N: usize> Block<N> {
 pub fn walk_of(share: f64, accel: f64, per_mm: f64, t_accel: f64) -> (f64, u32) {
     let s = (share / per_mm).clamp(1e-6, 1.0);
     let r = (accel * per_mm / t_accel).clamp(0.0, 1.0);
-    (s, ((r * IDX_ONE as f64) as u32).max(1))
+    (s, u32_of(r * IDX_ONE as f64).max(1))
 }
 
 /// The lowest index (Q20) where the table, scaled by `scale` (Q16), is at least as fast as a

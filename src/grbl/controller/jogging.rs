@@ -33,7 +33,10 @@ impl<const N: usize> Controller<'_, N> {
         let mut planner = self.planner;
         let mv = planner.line(&j.target, Some(j.feed), &self.limits)?;
         self.planner = planner;
-        self.start(Job { mv, jog: true, ..Job::NONE }, out);
+        let mut job = Job::none();
+        job.mv = mv;
+        job.jog = true;
+        self.start(job, out);
         Ok(())
     }
 
