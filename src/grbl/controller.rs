@@ -81,6 +81,9 @@ enum Jogging {
     On,
     /// Cancelled: decelerating with a feed hold, then the queue is flushed.
     Cancel,
+    /// Flushed: the engine takes the stop at its next tick (≤ 0.5 ms while held); still
+    /// jogging until it is idle, so no report says `Hold:0` in between.
+    Stopping,
 }
 
 /// How fast a straight move (or an arc's chord) runs.

@@ -67,7 +67,12 @@ impl<const N: usize> Controller<'_, N> {
                 }
                 self.pushed = self.shared.moves_done();
                 self.planner.sync(self.shared.positions(), &self.limits);
-                self.jog = Jogging::Off;
+                self.jog = Jogging::Stopping;
+            }
+            Jogging::Stopping => {
+                if self.shared.state() == State::Idle {
+                    self.jog = Jogging::Off;
+                }
             }
         }
     }
