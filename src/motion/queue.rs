@@ -47,8 +47,47 @@ pub enum MoveError {
 pub struct Move<const N: usize> {
     pub(crate) steps: [i32; N],
     pub(crate) master: u8,
-    pub(crate) cruise: Period,
+    pub(crate) rates: Rates,
     pub(crate) path: Option<Path>,
+}
+
+/// Which override scales a move: feed for G1/G2/G3 (and G93), rapid for G0, none for jogs
+/// (Grbl 1.1).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Ovr {
+    None,
+    Feed,
+    Rapid,
+}
+
+/// A move's master cruise rate and what an override makes of it: Grbl scales the programmed
+/// rate (F, or the axes' limit for G0), then the axes' max rates still bind.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Rates {
+    pub ovr: Ovr,
+    /// Master steps/s asked at 100 % (F, or the axes' limit for G0), before any clamp.
+    pub asked_hz: f32,
+    /// Master steps/s the axes' max rates, the step timing and the table's top allow.
+    pub cap_hz: f32,
+    /// Master period at 100 % (every clamp applied).
+    pub cruise: Period,
+}
+
+impl Rates {
+    /// The master cruise under the overrides `o`.
+    pub fn cruise_at(&self, o: Overrides) -> Period {
+        let pct = match self.ovr {
+            Ovr::Feed => o.feed,
+            Ovr::Rapid => o.rapid,
+            Ovr::None => 100,
+        };
+        if pct == 100 {
+            return self.cruise;
+        }
+        // max/min, not clamp (no panic path); f64 like the planner (no f32 soft float set).
+        let hz = (self.asked_hz as f64 * pct as f64 * 0.01).min(self.cap_hz as f64).max(MIN_RATE_HZ as f64);
+        period_of_millihz((hz * 1000.0) as u64)
+    }
 }
 
 /// A move's length and limits in path units (mm, s), for the look-ahead.
@@ -58,12 +97,12 @@ pub struct Path {
     pub len: f32,
     /// Master steps per mm of path.
     pub share: f32,
-    /// Nominal (cruise) path speed, mm/s, after every clamp.
+    /// Nominal (cruise) path speed at 100 %, mm/s, after every clamp.
     pub speed: f32,
     /// Path acceleration the moving axes allow, mm/s².
     pub accel: f32,
-    /// Highest speed at the junction with the previous move (junction deviation `$11` and
-    /// both moves' nominal speeds), mm/s.
+    /// Highest speed at the junction with the previous move from junction deviation `$11`
+    /// (0 from rest, +∞ straight on), mm/s; the look-ahead also caps it by both moves' speeds.
     pub junction: f32,
 }
 
@@ -92,7 +131,8 @@ impl<const N: usize> Move<N> {
         if counts[master] == 0 {
             return Err(MoveError::ZeroLength);
         }
-        Ok(Move { steps: s, master: master as u8, cruise: period_of_millihz(cruise_millihz), path: None })
+        let rates = Rates { ovr: Ovr::None, asked_hz: 0.0, cap_hz: 0.0, cruise: period_of_millihz(cruise_millihz) };
+        Ok(Move { steps: s, master: master as u8, rates, path: None })
     }
 
     /// Signed steps per axis.
@@ -107,7 +147,18 @@ impl<const N: usize> Move<N> {
 
     /// Master cruise period.
     pub fn cruise(&self) -> Period {
-        self.cruise
+        self.rates.cruise
+    }
+
+    /// Its cruise and how the overrides scale it.
+    pub fn rates(&self) -> &Rates {
+        &self.rates
+    }
+
+    /// The same move, never overridden (a jog).
+    pub fn fixed(mut self) -> Self {
+        self.rates.ovr = Ovr::None;
+        self
     }
 
     /// The same move with its geometry, so the look-ahead can join it to its neighbours.
