@@ -319,3 +319,31 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn a_hold_while_an_override_ramps_ends_exactly_and_resumes_at_the_new_speed() {
+    let mut b = bench(1000.0, 36_000.0);
+    assert_eq!(b.line("G91"), "ok\r\n");
+    assert_eq!(b.line("G1 X300 F12000"), "ok\r\n"); // 20 kHz
+    b.run_ms(300);
+    for _ in 0..5 {
+        b.byte(0x92); // 50 %: walking down for 100 ms
+    }
+    b.run_ms(40);
+    b.byte(b'!');
+    b.run_ms(400);
+    assert_eq!(b.shared.state(), ddastep::queue::State::Held);
+    let held = b.shared.positions();
+    b.run_ms(50);
+    assert_eq!(b.shared.positions(), held, "held");
+    b.byte(0x91); // 60 % while held
+    b.trace = Some(Vec::new());
+    b.byte(b'~');
+    b.run_ms(300);
+    assert_eq!(b.shared.rate_hz(), 12_000, "resumed at 60 %");
+    b.run_to_idle(10_000);
+    let tr = b.trace.take().unwrap();
+    assert!(tr.iter().all(|e| e.1 <= 12_000));
+    assert_walk_steps(&tr, 100.0, 1_400);
+    assert_eq!(b.shared.positions(), [30_000, 0, 0]);
+}

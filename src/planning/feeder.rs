@@ -171,7 +171,7 @@ impl<'a, const N: usize> Feeder<'a, N> {
         ramp.exit_q = b.exit_q;
         let start = self.pos;
         let steps = b.mv.steps;
-        let p = Prepared::new(steps, b.mv.master as usize, start, ramp, b.mv.rates, &profile.timing, &self.pins, &mut self.dir, self.shared.epoch());
+        let p = Prepared::new(steps, b.mv.master as usize, start, ramp, b.mv.rates(), &profile.timing, &self.pins, &mut self.dir, self.shared.epoch());
         // The last prepared move may now run through into this one.
         self.ring.set_last_exit(b.entry_q);
         if self.ring.push(p).is_err() {

@@ -78,12 +78,12 @@ impl<const N: usize> Block<N> {
                 let r = walk_q as f64 / IDX_ONE as f64;
                 let scale = (65536.0 / s).min(u32::MAX as f64) as u32;
                 let dist_q = ((s / r) * 65536.0).min(u32::MAX as f64) as u32;
-                let plan = RampPlan { cruise_q: 0, exit_q: 0, walk_q, scale, dist_q, cruise: mv.rates.cruise };
+                let plan = RampPlan { cruise_q: 0, exit_q: 0, walk_q, scale, dist_q, cruise: mv.cruise };
                 let budget = usable(total) * 256.0 * r / s;
                 let v_j = if joins { p.junction as f64 * per_mm } else { 0.0 };
                 (plan, budget, table.index_of_hz(v_j))
             }
-            _ => (RampPlan::lone(0, mv.rates.cruise), usable(total) * 256.0, 0),
+            _ => (RampPlan::lone(0, mv.cruise), usable(total) * 256.0, 0),
         };
         let budget = budget.clamp(0.0, u32::MAX as f64) as u32;
         let mut b = Block { mv, ramp, budget, junction_q, max_entry_q: 0, rev_entry_q: u32::MAX, entry_q: 0, exit_q: 0 };
@@ -100,7 +100,7 @@ impl<const N: usize> Block<N> {
         };
         let slaves = self.mv.steps.iter().filter(|s| **s != 0).count().saturating_sub(1) as u32;
         let min_bits = timing.min_period_for(slaves).saturating_mul(16);
-        (self.ramp.cruise, self.ramp.cruise_q) = cruise_for(&self.mv.rates, o, self.ramp.scale, min_bits, &profile.ramp);
+        (self.ramp.cruise, self.ramp.cruise_q) = cruise_for(&self.mv.rates(), o, self.ramp.scale, min_bits, &profile.ramp);
         self.max_entry_q = self.junction_q.min(self.ramp.cruise_q);
         self.rev_entry_q = u32::MAX;
     }

@@ -17,7 +17,7 @@
 //! `$11`, Grbl's formula); the look-ahead ([`crate::lookahead`]) does the rest.
 
 use crate::protocol::Error;
-use crate::queue::{Move, Ovr, Path, Rates};
+use crate::queue::{Move, Ovr, Path};
 use crate::settings::Settings;
 use crate::timing::Timing;
 
@@ -171,8 +171,7 @@ impl<const N: usize> Planner<N> {
         let top_millihz = crate::ramp::MAX_RATE_HZ as u64 * 1000;
         let cruise_millihz = (libm::round(wanted_hz.max(1.0).min(top) * 1000.0) as u64).min(top_millihz);
         let mut mv = Move::new_millihz(delta, cruise_millihz).map_err(|_| Error::InvalidTarget)?;
-        mv.rates = Rates { ovr, asked_hz: (asked * share) as f32, cap_hz: (vmax * share).min(top) as f32, ..mv.rates };
-        let speed = cruise_millihz as f64 / 1000.0 / share;
+        mv.ovr = ovr;
         // Junction deviation only: the look-ahead caps it by both moves' speeds under the
         // overrides in force.
         let junction = match self.prev {
@@ -180,7 +179,13 @@ impl<const N: usize> Planner<N> {
             None => 0.0,
         };
         self.prev = Some(unit);
-        let path = Path { len: len as f32, share: share as f32, speed: speed as f32, accel: accel.min(1e12) as f32, junction: junction as f32 };
+        let path = Path {
+            share: share as f32,
+            accel: accel.min(1e12) as f32,
+            asked_hz: (asked * share) as f32,
+            cap_hz: (vmax * share).min(top) as f32,
+            junction: junction as f32,
+        };
         self.mm = *target;
         self.steps = to;
         Ok(Some(Planned { mv: mv.with_path(path), mm_per_step: (len / master_steps as f64) as f32, wanted_hz }))
