@@ -17,6 +17,7 @@
 //! Positions: the planner works in machine millimetres; work offsets ([`Offsets`]) turn
 //! program coordinates into machine ones in the interpreter, and reports subtract them again.
 
+mod encoder;
 mod jogging;
 mod soft_limits;
 mod status;
@@ -119,22 +120,26 @@ struct Job<const N: usize> {
 }
 
 impl<const N: usize> Job<N> {
-    const NONE: Self = Job {
-        listing: None,
-        dwell_ms: None,
-        dwell_end: None,
-        mv: None,
-        mv2: None,
-        jog: false,
-        arc: None,
-        rate: Rate::Rapid,
-        tool: None,
-        power: Power { speed: 0.0, dynamic: false, cruise_hz: 0.0 },
-        drivers_off: false,
-        pause: false,
-        end: false,
-        save: false,
-    };
+    /// Nothing to do. (A function, not a constant: a constant of this size would be copied
+    /// from flash whole, payloads of its `None`s included.)
+    fn none() -> Self {
+        Job {
+            listing: None,
+            dwell_ms: None,
+            dwell_end: None,
+            mv: None,
+            mv2: None,
+            jog: false,
+            arc: None,
+            rate: Rate::Rapid,
+            tool: None,
+            power: Power { speed: 0.0, dynamic: false, cruise_hz: 0.0 },
+            drivers_off: false,
+            pause: false,
+            end: false,
+            save: false,
+        }
+    }
 }
 
 /// The Grbl-compatible controller for up to `N` axes (`$42` of them in use).
@@ -191,6 +196,8 @@ pub struct Controller<'a, const N: usize> {
     watchdog_note: bool,
     /// Limit pins active (bit i = axis i), for `Pn:`.
     limit_pins: u8,
+    /// Encoder feedback's step-loss check (see `encoder.rs`).
+    enc: crate::encoder::loss::Monitor,
 }
 
 impl<'a, const N: usize> Controller<'a, N> {
@@ -263,8 +270,10 @@ impl<'a, const N: usize> Controller<'a, N> {
             soft_limit: SoftLimit::Off,
             watchdog_note: false,
             limit_pins: 0,
+            enc: crate::encoder::loss::Monitor::OFF,
         });
         c.startup_next = c.next_startup(0);
+        c.enc_configure();
         c.apply_profile();
         c.planner.sync(shared.positions(), &c.limits);
         c
@@ -666,7 +675,11 @@ impl<'a, const N: usize> Controller<'a, N> {
     fn save_later(&mut self, out: &mut impl Out) {
         match &mut self.job {
             Some(j) => j.save = true,
-            None => self.start(Job { save: true, ..Job::NONE }, out),
+            None => {
+                let mut job = Job::none();
+                job.save = true;
+                self.start(job, out);
+            }
         }
     }
 
@@ -677,22 +690,23 @@ impl<'a, const N: usize> Controller<'a, N> {
         if block.axes[self.axes..].iter().any(Option::is_some) {
             return Err(Error::UnsupportedCommand);
         }
-        let (modal, fx) = self.modal.interpret_with(&block, self.planner.position_mm(), &self.offsets)?;
+        let mut fx = gcode::Effects::none();
+        let modal = self.modal.interpret_into(&block, self.planner.position_mm(), &self.offsets, &mut fx)?;
         let mut planner = self.planner;
         let mut offsets = self.offsets;
         // G93: F is 1/minutes (checked positive where a motion needs it).
         let rate = if modal.inverse_time { Rate::Minutes(1.0 / modal.feed) } else { Rate::Feed(modal.feed) };
         let cfg = self.ramped.cfg;
         let lim = &self.limits;
-        let mv = match fx.motion {
-            Some((t, rapid)) => plan(&mut planner, &t, if rapid { Rate::Rapid } else { rate }, lim, &cfg)?,
+        let mv = match &fx.motion {
+            Some((t, rapid)) => plan(&mut planner, t, if *rapid { Rate::Rapid } else { rate }, lim, &cfg)?,
             None => None,
         };
-        let mv2 = match fx.home {
-            Some(t) => planner.line(&t, None, lim)?,
+        let mv2 = match &fx.home {
+            Some(t) => planner.line(t, None, lim)?,
             None => None,
         };
-        let (arc, rate) = match fx.arc {
+        let (arc, rate) = match &fx.arc {
             Some(a) => {
                 a.check_range(&self.limits.steps_per_mm)?;
                 let seg = a.segments(self.settings.arc_tolerance as f64);
@@ -708,18 +722,18 @@ impl<'a, const N: usize> Controller<'a, N> {
         // Soft limits: every target this line moves to, arc chord ends included (a chord
         // between two points in the box stays in it).
         let arc_out = arc.is_some_and(|mut seg| seg.any(|p| self.beyond_travel(&p)));
-        let home_out = fx.home.is_some_and(|t| self.beyond_travel(&t));
-        if arc_out || home_out || fx.motion.is_some_and(|(t, _)| self.beyond_travel(&t)) {
+        let home_out = fx.home.as_ref().is_some_and(|t| self.beyond_travel(t));
+        if arc_out || home_out || fx.motion.as_ref().is_some_and(|(t, _)| self.beyond_travel(t)) {
             self.soft_limit_trip();
             return Ok(());
         }
         let mut store = false;
-        if let Some((slot, v)) = fx.coord_write {
-            offsets.stored.set(slot, &v);
+        if let Some((slot, v)) = &fx.coord_write {
+            offsets.stored.set(*slot, v);
             store = true;
         }
-        if let Some(g) = fx.g92 {
-            offsets.g92 = g;
+        if let Some(g) = &fx.g92 {
+            offsets.g92 = *g;
         }
         if let Some(t) = fx.tlo {
             offsets.tlo = t;
@@ -734,7 +748,7 @@ impl<'a, const N: usize> Controller<'a, N> {
         self.planner = planner;
         self.offsets = offsets;
         if self.check {
-            if let Some(a) = fx.arc {
+            if let Some(a) = &fx.arc {
                 // Check mode: only the position follows the arc.
                 // (Infallible after `check_range`: nothing may fail once committed.)
                 let _ = self.planner.line(a.target(), None, &self.limits);
@@ -751,20 +765,19 @@ impl<'a, const N: usize> Controller<'a, N> {
             self.drivers_on = true;
             self.m17 = true;
         }
-        let job = Job {
-            dwell_ms: fx.dwell_ms,
-            mv,
-            mv2,
-            arc,
-            rate,
-            tool,
-            power,
-            drivers_off: fx.drivers == Some(false),
-            pause: fx.stop == Some(Stop::Pause),
-            end: fx.stop == Some(Stop::End),
-            save: store,
-            ..Job::NONE
-        };
+        // (Set field by field on `Job::none()`: struct-update syntax copies every field.)
+        let mut job = Job::none();
+        job.dwell_ms = fx.dwell_ms;
+        job.mv = mv;
+        job.mv2 = mv2;
+        job.arc = arc;
+        job.rate = rate;
+        job.tool = tool;
+        job.power = power;
+        job.drivers_off = fx.drivers == Some(false);
+        job.pause = fx.stop == Some(Stop::Pause);
+        job.end = fx.stop == Some(Stop::End);
+        job.save = store;
         self.start(job, out);
         Ok(())
     }

@@ -11,6 +11,7 @@
 
 use crate::arc::{Arc, Center};
 use crate::coords::{Offsets, G28};
+use crate::num::{round_u32, u32_of};
 use crate::protocol::Error;
 use crate::spindle::{SpindleDir, FLOOD, MIST};
 use crate::AXIS_NAMES;
@@ -174,31 +175,34 @@ pub struct Block<const N: usize> {
 }
 
 impl<const N: usize> Block<N> {
-    const EMPTY: Self = Block {
-        groups: 0,
-        axis_cmd: false,
-        motion: None,
-        non_modal: None,
-        plane: None,
-        relative: None,
-        inches: None,
-        stop: None,
-        drivers: None,
-        coord: None,
-        tool_length: None,
-        inverse_time: None,
-        spindle: None,
-        coolant: None,
-        axes: [None; N],
-        ijk: [None; 3],
-        r: None,
-        f: None,
-        l: None,
-        p: None,
-        s: None,
-        t: None,
-        n: None,
-    };
+    /// No words. (A function, not a constant: see `Job::none` in the controller.)
+    fn empty() -> Self {
+        Block {
+            groups: 0,
+            axis_cmd: false,
+            motion: None,
+            non_modal: None,
+            plane: None,
+            relative: None,
+            inches: None,
+            stop: None,
+            drivers: None,
+            coord: None,
+            tool_length: None,
+            inverse_time: None,
+            spindle: None,
+            coolant: None,
+            axes: [None; N],
+            ijk: [None; 3],
+            r: None,
+            f: None,
+            l: None,
+            p: None,
+            s: None,
+            t: None,
+            n: None,
+        }
+    }
 
     /// Claims a modal group: a second command of one group is an error.
     fn claim(&mut self, g: u16) -> Result<(), Error> {
@@ -230,7 +234,7 @@ impl<const N: usize> Block<N> {
 
 /// Parses a cleaned line (upper case, no whitespace or comments) into a block.
 pub fn parse<const N: usize>(line: &[u8]) -> Result<Block<N>, Error> {
-    let mut b = Block::<N>::EMPTY;
+    let mut b = Block::<N>::empty();
     let mut i = 0;
     while i < line.len() {
         let letter = line[i];
@@ -254,7 +258,7 @@ fn split_code(v: f64) -> Result<(u32, u32), Error> {
         return Err(Error::UnsupportedCommand);
     }
     let int = libm::trunc(v);
-    Ok((int as u32, libm::round(100.0 * (v - int)) as u32))
+    Ok((u32_of(int), round_u32(100.0 * (v - int))))
 }
 
 fn g_word<const N: usize>(b: &mut Block<N>, v: f64) -> Result<(), Error> {
@@ -433,6 +437,13 @@ pub struct Effects<const N: usize> {
     pub stop: Option<Stop>,
 }
 
+impl<const N: usize> Effects<N> {
+    /// Nothing to do.
+    pub fn none() -> Self {
+        Effects { drivers: None, dwell_ms: None, coord_write: None, g92: None, tlo: None, motion: None, arc: None, home: None, stop: None }
+    }
+}
+
 /// The parser state that outlives a line (Grbl's `gc_state.modal` plus F, S, T).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Modal {
@@ -493,6 +504,20 @@ impl Modal {
         pos: &[f64; N],
         off: &Offsets<N>,
     ) -> Result<(Modal, Effects<N>), Error> {
+        let mut fx = Effects::none();
+        let m = self.interpret_into(b, pos, off, &mut fx)?;
+        Ok((m, fx))
+    }
+
+    /// [`Self::interpret_with`] writing what to do into `fx` (given as [`Effects::none`]), so
+    /// the effects, half a kilobyte on seven axes, are not copied on the way out.
+    pub fn interpret_into<const N: usize>(
+        &self,
+        b: &Block<N>,
+        pos: &[f64; N],
+        off: &Offsets<N>,
+        fx: &mut Effects<N>,
+    ) -> Result<Modal, Error> {
         let mut m = *self;
         if b.n.is_some_and(|n| n > MAX_LINE_NUMBER) {
             return Err(Error::InvalidLineNumber);
@@ -536,19 +561,10 @@ impl Modal {
             if t > 255.0 {
                 return Err(Error::MaxValueExceeded);
             }
-            m.tool = t as u32;
+            m.tool = u32_of(t);
         }
-        let mut fx = Effects {
-            drivers: b.drivers,
-            dwell_ms: None,
-            coord_write: None,
-            g92: None,
-            tlo: None,
-            motion: None,
-            arc: None,
-            home: None,
-            stop: b.stop,
-        };
+        fx.drivers = b.drivers;
+        fx.stop = b.stop;
         let nm = b.non_modal;
         if b.l.is_some() && nm != Some(NonModal::SetCoordData) {
             return Err(Error::UnusedWords);
@@ -556,7 +572,7 @@ impl Modal {
         match (nm, b.p) {
             (Some(NonModal::Dwell), None) => return Err(Error::ValueWordMissing),
             (Some(NonModal::Dwell), Some(p)) if p > MAX_DWELL_S => return Err(Error::BadNumberFormat),
-            (Some(NonModal::Dwell), Some(p)) => fx.dwell_ms = Some(libm::round(p * 1000.0) as u32),
+            (Some(NonModal::Dwell), Some(p)) => fx.dwell_ms = Some(round_u32(p * 1000.0)),
             (Some(NonModal::SetCoordData), _) => {}
             (_, Some(_)) => return Err(Error::UnusedWords),
             _ => {}
@@ -634,7 +650,7 @@ impl Modal {
                 ..m
             };
         }
-        Ok((m, fx))
+        Ok(m)
     }
 }
 

@@ -18,7 +18,9 @@ pub struct Jog<const N: usize> {
 }
 
 /// Parses the text after `$J=` against the modal state, the machine position and the offsets,
-/// for a machine with `axes` axes.
+/// for a machine with `axes` axes. (Not inlined: its block and effects stay off the idle
+/// loop's stack frame, which is live under every G-code line.)
+#[inline(never)]
 pub fn plan<const N: usize>(
     line: &[u8],
     axes: usize,
@@ -44,6 +46,7 @@ pub fn plan<const N: usize>(
     }
     // G1 at the jog's own feed; the modal state itself is not kept.
     let jog_modal = Modal { motion: Motion::Linear, feed: 0.0, ..*modal };
-    let (m, fx) = jog_modal.interpret_with(&b, pos, off)?;
+    let mut fx = crate::gcode::Effects::none();
+    let m = jog_modal.interpret_into(&b, pos, off, &mut fx)?;
     Ok(Jog { target: fx.motion.map_or(*pos, |(t, _)| t), feed: m.feed })
 }

@@ -211,8 +211,8 @@ pub fn put_fixed(out: &mut impl Out, x: f64, decimals: u32) {
         out.put(b"-");
     }
     let a = libm::fabs(scaled);
-    let hi = (a / 1e9) as u32;
-    let lo = (a - hi as f64 * 1e9) as u32;
+    let hi = crate::num::u32_of(a / 1e9);
+    let lo = crate::num::u32_of(a - hi as f64 * 1e9);
     if hi > 0 {
         put_u32(out, hi);
         put_padded(out, lo / scale, 9 - decimals as usize);

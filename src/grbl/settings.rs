@@ -11,19 +11,24 @@
 //! it to its master's share of the path, so axes that do not move never slow a move down.
 
 use crate::protocol::Error;
+use crate::encoder::{self, EncoderSettings};
 use crate::ramp::{Profile, RampConfig, RampError, RampTable, Shape, MAX_RATE_HZ};
 #[allow(unused_imports)]
 use crate::ramp::MAX_RATE_HZ as _;
+use crate::num::{round_u32, u32_of};
 use crate::timing::{ns_to_ticks, Timing};
 use crate::MAX_AXES;
 
 /// Bytes of the flash image.
-pub const SETTINGS_LEN: usize = 160;
+pub const SETTINGS_LEN: usize = 184;
 const MAGIC: u8 = 0xD5;
-const VERSION: u8 = 3;
+const VERSION: u8 = 4;
 /// Byte offset of the settings after the axis arrays: `$12`, `$30`, `$31`, `$33` (f32, u32),
-/// `$32` (flag byte); CRC last.
+/// `$32` (flag byte), the encoder's `$87`-`$99` from `TAIL + 20`; CRC last.
 const TAIL: usize = 24 + 4 * 4 * MAX_AXES;
+const _: () = assert!(TAIL + 20 + crate::encoder::IMAGE_LEN <= SETTINGS_LEN - 4);
+/// Byte offset of the flag bits (`$4`, `$5`, `$6`, `$20`, `$22`, `$21` as bits 0..=5).
+const FLAGS: usize = 19;
 /// Absolute floor of the step period (ticks; 144 = 500 kHz, the engine's design limit). The
 /// binding limits are the pulse rule and the step handler's measured cost, both applied by
 /// `Timing::min_period_for`.
@@ -41,22 +46,100 @@ pub const STATUS_MASK: u16 = 10;
 pub const SPINDLE_PWM_HZ: u16 = 33; // grblHAL's number for the spindle PWM frequency
 
 /// Grbl settings we report but do not implement, with the only value they accept.
-const FIXED: [(u16, f32, u8); 7] = [
-    (11, 0.010, 3),  // junction deviation: every move stops (no look-ahead)
-    (13, 0.0, 0),    // report inches: no
-    (23, 0.0, 0),    // homing direction mask
-    (24, 25.0, 3),   // homing feed
-    (25, 500.0, 3),  // homing seek
-    (26, 250.0, 0),  // homing debounce
-    (27, 1.0, 3),    // homing pull-off
+/// (Their decimals for `$$` are in [`LOW`].)
+const FIXED: [(u16, f32); 7] = [
+    (11, 0.010), // junction deviation (the look-ahead's)
+    (13, 0.0),   // report inches: no
+    (23, 0.0),   // homing direction mask
+    (24, 25.0),  // homing feed
+    (25, 500.0), // homing seek
+    (26, 250.0), // homing debounce
+    (27, 1.0),   // homing pull-off
 ];
 
-/// Setting numbers below 100 in `$$` order: Grbl's, ours and the [`FIXED`] ones. (A table
-/// rather than an iterator chain over `FIXED`: ~400 bytes less flash.)
-const LOW_IDS: [u16; 27] = [
-    0, 1, 2, 3, 4, 5, 6, STATUS_MASK, 11, 12, 13, 20, 21, 22, 23, 24, 25, 26, 27, DIR_SETUP, 30,
-    31, 32, SPINDLE_PWM_HZ, RAMP_START, RAMP_SHAPE, AXIS_COUNT,
+/// How `$N=` checks one setting: the value range (an index into [`RANGES`]; bytes, flags and
+/// the fixed settings have their own rules), the decimals `$$` shows, what a change redoes;
+/// and where the flash image keeps it: byte `at`, and for a flag its bit (`WHOLE`: the byte is
+/// 0 or 1).
+#[derive(Clone, Copy)]
+struct Spec {
+    id: u16,
+    range: u8,
+    decimals: u8,
+    change: Change,
+    at: u8,
+    bit: u8,
+}
+
+/// [`Spec::bit`] of a flag (or the shape) that has a byte of its own.
+const WHOLE: u8 = 8;
+
+/// Value ranges of the `f32` and `u32` settings (inclusive).
+const RANGES: [(f64, f64); 9] = [
+    (0.0, 0.0),                  // 0: no range (bytes, flags, fixed)
+    (0.2, 100.0),                // 1: $0 pulse (0.2 µs: TMC drivers need 100 ns; shorter no driver takes)
+    (1e-4, 1000.0),              // 2: $12 arc tolerance (below 0.1 µm a chord is far below a step)
+    (0.0, 1e6),                  // 3: $30/$31 spindle, $130+ travel
+    (1.0, 100_000.0),            // 4: $33 PWM frequency
+    (0.0, 1000.0),               // 5: $29 direction setup
+    (1.0, MAX_RATE_HZ as f64),   // 6: $40 ramp start
+    (1e-3, 1e5),                 // 7: $100+ steps per unit
+    (1e-3, 1e8),                 // 8: $110+ max rate, $120+ acceleration
 ];
+
+const fn spec(id: u16, range: u8, decimals: u8, change: Change, at: usize, bit: u8) -> Spec {
+    Spec { id, range, decimals, change, at: at as u8, bit }
+}
+
+/// Settings below 100 in `$$` order: Grbl's, ours and the [`FIXED`] ones.
+const LOW: [Spec; 33] = {
+    use Change::{None as Fixed, Pins, Profile, Shell};
+    [
+        spec(0, 1, 3, Profile, 4, 0),
+        spec(1, 0, 0, Shell, 16, 0),
+        spec(2, 0, 0, Pins, 17, 0),
+        spec(3, 0, 0, Pins, 18, 0),
+        spec(4, 0, 0, Shell, FLAGS, 0),
+        spec(5, 0, 0, Shell, FLAGS, 1),
+        spec(6, 0, 0, Shell, FLAGS, 2),
+        spec(STATUS_MASK, 0, 0, Shell, 22, 0),
+        spec(11, 0, 3, Fixed, 0, 0),
+        spec(12, 2, 3, Shell, TAIL, 0),
+        spec(13, 0, 0, Fixed, 0, 0),
+        spec(20, 0, 0, Shell, FLAGS, 3),
+        spec(21, 0, 0, Shell, FLAGS, 5),
+        spec(22, 0, 0, Shell, FLAGS, 4),
+        spec(23, 0, 0, Fixed, 0, 0),
+        spec(24, 0, 3, Fixed, 0, 0),
+        spec(25, 0, 3, Fixed, 0, 0),
+        spec(26, 0, 0, Fixed, 0, 0),
+        spec(27, 0, 3, Fixed, 0, 0),
+        spec(DIR_SETUP, 5, 3, Profile, 8, 0),
+        spec(30, 3, 0, Shell, TAIL + 4, 0),
+        spec(31, 3, 0, Shell, TAIL + 8, 0),
+        spec(32, 0, 0, Shell, TAIL + 16, WHOLE),
+        spec(SPINDLE_PWM_HZ, 4, 0, Shell, TAIL + 12, 0),
+        spec(RAMP_START, 6, 0, Profile, 12, 0),
+        spec(RAMP_SHAPE, 0, 0, Profile, 20, WHOLE),
+        spec(AXIS_COUNT, 0, 0, Profile, 21, 0),
+        // The encoder's (`encoder::IDS`): read, written and stored by `EncoderSettings`.
+        spec(encoder::AXIS, 0, 0, Fixed, 0, 0),
+        spec(encoder::COUNTS_PER_STEP, 0, 0, Fixed, 0, 0),
+        spec(encoder::INVERT, 0, 0, Fixed, 0, 0),
+        spec(encoder::THRESHOLD, 0, 0, Fixed, 0, 0),
+        spec(encoder::ACTION, 0, 0, Fixed, 0, 0),
+        spec(encoder::LAG, 0, 0, Fixed, 0, 0),
+    ]
+};
+
+/// A setting's field, for the one read and write path of `$$` and `$N=`.
+enum Slot<'a> {
+    Real(&'a mut f32),
+    Whole(&'a mut u32),
+    Byte(&'a mut u8),
+    Flag(&'a mut bool),
+    Shape(&'a mut Shape),
+}
 
 /// Persistent settings. Axis arrays are indexed X Y Z A B C U; only the firmware's first N
 /// axes are reported and used.
@@ -111,6 +194,8 @@ pub struct Settings {
     pub status_mask: u8,
     /// `$42` axes the machine has, 3..=7.
     pub axes: u8,
+    /// `$87`-`$89`, `$97`-`$99`: encoder feedback.
+    pub encoder: EncoderSettings,
 }
 
 impl Default for Settings {
@@ -179,6 +264,7 @@ impl Settings {
         max_travel: [200.0; MAX_AXES],
         status_mask: 1,
         axes: 3,
+        encoder: EncoderSettings::DEFAULT,
     };
 
     /// The seed paper's bench (the settings before the safe defaults, which the demos and
@@ -201,8 +287,8 @@ impl Settings {
     /// Setting number `i` of the `$$` listing for `axes` axes (`None` past the end).
     pub fn id(i: usize, axes: usize) -> Option<u16> {
         let axes = axes.min(MAX_AXES);
-        match i.checked_sub(LOW_IDS.len()) {
-            None => LOW_IDS.get(i).copied(),
+        match i.checked_sub(LOW.len()) {
+            None => LOW.get(i).map(|s| s.id),
             Some(j) if j < 4 * axes => Some(100 + 10 * (j / axes) as u16 + (j % axes) as u16),
             Some(_) => None,
         }
@@ -213,43 +299,82 @@ impl Settings {
         (0..).map_while(move |i| Self::id(i, axes))
     }
 
-    /// Value of setting `id` and its decimals for `$$`, if it exists for `axes` axes.
-    pub fn get(&self, id: u16, axes: usize) -> Option<(f64, u32)> {
-        let v = match id {
-            0 => (self.pulse_us as f64, 3),
-            1 => (self.idle_delay_ms as f64, 0),
-            2 => (self.step_invert as f64, 0),
-            3 => (self.dir_invert as f64, 0),
-            4 => (self.enable_invert as u8 as f64, 0),
-            5 => (self.limit_invert as u8 as f64, 0),
-            6 => (self.probe_invert as u8 as f64, 0),
-            12 => (self.arc_tolerance as f64, 3),
-            20 => (self.soft_limits as u8 as f64, 0),
-            21 => (self.hard_limits as u8 as f64, 0),
-            22 => (self.homing as u8 as f64, 0),
-            30 => (self.spindle_max as f64, 0),
-            31 => (self.spindle_min as f64, 0),
-            32 => (self.laser_mode as u8 as f64, 0),
-            SPINDLE_PWM_HZ => (self.spindle_pwm_hz as f64, 0),
-            DIR_SETUP => (self.dir_setup_us as f64, 3),
-            RAMP_START => (self.ramp_start_hz as f64, 0),
-            RAMP_SHAPE => ((self.shape == Shape::SCurve) as u8 as f64, 0),
-            STATUS_MASK => (self.status_mask as f64, 0),
-            AXIS_COUNT => (self.axes as f64, 0),
+    /// How setting `id` is checked and stored, if it exists for `axes` axes.
+    fn spec(id: u16, axes: usize) -> Option<Spec> {
+        use Change::{Profile, Shell};
+        match id {
             100..=139 => {
                 let (g, i) = ((id - 100) / 10, (id % 10) as usize);
-                if i >= axes.min(self.axes as usize).min(MAX_AXES) {
+                if i >= axes.min(MAX_AXES) {
                     return None;
                 }
-                let arr = [&self.steps_per_mm, &self.max_rate, &self.accel, &self.max_travel];
-                (arr[g as usize][i] as f64, 3)
+                // $100+ steps/unit, $110+ max rate, $120+ acceleration, $130+ travel: from
+                // byte 24, in that order.
+                let at = 24 + 4 * (g as usize * MAX_AXES + i);
+                Some(match g {
+                    0 => spec(id, 7, 3, Profile, at, 0),
+                    1 | 2 => spec(id, 8, 3, Profile, at, 0),
+                    _ => spec(id, 3, 3, Shell, at, 0),
+                })
             }
-            _ => {
-                let f = FIXED.iter().find(|f| f.0 == id)?;
-                (f.1 as f64, f.2 as u32)
+            _ => LOW.iter().find(|s| s.id == id).copied(),
+        }
+    }
+
+    /// The field of setting `id` (`None` for the fixed ones and unknown numbers).
+    fn slot(&mut self, id: u16) -> Option<Slot<'_>> {
+        use Slot::*;
+        Some(match id {
+            0 => Real(&mut self.pulse_us),
+            1 => Byte(&mut self.idle_delay_ms),
+            2 => Byte(&mut self.step_invert),
+            3 => Byte(&mut self.dir_invert),
+            4 => Flag(&mut self.enable_invert),
+            5 => Flag(&mut self.limit_invert),
+            6 => Flag(&mut self.probe_invert),
+            STATUS_MASK => Byte(&mut self.status_mask),
+            12 => Real(&mut self.arc_tolerance),
+            20 => Flag(&mut self.soft_limits),
+            21 => Flag(&mut self.hard_limits),
+            22 => Flag(&mut self.homing),
+            DIR_SETUP => Real(&mut self.dir_setup_us),
+            30 => Real(&mut self.spindle_max),
+            31 => Real(&mut self.spindle_min),
+            32 => Flag(&mut self.laser_mode),
+            SPINDLE_PWM_HZ => Whole(&mut self.spindle_pwm_hz),
+            RAMP_START => Whole(&mut self.ramp_start_hz),
+            RAMP_SHAPE => Shape(&mut self.shape),
+            AXIS_COUNT => Byte(&mut self.axes),
+            100..=139 => {
+                let arr = match (id - 100) / 10 {
+                    0 => &mut self.steps_per_mm,
+                    1 => &mut self.max_rate,
+                    2 => &mut self.accel,
+                    _ => &mut self.max_travel,
+                };
+                Real(arr.get_mut((id % 10) as usize)?)
             }
+            _ => return None,
+        })
+    }
+
+    /// Value of setting `id` and its decimals for `$$`, if it exists for `axes` axes.
+    pub fn get(&self, id: u16, axes: usize) -> Option<(f64, u32)> {
+        // The encoder's first: `EncoderSettings` keeps their values and decimals.
+        if let Some(v) = self.encoder.get(id) {
+            return Some(v);
+        }
+        let spec = Self::spec(id, axes.min(self.axes as usize))?;
+        let mut s = *self;
+        let v = match s.slot(id) {
+            Some(Slot::Real(v)) => *v as f64,
+            Some(Slot::Whole(v)) => *v as f64,
+            Some(Slot::Byte(v)) => *v as f64,
+            Some(Slot::Flag(v)) => *v as u8 as f64,
+            Some(Slot::Shape(v)) => (*v == Shape::SCurve) as u8 as f64,
+            None => FIXED.iter().find(|f| f.0 == id)?.1 as f64,
         };
-        Some(v)
+        Some((v, spec.decimals as u32))
     }
 
     /// `$id=value`: checks and stores one setting (Grbl's rules: negative values refused,
@@ -261,157 +386,70 @@ impl Settings {
         if value < 0.0 {
             return Err(Error::NegativeValue);
         }
+        if encoder::IDS.contains(&id) {
+            self.encoder.set(id, value, axes.min(self.axes as usize))?;
+            return Ok(Change::Shell);
+        }
         let int = libm::trunc(value);
-        let byte = || if int <= 255.0 { Ok(int as u8) } else { Err(Error::InvalidStatement) };
-        let range = |lo: f64, hi: f64| {
-            if (lo..=hi).contains(&value) {
-                Ok(value as f32)
-            } else {
-                Err(Error::InvalidStatement)
-            }
-        };
-        match id {
-            0 => {
-                // 0.2 µs: TMC drivers need 100 ns; shorter than that no driver takes.
-                if value < 0.2 {
-                    return Err(Error::StepPulseMin);
-                }
-                self.pulse_us = range(0.2, 100.0)?;
-                Ok(Change::Profile)
-            }
-            1 => {
-                self.idle_delay_ms = byte()?;
-                Ok(Change::Shell)
-            }
-            2 => {
-                self.step_invert = byte()?;
-                Ok(Change::Pins)
-            }
-            3 => {
-                self.dir_invert = byte()?;
-                Ok(Change::Pins)
-            }
-            4 => {
-                self.enable_invert = int != 0.0;
-                Ok(Change::Shell)
-            }
-            5 => {
-                self.limit_invert = int != 0.0;
-                Ok(Change::Shell)
-            }
-            6 => {
-                self.probe_invert = int != 0.0;
-                Ok(Change::Shell)
-            }
-            20 => {
-                // Grbl's rule: soft limits need homing (a known machine position).
-                if int != 0.0 && !self.homing {
-                    return Err(Error::SoftLimitNeedsHoming);
-                }
-                self.soft_limits = int != 0.0;
-                Ok(Change::Shell)
-            }
-            21 => {
-                self.hard_limits = int != 0.0;
-                Ok(Change::Shell)
-            }
-            22 => {
-                // Turning homing off turns soft limits off too (Grbl).
-                self.homing = int != 0.0;
-                self.soft_limits &= self.homing;
-                Ok(Change::Shell)
-            }
-            12 => {
-                // Grbl takes any positive value; below 0.1 µm a chord is far below a step.
-                self.arc_tolerance = range(1e-4, 1000.0)?;
-                Ok(Change::Shell)
-            }
-            30 | 31 => {
-                let v = range(0.0, 1e6)?;
-                *(if id == 30 { &mut self.spindle_max } else { &mut self.spindle_min }) = v;
-                Ok(Change::Shell)
-            }
-            32 => {
-                self.laser_mode = int != 0.0;
-                Ok(Change::Shell)
-            }
-            SPINDLE_PWM_HZ => {
-                range(1.0, 100_000.0)?;
-                self.spindle_pwm_hz = value as u32;
-                Ok(Change::Shell)
-            }
-            DIR_SETUP => {
-                self.dir_setup_us = range(0.0, 1000.0)?;
-                Ok(Change::Profile)
-            }
-            RAMP_START => {
-                range(1.0, MAX_RATE_HZ as f64)?;
-                self.ramp_start_hz = value as u32;
-                Ok(Change::Profile)
-            }
-            RAMP_SHAPE => {
-                self.shape = match int as u32 {
-                    0 => Shape::Trapezoid,
-                    1 => Shape::SCurve,
-                    _ => return Err(Error::InvalidStatement),
-                };
-                Ok(Change::Profile)
-            }
-            STATUS_MASK => {
-                self.status_mask = byte()? & 3;
-                Ok(Change::Shell)
-            }
-            AXIS_COUNT => {
-                if !(3.0..=axes.min(MAX_AXES) as f64).contains(&int) {
-                    return Err(Error::InvalidStatement);
-                }
-                self.axes = int as u8;
-                Ok(Change::Profile)
-            }
-            100..=139 => {
-                let (g, i) = ((id - 100) / 10, (id % 10) as usize);
-                if i >= axes.min(self.axes as usize).min(MAX_AXES) {
-                    return Err(Error::InvalidStatement);
-                }
-                let (arr, v) = match g {
-                    0 => (&mut self.steps_per_mm, range(1e-3, 1e5)?),
-                    1 => (&mut self.max_rate, range(1e-3, 1e8)?),
-                    2 => (&mut self.accel, range(1e-3, 1e8)?),
-                    _ => (&mut self.max_travel, range(0.0, 1e6)?),
-                };
-                arr[i] = v;
-                Ok(if g == 3 { Change::Shell } else { Change::Profile })
-            }
-            _ => {
+        let spec = Self::spec(id, axes.min(self.axes as usize)).ok_or(Error::InvalidStatement)?;
+        let bad = Err(Error::InvalidStatement);
+        if id == 0 && value < 0.2 {
+            return Err(Error::StepPulseMin);
+        }
+        // Grbl's rule: soft limits need homing (a known machine position).
+        if id == 20 && int != 0.0 && !self.homing {
+            return Err(Error::SoftLimitNeedsHoming);
+        }
+        if id == AXIS_COUNT && !(3.0..=axes.min(MAX_AXES) as f64).contains(&int) {
+            return bad;
+        }
+        let (lo, hi) = RANGES[spec.range as usize];
+        let in_range = (lo..=hi).contains(&value);
+        match self.slot(id) {
+            Some(Slot::Real(v)) if in_range => *v = value as f32,
+            Some(Slot::Whole(v)) if in_range => *v = u32_of(value),
+            Some(Slot::Byte(v)) if int <= 255.0 => *v = u32_of(int) as u8,
+            Some(Slot::Flag(v)) => *v = int != 0.0,
+            Some(Slot::Shape(v)) if int <= 1.0 => *v = if int == 0.0 { Shape::Trapezoid } else { Shape::SCurve },
+            Some(_) => return bad,
+            None => {
                 let f = FIXED.iter().find(|f| f.0 == id).ok_or(Error::InvalidStatement)?;
-                if libm::fabs(value - f.1 as f64) < 1e-6 {
-                    Ok(Change::None)
-                } else {
-                    Err(Error::InvalidStatement)
-                }
+                return if libm::fabs(value - f.1 as f64) < 1e-6 { Ok(Change::None) } else { bad };
             }
         }
+        if id == STATUS_MASK {
+            self.status_mask &= 3;
+        }
+        // Turning homing off turns soft limits off too (Grbl).
+        if id == 22 {
+            self.soft_limits &= self.homing;
+        }
+        Ok(spec.change)
     }
 
     /// True when every field is in the range [`Self::set`] accepts.
     pub fn is_valid(&self) -> bool {
-        // Every axis is checked, also those beyond the axis count.
-        let full = Settings { axes: MAX_AXES as u8, ..*self };
+        // Every axis is checked, also those beyond the axis count. Each value must come back
+        // unchanged from `set` (compared as bits: no f32 compare routines in the firmware).
+        // (A copy and one store, not `Settings { axes, ..*self }`: that copies field by field.)
+        let mut full = *self;
+        full.axes = MAX_AXES as u8;
         let mut probe = full;
         let mut ok = (3..=MAX_AXES as u8).contains(&self.axes);
         for id in Self::ids(MAX_AXES).filter(|&id| id != AXIS_COUNT) {
             if let Some((v, _)) = full.get(id, MAX_AXES) {
-                ok &= probe.set(id, v, MAX_AXES).is_ok();
+                ok &= probe.set(id, v, MAX_AXES).is_ok()
+                    && probe.get(id, MAX_AXES).map(|g| g.0.to_bits()) == Some(v.to_bits());
             }
         }
-        ok && probe == full
+        ok
     }
 
     /// Step timing in timer ticks.
     pub fn timing(&self) -> Timing {
         // f64 like the rest of the settings math: f32 arithmetic would link a second soft-float set.
-        let pulse = ns_to_ticks(libm::round(self.pulse_us as f64 * 1000.0) as u32);
-        let dir = ns_to_ticks(libm::round(self.dir_setup_us as f64 * 1000.0) as u32);
+        let pulse = ns_to_ticks(round_u32(self.pulse_us as f64 * 1000.0));
+        let dir = ns_to_ticks(round_u32(self.dir_setup_us as f64 * 1000.0));
         Timing::new(pulse, dir, ISR_FLOOR_TICKS)
     }
 
@@ -447,11 +485,11 @@ impl Settings {
             top2 += v * v;
         }
         let accel = accel * c;
-        let vmax = ((crate::planner::sqrt(top2) * c) as u32).max(1).min(crate::ramp::MAX_RATE_HZ);
+        let vmax = u32_of(crate::planner::sqrt(top2) * c).max(1).min(crate::ramp::MAX_RATE_HZ);
         RampConfig {
             v0: self.ramp_start_hz.max(1).min(vmax),
             vmax,
-            accel: (accel.min(u32::MAX as f64) as u32).max(1),
+            accel: u32_of(accel.min(u32::MAX as f64)).max(1),
             shape: self.shape,
         }
     }
@@ -470,7 +508,7 @@ impl Settings {
                 // fraction, so no move runs faster), down to a lower top only as a last resort.
                 Err(RampError::TooLong { .. }) if attempt < 4 => {
                     let ms = RampTable::<L>::ramp_ms(&cfg) as f64;
-                    cfg.accel = (cfg.accel as f64 * ms / (L as f64 - 2.0).max(1.0)).min(u32::MAX as f64 / 2.0) as u32 + 1;
+                    cfg.accel = u32_of((cfg.accel as f64 * ms / (L as f64 - 2.0).max(1.0)).min(u32::MAX as f64 / 2.0)) + 1;
                 }
                 Err(RampError::TooLong { reachable_vmax }) => {
                     table_limited = true;
@@ -485,37 +523,31 @@ impl Settings {
         Ramped { cfg, max_rate_hz: timing.max_rate_hz(), table_limited }
     }
 
-    /// The flash image: magic, version, fields (little-endian), CRC-32.
+    /// The flash image: magic, version, fields (little-endian, where [`LOW`] and
+    /// [`Self::spec`] put them), CRC-32.
     pub fn to_bytes(&self) -> [u8; SETTINGS_LEN] {
         let mut b = [0u8; SETTINGS_LEN];
-        b[0] = MAGIC;
-        b[1] = VERSION;
-        b[2..4].copy_from_slice(&(SETTINGS_LEN as u16).to_le_bytes());
-        b[4..8].copy_from_slice(&self.pulse_us.to_le_bytes());
-        b[8..12].copy_from_slice(&self.dir_setup_us.to_le_bytes());
-        b[12..16].copy_from_slice(&self.ramp_start_hz.to_le_bytes());
-        b[16] = self.idle_delay_ms;
-        b[17] = self.step_invert;
-        b[18] = self.dir_invert;
-        b[19] = self.enable_invert as u8
-            | (self.limit_invert as u8) << 1
-            | (self.probe_invert as u8) << 2
-            | (self.soft_limits as u8) << 3
-            | (self.homing as u8) << 4
-            | (self.hard_limits as u8) << 5;
-        b[20] = (self.shape == Shape::SCurve) as u8;
-        b[21] = self.axes;
-        b[22] = self.status_mask;
-        // Axis arrays from byte 24, in field order (chunks, not computed indices: no panic path).
-        let values = [&self.steps_per_mm, &self.max_rate, &self.accel, &self.max_travel].into_iter().flatten();
-        for (w, v) in b[24..].chunks_exact_mut(4).zip(values) {
+        b[..4].copy_from_slice(&[MAGIC, VERSION, SETTINGS_LEN as u8, (SETTINGS_LEN >> 8) as u8]);
+        let mut s = *self;
+        for id in Self::ids(MAX_AXES) {
+            let (Some(spec), Some(slot)) = (Self::spec(id, MAX_AXES), s.slot(id)) else { continue };
+            let at = spec.at as usize;
+            // Bytes and flags share their word with their neighbours: OR them in.
+            let (word, own) = match slot {
+                Slot::Real(v) => (v.to_bits(), true),
+                Slot::Whole(v) => (*v, true),
+                Slot::Byte(v) => (*v as u32, false),
+                Slot::Flag(v) => ((*v as u32) << (spec.bit & 7), false),
+                Slot::Shape(v) => ((*v == Shape::SCurve) as u32, false),
+            };
+            if let Some(w) = b.get_mut(at..at + 4) {
+                let old = u32::from_le_bytes([w[0], w[1], w[2], w[3]]);
+                w.copy_from_slice(&(if own { word } else { old | word }).to_le_bytes());
+            }
+        }
+        for (w, v) in b[TAIL + 20..].chunks_exact_mut(4).zip(self.encoder.0) {
             w.copy_from_slice(&v.to_le_bytes());
         }
-        b[TAIL..TAIL + 4].copy_from_slice(&self.arc_tolerance.to_le_bytes());
-        b[TAIL + 4..TAIL + 8].copy_from_slice(&self.spindle_max.to_le_bytes());
-        b[TAIL + 8..TAIL + 12].copy_from_slice(&self.spindle_min.to_le_bytes());
-        b[TAIL + 12..TAIL + 16].copy_from_slice(&self.spindle_pwm_hz.to_le_bytes());
-        b[TAIL + 16] = self.laser_mode as u8;
         let crc = crc32(&b[..SETTINGS_LEN - 4]);
         b[SETTINGS_LEN - 4..].copy_from_slice(&crc.to_le_bytes());
         b
@@ -525,54 +557,46 @@ impl Settings {
     /// checksum, a value out of range).
     pub fn decode(b: &[u8]) -> Option<Settings> {
         let b: &[u8; SETTINGS_LEN] = b.get(..SETTINGS_LEN)?.try_into().ok()?;
-        let word = |at: usize| [b[at], b[at + 1], b[at + 2], b[at + 3]];
-        if b[0] != MAGIC || b[1] != VERSION || b[2..4] != (SETTINGS_LEN as u16).to_le_bytes() {
+        let word = |at: usize| u32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]]);
+        if word(0) != u32::from_le_bytes([MAGIC, VERSION, SETTINGS_LEN as u8, (SETTINGS_LEN >> 8) as u8]) {
             return None;
         }
-        if crc32(&b[..SETTINGS_LEN - 4]) != u32::from_le_bytes(word(SETTINGS_LEN - 4)) {
+        if crc32(&b[..SETTINGS_LEN - 4]) != word(SETTINGS_LEN - 4) {
             return None;
         }
-        let mut s = Settings {
-            pulse_us: f32::from_le_bytes(word(4)),
-            dir_setup_us: f32::from_le_bytes(word(8)),
-            ramp_start_hz: u32::from_le_bytes(word(12)),
-            arc_tolerance: f32::from_le_bytes(word(TAIL)),
-            spindle_max: f32::from_le_bytes(word(TAIL + 4)),
-            spindle_min: f32::from_le_bytes(word(TAIL + 8)),
-            spindle_pwm_hz: u32::from_le_bytes(word(TAIL + 12)),
-            laser_mode: match b[TAIL + 16] {
-                0 => false,
-                1 => true,
-                _ => return None,
-            },
-            idle_delay_ms: b[16],
-            step_invert: b[17],
-            dir_invert: b[18],
-            enable_invert: b[19] & 1 != 0,
-            limit_invert: b[19] & 2 != 0,
-            probe_invert: b[19] & 4 != 0,
-            soft_limits: b[19] & 8 != 0,
-            homing: b[19] & 16 != 0,
-            hard_limits: b[19] & 32 != 0,
-            shape: match b[20] {
-                0 => Shape::Trapezoid,
-                1 => Shape::SCurve,
-                _ => return None,
-            },
-            axes: b[21],
-            status_mask: b[22],
-            ..Settings::DEFAULT
-        };
-        let values = [&mut s.steps_per_mm, &mut s.max_rate, &mut s.accel, &mut s.max_travel].into_iter().flatten();
-        for (w, v) in b[24..].chunks_exact(4).zip(values) {
-            *v = f32::from_le_bytes([w[0], w[1], w[2], w[3]]);
+        let mut s = Settings::DEFAULT;
+        for id in Self::ids(MAX_AXES) {
+            let (Some(spec), Some(slot)) = (Self::spec(id, MAX_AXES), s.slot(id)) else { continue };
+            let at = (spec.at as usize).min(SETTINGS_LEN - 8);
+            let byte = b[at];
+            let flag = match spec.bit {
+                WHOLE if byte > 1 => return None,
+                WHOLE => byte != 0,
+                bit => byte >> (bit & 7) & 1 != 0,
+            };
+            match slot {
+                Slot::Real(v) => *v = f32::from_bits(word(at)),
+                Slot::Whole(v) => *v = word(at),
+                Slot::Byte(v) => *v = byte,
+                Slot::Flag(v) => *v = flag,
+                Slot::Shape(v) => *v = if flag { Shape::SCurve } else { Shape::Trapezoid },
+            }
         }
+        s.encoder = EncoderSettings::from_bytes(&b[TAIL + 20..]);
         s.is_valid().then_some(s)
     }
 
     /// Settings from a flash image, or the defaults if it is not a valid one.
     pub fn from_bytes(b: &[u8]) -> Settings {
         Self::decode(b).unwrap_or(Settings::DEFAULT)
+    }
+}
+
+/// Stores 4 bytes at `at` (one call instead of a slice index and copy at each field).
+#[inline(never)]
+pub(crate) fn put4(b: &mut [u8], at: usize, v: [u8; 4]) {
+    if let Some(w) = b.get_mut(at..at + 4) {
+        w.copy_from_slice(&v);
     }
 }
 
@@ -596,9 +620,9 @@ mod tests {
     fn low_ids_are_ours_and_every_fixed_one() {
         let ours = [
             0, 1, 2, 3, 4, 5, 6, STATUS_MASK, 12, 20, 21, 22, 30, 31, 32, SPINDLE_PWM_HZ, DIR_SETUP, RAMP_START, RAMP_SHAPE,
-            AXIS_COUNT,
+            AXIS_COUNT, 87, 88, 89, 97, 98, 99,
         ];
-        assert_eq!(LOW_IDS.len(), ours.len() + FIXED.len());
-        assert!(ours.iter().chain(FIXED.iter().map(|f| &f.0)).all(|id| LOW_IDS.contains(id)));
+        assert_eq!(LOW.len(), ours.len() + FIXED.len());
+        assert!(ours.iter().chain(FIXED.iter().map(|f| &f.0)).all(|id| LOW.iter().any(|s| s.id == *id)));
     }
 }

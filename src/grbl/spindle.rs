@@ -89,7 +89,7 @@ pub fn duty(speed: f64, min: f64, max: f64, arr: u16) -> u16 {
     } else if speed <= min {
         1
     } else {
-        (libm::round((speed - min) / (max - min) * top as f64) as u32).max(1).min(top)
+        crate::num::round_u32((speed - min) / (max - min) * top as f64).max(1).min(top)
     };
     ccr.min(0xFFFF) as u16
 }

@@ -12,7 +12,7 @@
 //! Each page sees every second write, halving flash wear per page.
 
 use crate::coords::{Coords, COORDS_LEN};
-use crate::settings::{crc32, Settings, SETTINGS_LEN};
+use crate::settings::{crc32, put4, Settings, SETTINGS_LEN};
 
 /// Bytes a stored text line can hold (Grbl keeps 80 with its terminator).
 pub const TEXT_LEN: usize = 79;
@@ -71,13 +71,15 @@ pub struct Stored {
 
 impl From<Settings> for Stored {
     fn from(settings: Settings) -> Self {
-        Stored { settings, ..Stored::DEFAULT }
+        let mut s = Stored::defaults();
+        s.settings = settings;
+        s
     }
 }
 
 impl Default for Stored {
     fn default() -> Self {
-        Self::DEFAULT
+        Self::defaults()
     }
 }
 
@@ -90,11 +92,24 @@ impl Stored {
         build_info: Text::EMPTY,
     };
 
+    /// [`Self::DEFAULT`] built in place: the constant would be copied from flash whole (its
+    /// kilobyte of zeros included), where zeroing takes a few instructions.
+    pub fn defaults() -> Stored {
+        Stored {
+            seq: 0,
+            settings: Settings::DEFAULT,
+            coords: Coords::ZERO,
+            startup: [Text::EMPTY; STARTUP_LINES],
+            build_info: Text::EMPTY,
+        }
+    }
+
     /// The flash image.
+    #[inline(never)]
     pub fn to_bytes(&self) -> [u8; IMAGE_LEN] {
         let mut b = [0u8; IMAGE_LEN];
-        b[..4].copy_from_slice(&MAGIC);
-        b[4..8].copy_from_slice(&self.seq.to_le_bytes());
+        put4(&mut b, 0, MAGIC);
+        put4(&mut b, 4, self.seq.to_le_bytes());
         b[SETTINGS_AT..COORDS_AT].copy_from_slice(&self.settings.to_bytes());
         b[COORDS_AT..TEXT_AT].copy_from_slice(&self.coords.to_bytes());
         let texts = self.startup.iter().chain(core::iter::once(&self.build_info));
@@ -103,7 +118,7 @@ impl Stored {
             w[1..].copy_from_slice(&t.buf);
         }
         let crc = crc32(&b[..IMAGE_LEN - 4]);
-        b[IMAGE_LEN - 4..].copy_from_slice(&crc.to_le_bytes());
+        put4(&mut b, IMAGE_LEN - 4, crc.to_le_bytes());
         b
     }
 
@@ -114,12 +129,10 @@ impl Stored {
         if b[..4] != MAGIC || crc32(&b[..IMAGE_LEN - 4]) != crc {
             return None;
         }
-        let mut s = Stored {
-            seq: u32::from_le_bytes(b[4..8].try_into().ok()?),
-            settings: Settings::decode(&b[SETTINGS_AT..COORDS_AT])?,
-            coords: Coords::from_bytes(&b[COORDS_AT..TEXT_AT])?,
-            ..Stored::DEFAULT
-        };
+        let mut s = Stored::defaults();
+        s.seq = u32::from_le_bytes(b[4..8].try_into().ok()?);
+        s.settings = Settings::decode(&b[SETTINGS_AT..COORDS_AT])?;
+        s.coords = Coords::from_bytes(&b[COORDS_AT..TEXT_AT])?;
         let texts = s.startup.iter_mut().chain(core::iter::once(&mut s.build_info));
         for (w, t) in b[TEXT_AT..].chunks_exact(TEXT_LEN + 1).zip(texts) {
             *t = Text::new(w.get(1..1 + w[0] as usize)?)?;
@@ -131,8 +144,8 @@ impl Stored {
     /// other one). Nothing valid: the defaults, and page 0.
     pub fn load(pages: [&[u8]; 2]) -> (Stored, usize) {
         match Self::newest(pages) {
-            Some(i) => (Stored::decode(pages[i]).unwrap_or(Stored::DEFAULT), 1 - i),
-            None => (Stored::DEFAULT, 0),
+            Some(i) => (Stored::decode(pages[i]).unwrap_or_else(Stored::defaults), 1 - i),
+            None => (Stored::defaults(), 0),
         }
     }
 

@@ -87,7 +87,7 @@ impl Rates {
         }
         // max/min, not clamp (no panic path); f64 like the planner (no f32 soft float set).
         let hz = (self.asked_hz as f64 * pct as f64 * 0.01).min(self.cap_hz as f64).max(MIN_RATE_HZ as f64);
-        period_of_millihz((hz * 1000.0) as u64)
+        period_of_millihz(crate::num::u64_of(hz * 1000.0))
     }
 }
 

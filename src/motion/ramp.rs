@@ -23,6 +23,7 @@ use core::sync::atomic::{AtomicBool, Ordering};
 
 use fixed::types::U28F4;
 
+use crate::num::{u32_of, u64_of};
 use crate::timing::Timing;
 use crate::TIMER_HZ;
 
@@ -84,7 +85,7 @@ const S_CURVE_SPAN: f64 = 4.0;
 /// (f64, exact here below 2^53: it keeps 64-bit integer division out of the firmware.)
 pub fn period_of_millihz(milli_hz: u64) -> Period {
     let q4 = (TIMER_HZ as f64 * 16_000.0) / (milli_hz.max(1) as f64) + 0.5;
-    Period::from_bits(if q4 >= u32::MAX as f64 { u32::MAX } else { q4 as u32 })
+    Period::from_bits(if q4 >= u32::MAX as f64 { u32::MAX } else { u32_of(q4) })
 }
 
 /// Period of a whole rate in steps/s.
@@ -133,7 +134,7 @@ impl<const L: usize> RampTable<L> {
         match cfg.shape {
             Shape::Trapezoid => ms,
             // The logistic's steepest slope is span/2 / norm of the mean slope.
-            Shape::SCurve => (ms as f64 * s_curve_stretch()) as u64 + 1,
+            Shape::SCurve => u64_of(ms as f64 * s_curve_stretch()) + 1,
         }
     }
 
@@ -154,9 +155,9 @@ impl<const L: usize> RampTable<L> {
             let reachable = match cfg.shape {
                 // f64 (exact: the product is below 2^53 and a quotient that is not whole is
                 // at least 1/1000 from the next integer): no 64-bit division in the firmware.
-                Shape::Trapezoid => cfg.v0 as u64 + (cfg.accel as f64 * L as f64 / 1000.0) as u64,
+                Shape::Trapezoid => cfg.v0 as u64 + u64_of(cfg.accel as f64 * L as f64 / 1000.0),
                 Shape::SCurve => {
-                    cfg.v0 as u64 + (cfg.accel as f64 * L as f64 / 1000.0 / s_curve_stretch()) as u64
+                    cfg.v0 as u64 + u64_of(cfg.accel as f64 * L as f64 / 1000.0 / s_curve_stretch())
                 }
             };
             return Err(RampError::TooLong { reachable_vmax: reachable.saturating_sub(1) as u32 });
@@ -170,6 +171,14 @@ impl<const L: usize> RampTable<L> {
             if self.periods[i] > self.periods[i - 1] {
                 self.periods[i] = self.periods[i - 1];
             }
+        }
+        // The last millisecond's mean is below `vmax` when the ramp ends inside it: one more
+        // entry at `vmax` itself, so every cruise up to `vmax` has an index to walk to.
+        let top = period_of_millihz(cfg.vmax as u64 * 1000);
+        let mut n = n;
+        if n < L && self.periods[n - 1] > top {
+            self.periods[n] = top;
+            n += 1;
         }
         // Distance walked: the rate is interpolated between entries, so integrate each
         // entry-to-entry stretch as a trapezoid (the last entry counts flat).
@@ -259,7 +268,7 @@ impl<const L: usize> RampTable<L> {
         }
         let (a, b) = (self.periods[lo].to_bits() as f64, self.periods[hi].to_bits() as f64);
         let f = if a > b { (a - p) / (a - b) } else { 0.0 };
-        ((lo as u32) << IDX_FRAC) + ((f.max(0.0).min(1.0) * IDX_ONE as f64) as u32).min(IDX_MASK)
+        ((lo as u32) << IDX_FRAC) + u32_of(f.max(0.0).min(1.0) * IDX_ONE as f64).min(IDX_MASK)
     }
 
     /// The highest fractional index (Q20) whose [`Self::sum_at`] is at most `sum` (clamped to
@@ -388,7 +397,7 @@ fn mean_millihz(cfg: &RampConfig, i: usize, n: usize) -> u64 {
                 // Ramp part of length f = (vmax-start)/a ms, then vmax for 1-f.
                 let f = (vmax - start) as f64 / a as f64;
                 let mean = f * (start as f64 + vmax as f64) / 2.0 + (1.0 - f) * vmax as f64;
-                (mean as u64).min(vmax)
+                u64_of(mean).min(vmax)
             }
         }
         Shape::SCurve => {
@@ -397,7 +406,7 @@ fn mean_millihz(cfg: &RampConfig, i: usize, n: usize) -> u64 {
             let u = ((i as f64 + 0.5) / n as f64).min(1.0);
             let v = v0 as f64 + (vmax - v0) as f64 * s_curve(u);
             // max/min, not clamp: its panic message would link integer formatting.
-            (v as u64).max(v0.max(1)).min(vmax.max(1))
+            u64_of(v).max(v0.max(1)).min(vmax.max(1))
         }
     }
 }

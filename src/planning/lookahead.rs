@@ -18,6 +18,7 @@
 //! handed to the engine and lowers each exit to what its move can reach. So the buffer always
 //! ends at rest, and a starved buffer never means an abrupt stop from speed.
 
+use crate::num::u32_of;
 use crate::prepared::RampPlan;
 use crate::queue::{Move, Overrides, Rates};
 use crate::ramp::{Period, Profile, RampTable, IDX_ONE};
@@ -76,8 +77,8 @@ impl<const N: usize> Block<N> {
             (Some(p), true) => {
                 let (s, walk_q) = walk_of(p.share as f64, p.accel as f64, per_mm, t_accel);
                 let r = walk_q as f64 / IDX_ONE as f64;
-                let scale = (65536.0 / s).min(u32::MAX as f64) as u32;
-                let dist_q = ((s / r) * 65536.0).min(u32::MAX as f64) as u32;
+                let scale = u32_of((65536.0 / s).min(u32::MAX as f64));
+                let dist_q = u32_of(((s / r) * 65536.0).min(u32::MAX as f64));
                 let plan = RampPlan { cruise_q: 0, exit_q: 0, walk_q, scale, dist_q, cruise: mv.cruise };
                 let budget = usable(total) * 256.0 * r / s;
                 let v_j = if joins { p.junction as f64 * per_mm } else { 0.0 };
@@ -85,7 +86,7 @@ impl<const N: usize> Block<N> {
             }
             _ => (RampPlan::lone(0, mv.cruise), usable(total) * 256.0, 0),
         };
-        let budget = budget.clamp(0.0, u32::MAX as f64) as u32;
+        let budget = u32_of(budget.clamp(0.0, u32::MAX as f64));
         let mut b = Block { mv, ramp, budget, junction_q, max_entry_q: 0, rev_entry_q: u32::MAX, entry_q: 0, exit_q: 0 };
         b.price(profile, o);
         b
@@ -125,7 +126,7 @@ pub fn cruise_for<const L: usize>(rates: &Rates, o: Overrides, scale: u32, min_b
 pub fn walk_of(share: f64, accel: f64, per_mm: f64, t_accel: f64) -> (f64, u32) {
     let s = (share / per_mm).clamp(1e-6, 1.0);
     let r = (accel * per_mm / t_accel).clamp(0.0, 1.0);
-    (s, ((r * IDX_ONE as f64) as u32).max(1))
+    (s, u32_of(r * IDX_ONE as f64).max(1))
 }
 
 /// The lowest index (Q20) where the table, scaled by `scale` (Q16), is at least as fast as a

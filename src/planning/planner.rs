@@ -169,7 +169,7 @@ impl<const N: usize> Planner<N> {
         // max/min, not f64::clamp: its panic message would link float formatting into the firmware.
         // Milli-steps/s: G93 times need more than whole steps/s at low rates.
         let top_millihz = crate::ramp::MAX_RATE_HZ as u64 * 1000;
-        let cruise_millihz = (libm::round(wanted_hz.max(1.0).min(top) * 1000.0) as u64).min(top_millihz);
+        let cruise_millihz = crate::num::u64_of(libm::round(wanted_hz.max(1.0).min(top) * 1000.0)).min(top_millihz);
         let mut mv = Move::new_millihz(delta, cruise_millihz).map_err(|_| Error::InvalidTarget)?;
         mv.ovr = ovr;
         // Junction deviation only: the look-ahead caps it by both moves' speeds under the

@@ -31,7 +31,30 @@ impl Out for Tx {
     }
 }
 
+/// A motor with a quadrature encoder on one axis, as TIM3 and the firmware's SysTick see it:
+/// the count follows the axis's position `lag_ms` milliseconds late, times `counts_per_step`,
+/// minus the counts slipped so far; the controller gets the library's own 16-bit extension.
+pub struct EncoderModel {
+    pub axis: usize,
+    pub counts_per_step: f64,
+    pub lag_ms: usize,
+    /// Counts lost so far (missed steps × counts per step).
+    pub slipped: f64,
+    history: std::collections::VecDeque<i32>,
+    sampler: ddastep::encoder::count::Sampler,
+    /// The last sample: extended count, counts of the window.
+    last: (i32, i32),
+}
+
+impl EncoderModel {
+    pub fn new(axis: usize, counts_per_step: f64, lag_ms: usize) -> Self {
+        EncoderModel { axis, counts_per_step, lag_ms, slipped: 0.0, history: Default::default(), sampler: Default::default(), last: (0, 0) }
+    }
+}
+
 pub struct Bench<const N: usize> {
+    /// An encoder read before every poll, when set.
+    pub encoder: Option<EncoderModel>,
     pub shared: &'static Shared<N>,
     pub ctl: Controller<'static, N>,
     pub engine: Engine<'static, N>,
@@ -70,6 +93,7 @@ impl<const N: usize> Bench<N> {
         let rxq: &'static mut Queue<u8, 256> = Box::leak(Box::new(Queue::new()));
         let (rx_in, rx_out) = rxq.split();
         let mut b = Bench {
+            encoder: None,
             shared,
             ctl,
             engine,
@@ -126,11 +150,24 @@ impl<const N: usize> Bench<N> {
         if self.shared.positions() != before && !self.enabled {
             self.stepped_while_disabled = true;
         }
+        if let Some(e) = &mut self.encoder {
+            // SysTick's sample, once a millisecond.
+            e.history.push_back(self.shared.positions()[e.axis]);
+            while e.history.len() > e.lag_ms + 1 {
+                e.history.pop_front();
+            }
+            let counts = (e.history[0] as f64 * e.counts_per_step - e.slipped).floor() as i64;
+            e.last = e.sampler.sample(counts as u16);
+        }
         self.idle_step();
     }
 
-    /// One pass of the firmware's idle loop (the library's `idle_step`).
+    /// One pass of the firmware's idle loop (the encoder check, then the library's
+    /// `idle_step`).
     fn idle_step(&mut self) {
+        if let Some(e) = &self.encoder {
+            self.ctl.encoder(e.last.0, e.last.1, &mut self.tx);
+        }
         let a = idle_step(&mut self.ctl, &mut self.rx_out, &mut self.tx, self.now_ms, self.req);
         self.enabled = a.enable;
         self.actions.push(a);

@@ -35,7 +35,10 @@ impl<const N: usize> Controller<'_, N> {
         // Overrides never scale a jog (Grbl).
         let mv = planner.line(&j.target, Some(j.feed), &self.limits)?.map(|p| Planned { mv: p.mv.fixed(), ..p });
         self.planner = planner;
-        self.start(Job { mv, jog: true, ..Job::NONE }, out);
+        let mut job = Job::none();
+        job.mv = mv;
+        job.jog = true;
+        self.start(job, out);
         Ok(())
     }
 

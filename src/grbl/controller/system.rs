@@ -38,11 +38,11 @@ impl<const N: usize> Controller<'_, N> {
             }
             b"$" => {
                 need_idle(idle || self.check)?;
-                self.start(Job { listing: Some(Listing::Settings(0)), ..Job::NONE }, out);
+                self.start_listing(Listing::Settings(0), out);
             }
             b"#" => {
                 need_idle(idle)?;
-                self.start(Job { listing: Some(Listing::Params(0)), ..Job::NONE }, out);
+                self.start_listing(Listing::Params(0), out);
             }
             b"I" => {
                 need_idle(idle)?;
@@ -116,6 +116,13 @@ impl<const N: usize> Controller<'_, N> {
         Ok(())
     }
 
+    /// Starts a long listing (`$$`, `$#`).
+    fn start_listing(&mut self, l: Listing, out: &mut impl Out) {
+        let mut job = Job::none();
+        job.listing = Some(l);
+        self.start(job, out);
+    }
+
     /// `$Nn=line`: the line runs (as Grbl checks it, by executing it) and is stored if valid.
     fn store_startup(&mut self, rest: &[u8], idle: bool, out: &mut impl Out) -> Result<(), Error> {
         let mut i = 0;
@@ -154,6 +161,8 @@ impl<const N: usize> Controller<'_, N> {
                 self.planner.sync(self.shared.positions(), &self.limits);
             }
         }
+        // Any change re-zeroes the encoder check (settings change only at rest).
+        self.enc_configure();
     }
 
     /// Writes listing lines while they fit; the listing left, if any.
