@@ -27,7 +27,7 @@
 //!
 //! Cycle budget: see bench/RESULTS.md (modeled on the virtual bench).
 
-use core::sync::atomic::Ordering::{Acquire, Relaxed};
+use core::sync::atomic::Ordering::Relaxed;
 
 use crate::board::PinMap;
 use crate::control::Ctl;
@@ -274,12 +274,13 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
         }
     }
 
-    /// The running move's cruise as the feeder last priced it (an override changed): the
-    /// floor, then the index (see [`Prepared`]); a new index re-plans the trigger.
+    /// The running move's cruise as the feeder last priced it (an override changed); a new
+    /// index re-plans the trigger. (Relaxed: the interrupt reads both while the feeder cannot
+    /// run, so it sees either store order's halves as [`Prepared`] describes.)
     #[inline(always)]
     fn cruise_update(&mut self) {
         // SAFETY: atomic fields of the running slot.
-        let (bits, q) = unsafe { ((*self.cur).cruise_bits.load(Acquire), (*self.cur).cruise_q.load(Relaxed)) };
+        let (bits, q) = unsafe { ((*self.cur).cruise_bits.load(Relaxed), (*self.cur).cruise_q.load(Relaxed)) };
         self.plan.cruise = Period::from_bits(bits);
         if q != self.plan.cruise_q {
             self.plan.cruise_q = q;

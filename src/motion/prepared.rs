@@ -69,9 +69,10 @@ pub struct Prepared<const N: usize> {
     /// The feeder raises this (from `ramp.exit_q`) while the move is the last one queued.
     pub(crate) exit_q: AtomicU32,
     /// The cruise under the overrides in force (index Q20, floor period bits): the feeder
-    /// stores the index, then the floor, when an override changes; the engine reads the floor,
-    /// then the index, once per ramp millisecond (so it never pairs a new floor with an old
-    /// index).
+    /// stores the index, then the floor (release), when an override changes; the engine reads
+    /// both once per ramp millisecond in its interrupt, where the feeder cannot run between the
+    /// two loads, so at worst it pairs a new index with the old floor (harmless: the floor only
+    /// holds at or below the index), never a new floor with an old index.
     pub(crate) cruise_q: AtomicU32,
     pub(crate) cruise_bits: AtomicU32,
     pub(crate) min_period: Period,
