@@ -41,6 +41,7 @@ fn status_and_enc_command_follow_the_encoder() {
     let st = b.status();
     assert!(st.contains("|FS:0,0|") && st.ends_with("|Enc:0.000,0>\r\n"), "{st}");
     assert_eq!(b.ctl.encoder_error_steps(), Some(0.0));
+    assert_eq!(b.line("$ENC"), "[ENC:X,0.000,0.000,0]\r\nok\r\n");
     assert_eq!(b.line("G1 X50 F3000"), "ok\r\n");
     b.run_ms(400);
     // Cruising at 3000 mm/min: the 8 ms window sees it to the count (4 counts per step).
@@ -53,8 +54,10 @@ fn status_and_enc_command_follow_the_encoder() {
     // 5000 steps × 4 counts: the encoder's own position; standing still once the window passed.
     b.run_ms(8);
     assert!(b.status().contains("|Enc:50.000,0>"));
-    // Off: no field, no check.
+    assert_eq!(b.line("$ENC"), "[ENC:X,50.000,50.000,0]\r\nok\r\n");
+    // Off: no field, no check, and `$ENC` is refused.
     assert_eq!(b.line("$87=0"), "ok\r\n");
+    assert!(b.line("$ENC").starts_with("error:"));
     assert!(!b.status().contains("Enc"));
     assert_eq!(b.ctl.encoder_error_steps(), None);
 }

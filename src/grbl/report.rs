@@ -132,16 +132,34 @@ pub fn status(out: &mut impl Out, s: &Status) {
 
 /// `[MSG:Step loss X 12]`: the axis and how far the motor is behind, steps (negative: ahead).
 pub fn step_loss(out: &mut impl Out, axis: usize, steps: f64) {
-    out.put(b"[MSG:Step loss ");
-    out.put(axis_letter(axis));
-    out.put(b" ");
-    put_fixed(out, steps, 0);
-    out.put(b"]\r\n");
+    values(out, [b"[MSG:Step loss ", axis_letter(axis), b" "], &[(steps, 0)], b"]\r\n");
+}
+
+/// `$ENC`: `[ENC:X,10.000,9.960,4]`: axis, commanded and measured position (mm, machine),
+/// commanded − measured steps.
+pub fn encoder(out: &mut impl Out, axis: usize, commanded_mm: f64, measured_mm: f64, steps: f64) {
+    values(out, [b"[ENC:", axis_letter(axis), b","], &[(commanded_mm, 3), (measured_mm, 3), (steps, 0)], b"]\r\n");
 }
 
 /// The letter of axis `i` (X Y Z A B C U).
 fn axis_letter(i: usize) -> &'static [u8] {
     b"XYZABCU".get(i..=i).unwrap_or_default()
+}
+
+/// `head`, then `(value, decimals)` separated by commas, then `tail`: one copy of the writes
+/// for the encoder's two lines.
+#[inline(never)]
+fn values(out: &mut impl Out, head: [&[u8]; 3], values: &[(f64, u32)], tail: &[u8]) {
+    for part in head {
+        out.put(part);
+    }
+    for (i, &(v, d)) in values.iter().enumerate() {
+        if i > 0 {
+            out.put(b",");
+        }
+        put_fixed(out, v, d);
+    }
+    out.put(tail);
 }
 
 fn axes(out: &mut impl Out, v: &[f64]) {
@@ -308,6 +326,7 @@ mod tests {
         let st = Status { enc: Some((-0.0625, 1234.4)), wco: None, ov: None, bf: None, ..st };
         assert_eq!(text(|o| status(o, &st)), "<Run|WPos:-1.235,0.001,12.000|FS:3000,0|Enc:-0.063,1234>\r\n");
         assert_eq!(text(|o| step_loss(o, 0, 37.25)), "[MSG:Step loss X 37]\r\n");
+        assert_eq!(text(|o| encoder(o, 6, 10.0, 9.96, -4.0)), "[ENC:U,10.000,9.960,-4]\r\n");
         assert_eq!(text(|o| modes(o, &Modal::RESET)), "[GC:G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0]\r\n");
         assert_eq!(text(|o| setting(o, 110, 36000.0, 3)), "$110=36000.000\r\n");
         let off = Offsets::<3>::default();

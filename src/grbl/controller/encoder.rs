@@ -1,6 +1,5 @@
-//! Encoder feedback in the controller: the step-loss check each turn of the idle loop and the
-//! `|Enc:` status field (see [`crate::encoder`]). The status report shows the commanded
-//! position (`MPos:`) beside the measured one (`Enc:`).
+//! Encoder feedback in the controller: the step-loss check each turn of the idle loop, the
+//! `|Enc:` status field and `$ENC` (see [`crate::encoder`]).
 //!
 //! A loss prints `[MSG:Step loss X 37]` (axis, commanded − measured steps) at once, then per
 //! `$98`: a feed hold (the check re-arms, accepting the position, when the hold is released
@@ -10,7 +9,7 @@
 
 use super::Controller;
 use crate::encoder::loss::Reading;
-use crate::protocol::Out;
+use crate::protocol::{Error, Out};
 use crate::report;
 
 impl<const N: usize> Controller<'_, N> {
@@ -45,6 +44,15 @@ impl<const N: usize> Controller<'_, N> {
     pub(super) fn encoder_status(&self) -> Option<(f64, f64)> {
         let spm = *self.limits.steps_per_mm.get(self.enc.axis()?)?;
         Some((self.enc.measured_steps() / spm, self.enc.speed_steps_per_s() * 60.0 / spm))
+    }
+
+    /// `$ENC`: `[ENC:X,commanded mm,measured mm,commanded - measured steps]`.
+    pub(super) fn encoder_report(&self, out: &mut impl Out) -> Result<(), Error> {
+        let axis = self.enc.axis().ok_or(Error::SettingDisabled)?;
+        let spm = *self.limits.steps_per_mm.get(axis).ok_or(Error::SettingDisabled)?;
+        let e = &self.enc;
+        report::encoder(out, axis, e.commanded_steps() as f64 / spm, e.measured_steps() / spm, e.error_steps());
+        Ok(())
     }
 
     /// Commanded − measured position of the watched axis at the last reading, steps (what a

@@ -25,6 +25,7 @@ impl<const N: usize> Controller<'_, N> {
                 out.put(report::UNLOCKED);
             }
             b"X" => {}
+            b"ENC" => self.encoder_report(out)?,
             b"H" => return Err(Error::SettingDisabled),
             b"C" if self.check => {
                 // Leaving check mode resets, as in Grbl: state and position as before `$C`.

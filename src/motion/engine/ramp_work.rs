@@ -13,6 +13,7 @@ use core::sync::atomic::Ordering::Relaxed;
 
 use super::{Engine, Phase};
 use crate::queue::State;
+use crate::ramp::Period;
 use crate::walk::{base_at, scaled, Step as WalkStep, FRESH, FRESH_MASK, PERIOD, PREDICT, TRIGGER};
 use crate::TICKS_PER_MS;
 
@@ -69,14 +70,15 @@ impl<const N: usize, const L: usize> Engine<'_, N, L> {
         }
     }
 
-    /// The exit target: 0 under a hold or when no successor is queued yet.
+    /// The exit target: 0 under a hold or when no successor is queued yet; never above the
+    /// cruise (an override may have lowered it below the planned exit).
     #[inline(always)]
     pub(super) fn target(&self) -> u32 {
         if self.hold || !self.ring.has_next() {
             0
         } else {
             // SAFETY: an atomic field of the running slot.
-            unsafe { (*self.cur).exit_q.load(Relaxed) }
+            unsafe { (*self.cur).exit_q.load(Relaxed) }.min(self.plan.cruise_q)
         }
     }
 
@@ -90,6 +92,7 @@ impl<const N: usize, const L: usize> Engine<'_, N, L> {
             // Slow steps: the work of the ticks in between happens here.
             self.settle();
         }
+        self.cruise_update();
         let target = self.target();
         match self.walk.per_ms(&self.plan, target, self.left) {
             WalkStep::Same => {}
@@ -107,6 +110,20 @@ impl<const N: usize, const L: usize> Engine<'_, N, L> {
                 self.walk.pending |= PREDICT;
                 self.spaced();
             }
+        }
+    }
+
+    /// The running move's cruise as the feeder last priced it (an override changed); a new
+    /// index re-plans the trigger. (Relaxed: the interrupt reads both while the feeder cannot
+    /// run, so it sees either store order's halves as [`crate::prepared::Prepared`] describes.)
+    #[inline(always)]
+    pub(super) fn cruise_update(&mut self) {
+        // SAFETY: atomic fields of the running slot.
+        let (bits, q) = unsafe { ((*self.cur).cruise_bits.load(Relaxed), (*self.cur).cruise_q.load(Relaxed)) };
+        self.plan.cruise = Period::from_bits(bits);
+        if q != self.plan.cruise_q {
+            self.plan.cruise_q = q;
+            self.walk.replan();
         }
     }
 
@@ -167,7 +184,7 @@ impl<const N: usize, const L: usize> Engine<'_, N, L> {
     /// Period for the table's period already looked up and the running move's scale.
     #[inline(always)]
     pub(super) fn apply_period(&mut self) {
-        self.period = scaled(self.base, &self.plan, self.min_period);
+        self.period = scaled(self.base, self.walk.idx, &self.plan, self.min_period);
         self.shared.period_bits.store(self.period.to_bits(), Relaxed);
     }
 
