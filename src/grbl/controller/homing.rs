@@ -123,6 +123,10 @@ impl<const N: usize> Controller<'_, N> {
             } else if self.shared.state() != State::Idle {
                 self.homing = Some(h);
                 return;
+            } else {
+                // Stopped short (a switch): its contacts settle for `$26` ms before the pins
+                // are believed (a bounce must not read as released).
+                h.start_at = self.now.wrapping_add(self.settings.homing_debounce_ms);
             }
             // Stopped at a switch or at the target: the engine's position is exact.
             self.feeder.abort();
@@ -137,18 +141,15 @@ impl<const N: usize> Controller<'_, N> {
         let at = *self.planner.position_steps();
         if approach {
             h.found |= pins;
-            let searching = h.group & !h.found;
-            if searching != 0 && h.moved && (0..3).all(|i| searching & 1 << i == 0 || at[i] == h.target[i] as i64) {
-                return self.homing_fail(ALARM_APPROACH, out);
-            }
-            if searching == 0 {
-                return self.homing_pass_done(h);
-            }
-        } else if h.moved {
-            if pins != 0 {
-                return self.homing_fail(ALARM_PULLOFF, out);
-            }
+        }
+        // The axes still to move: an approach's until their switch closes.
+        let moving = h.group & !h.found;
+        let arrived = h.moved && (0..3).all(|i| moving & 1 << i == 0 || at[i] == h.target[i] as i64);
+        if moving == 0 || (arrived && pins == 0 && !approach) {
             return self.homing_pass_done(h);
+        }
+        if arrived {
+            return self.homing_fail(if approach { ALARM_APPROACH } else { ALARM_PULLOFF }, out);
         }
         let s = self.settings;
         if !h.moved {
@@ -170,8 +171,7 @@ impl<const N: usize> Controller<'_, N> {
                 h.target[i] = at[i] as i32 + if toward_max == approach { d } else { -d };
             }
         }
-        // The axes still to move go to their targets; the others stay.
-        let moving = if approach { h.group & !h.found } else { h.group };
+        // The axes still to move go to their targets (again, after a stop short); the others stay.
         let mut mm = *self.planner.position_mm();
         for i in 0..3 {
             if moving & 1 << i != 0 {
