@@ -59,6 +59,7 @@ const ALARM_APPROACH: &[u8] = b"ALARM:9\r\n";
 impl<const N: usize> Controller<'_, N> {
     /// `$H` (`axis` `None`) or `$HX`/`$HY`/`$HZ`: checks and starts the cycle; the line's `ok`
     /// comes when it ends.
+    #[inline(never)]
     pub(super) fn home_start(&mut self, axis: Option<u8>, out: &mut impl Out) -> Result<(), Error> {
         if !self.settings.homing {
             return Err(Error::SettingDisabled);
@@ -104,6 +105,7 @@ impl<const N: usize> Controller<'_, N> {
     }
 
     /// One step of the cycle (every poll).
+    #[inline(never)]
     pub(super) fn homing_poll(&mut self, out: &mut impl Out) {
         let Some(mut h) = self.homing else { return };
         // A feed hold does not pause homing (Grbl reads none during the cycle).
