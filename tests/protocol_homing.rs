@@ -211,3 +211,50 @@ proptest! {
         prop_assert_eq!(b.carriage, [at[0] as i64 - 200, at[1] as i64 - 200, at[2] as i64 - 200]);
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(16))]
+    /// With any switches missing or already pressed, any pull-off and direction mask, `$H`
+    /// either ends with every carriage exactly `$27` off its switch and Grbl's machine
+    /// position, or is ALARM:9/8 in the alarm state: never a silent wrong position.
+    #[test]
+    fn never_a_wrong_position(
+        frac in prop::array::uniform3(0.0f64..1.0),
+        present in prop::array::uniform3(prop::bool::weighted(0.85)),
+        dir in 0u8..8,
+        pulloff in 1u32..50,
+    ) {
+        let mut s = homing();
+        s.homing_dir = dir;
+        s.homing_pulloff = pulloff as f32 / 10.0;
+        let mut b = Bench::<3>::new(s);
+        b.take();
+        // Each axis's switch at its homing end, within the travel of the carriage's start (up
+        // to 3 mm past it: already pressed).
+        let mut sw = Vec::new();
+        for i in 0..3 {
+            if present[i] {
+                let max = dir & 1 << i == 0;
+                let d = (frac[i] * ([300.0, 200.0, 80.0][i] * 100.0 + 300.0)) as i32 - 300;
+                sw.push((i, if max { d } else { -d }, max));
+            }
+        }
+        b.switches = sw.clone();
+        let (out, _) = home(&mut b, "$H");
+        let pull = (pulloff * 10) as i64; // steps (100 steps/mm)
+        if out == "ok" {
+            prop_assert!(present.iter().all(|&p| p));
+            let p = b.shared.positions();
+            for &(i, at, max) in &sw {
+                let travel = [300.0, 200.0, 80.0][i];
+                let (carriage, mpos) = if max { (at as i64 - pull, -pull) } else { (at as i64 + pull, -(travel as i64) * 100 + pull) };
+                prop_assert_eq!(b.carriage[i], carriage, "axis {}", i);
+                prop_assert_eq!(p[i] as i64, mpos, "axis {}", i);
+            }
+        } else {
+            prop_assert!(out.starts_with("ALARM:9\nok") || out.starts_with("ALARM:8\nok"), "{}", out);
+            prop_assert!(!present.iter().all(|&p| p) || out.starts_with("ALARM:8"), "{}", out);
+            prop_assert!(b.status().starts_with("<Alarm|"));
+        }
+    }
+}
