@@ -195,7 +195,9 @@ impl<const N: usize> Controller<'_, N> {
                 h.moving = true;
             }
             // Nothing to move (a zero distance): the pass ends where it is.
-            _ => {}
+            Ok(None) => {}
+            // A target the planner cannot reach (steps beyond i32): no switch can be found.
+            Err(_) => return self.homing_fail(ALARM_APPROACH, out),
         }
         h.moved = true;
         self.homing = Some(h);
