@@ -13,7 +13,7 @@ pub const DIR_PINS: [u8; MAX_AXES] = [0, 1, 3, 4, 5, 6, 7];
 /// GPIOB pin of the shared driver enable (active low, as on A4988/DRV8825/TMC2209 boards).
 pub const ENABLE_PIN: u8 = 8;
 /// GPIOA pins of the limit-switch inputs, X Y Z A B C U (pull-up, switch to ground).
-/// PA6/PA7 stay free for the TIM3 encoder, PA9/PA10 are USART1, PA11/PA12 USB, PA13/PA14 SWD.
+/// PA6/PA7 are the TIM3 encoder inputs ([`ENCODER_PINS`]), PA9/PA10 are USART1, PA11/PA12 USB, PA13/PA14 SWD.
 pub const LIMIT_PINS: [u8; MAX_AXES] = [0, 1, 2, 3, 4, 5, 8];
 /// GPIOA pin of the spindle/laser PWM: TIM1 channel 1. It is also U's limit input, so it gives
 /// way to the spindle (the limit input of a wired U axis would need another pin).
@@ -28,6 +28,10 @@ pub const COOLANT_FLOOD_PIN: u8 = 4;
 pub const COOLANT_MIST_PIN: u8 = 3;
 /// GPIOA pins that stay limit inputs with the spindle and coolant outputs in use (X Y Z).
 pub const LIMIT_INPUTS: u32 = 1 << LIMIT_PINS[0] | 1 << LIMIT_PINS[1] | 1 << LIMIT_PINS[2];
+/// GPIOA pins of the quadrature encoder, A and B (TIM3 channels 1 and 2; pulled up).
+pub const ENCODER_PINS: [u8; 2] = [6, 7];
+/// The encoder inputs as a GPIOA mask.
+pub const ENCODER_INPUTS: u32 = 1 << ENCODER_PINS[0] | 1 << ENCODER_PINS[1];
 
 /// GPIOC pin of the on-board LED (active low).
 pub const LED_PIN: u8 = 13;

@@ -11,6 +11,7 @@
 //! - [`grbl`]: the Grbl 1.1 front end — protocol, G-code, settings, reports, controller.
 //! - [`board`]: the Blue Pill pin map as numbers (the firmware shell in `src/firmware/`
 //!   turns it into registers).
+//! - [`encoder`]: encoder feedback — TIM3 count extension, speed, step-loss detection.
 //! - [`steptime`]: the step interrupt's self-measurement (DWT cycles), reported by `$I`.
 //!
 //! The modules are also re-exported at the crate root (`ddastep::engine`, …).
@@ -18,6 +19,7 @@
 #![cfg_attr(not(test), deny(warnings))]
 
 pub mod board;
+pub mod encoder;
 pub mod grbl;
 pub mod motion;
 pub mod num;

@@ -48,7 +48,7 @@ fn errors_use_grbl_numbers_and_change_nothing() {
         ("X999999999999999", 33),
         ("X1234567890123456", 2),
         ("$H", 5),
-        ("$99=1", 3),
+        ("$96=1", 3),
         ("$100", 3),
         ("$100=abc", 2),
         ("$0=0.1", 6),
@@ -138,7 +138,8 @@ fn settings_list_change_and_refuse_while_moving() {
     let list = b.line("$$");
     assert!(list.starts_with("$0=3.000\r\n$1=25\r\n$2=0\r\n"), "{list}");
     assert!(list.contains("$29=5.000\r\n$30=1000\r\n"));
-    assert!(list.contains("$40=1000\r\n$41=0\r\n$42=3\r\n$100=100.000\r\n"));
+    assert!(list.contains("$40=1000\r\n$41=0\r\n$42=3\r\n$87=0\r\n$88=1.000\r\n$89=0\r\n$97=20\r\n"));
+    assert!(list.contains("$98=0\r\n$99=1.000\r\n$100=100.000\r\n"));
     assert!(list.contains("$6=0\r\n$10=1\r\n$11=0.010\r\n"));
     assert!(list.ends_with("$132=1000.000\r\nok\r\n"), "{list}");
     assert!(!list.contains("$103"));

@@ -145,7 +145,14 @@ proptest! {
         flip in 0usize..SETTINGS_LEN, bit in 0u8..8,
         mask in 0u8..4, count in 3u8..=7,
         home in (any::<u8>(), 0.001f32..1e5, 0.001f32..1e5, 0u32..=65_535, 0.0f32..1e6),
+        enc in (0u8..=7, 0.001f64..64.0, any::<bool>(), 0u32..=1_000_000, any::<bool>(), 0.0f64..1000.0),
     ) {
+        let mut encoder = ddastep::encoder::EncoderSettings::DEFAULT;
+        let values = [enc.0 % (count + 1)].map(f64::from).into_iter()
+            .chain([enc.1, enc.2 as u8 as f64, enc.3 as f64, enc.4 as u8 as f64, enc.5]);
+        for (id, v) in ddastep::encoder::IDS.into_iter().zip(values) {
+            encoder.set(id, v, count as usize).unwrap();
+        }
         let s = Settings {
             pulse_us: pulse,
             idle_delay_ms: idle,
@@ -177,6 +184,7 @@ proptest! {
             max_travel: axes[3].map(|v| v * 10.0),
             status_mask: mask,
             axes: count,
+            encoder,
         };
         prop_assert!(s.is_valid());
         let mut image = s.to_bytes();

@@ -45,11 +45,29 @@ fn set_follows_grbl_rules() {
 fn ids_cover_every_gettable_setting_once() {
     let s = Settings::DEFAULT;
     let ids: heapless::Vec<u16, 64> = Settings::ids(3).collect();
-    assert_eq!(ids.len(), 7 + 14 + 6 + 12); // ours: $29, $33, $40, $41, $42 and $10's mask
+    // ours: $29, $33, $40, $41, $42 and $10's mask; the encoder's $87-$89, $97-$99
+    assert_eq!(ids.len(), 7 + 14 + 6 + 6 + 12);
     assert!(ids.windows(2).all(|w| w[0] < w[1]), "{ids:?}");
     assert!(ids.iter().all(|&id| s.get(id, 3).is_some()));
     assert_eq!(s.get(133, 3), None);
-    assert_eq!(Settings::ids(7).count(), 7 + 14 + 6 + 28);
+    assert_eq!(Settings::ids(7).count(), 7 + 14 + 6 + 6 + 28);
+}
+
+#[test]
+fn encoder_settings_follow_the_table() {
+    let mut s = Settings::DEFAULT;
+    assert_eq!(s.set(87, 4.0, 7), Err(Error::InvalidStatement)); // only 3 axes in use
+    assert_eq!(s.set(87, 1.0, 7), Ok(Change::Shell));
+    assert_eq!(s.set(88, 0.0, 3), Err(Error::InvalidStatement));
+    assert_eq!(s.set(88, 64.5, 3), Err(Error::InvalidStatement));
+    assert_eq!(s.set(88, -1.0, 3), Err(Error::NegativeValue));
+    assert_eq!(s.set(88, 0.25, 3), Ok(Change::Shell));
+    assert_eq!(s.set(89, 2.0, 3), Err(Error::InvalidStatement));
+    assert_eq!(s.set(97, 12.9, 3), Ok(Change::Shell));
+    assert_eq!(s.set(99, 1000.5, 3), Err(Error::InvalidStatement));
+    assert_eq!(s.set(90, 1.0, 3), Err(Error::InvalidStatement)); // grblHAL's PID: not ours
+    assert_eq!((s.get(88, 3), s.get(97, 3)), (Some((0.25, 3)), Some((12.0, 0))));
+    assert_eq!(Settings::decode(&s.to_bytes()), Some(s));
 }
 
 #[test]
@@ -93,10 +111,11 @@ fn profile_is_in_path_units_at_twice_the_fastest_accel() {
     }
     // Main's timing model: 3 µs pulses, twice that plus the store latency.
     assert_eq!(r.max_rate_hz, 72_000_000 / floor);
-    // The bench's own settings fit: 52 ms to √3 × 600 mm/s.
+    // The bench's own settings fit: 52 ms to √3 × 600 mm/s, then the entry at the top itself.
     let r = Settings::BENCH.build_profile(3, &mut g);
     assert!(!r.table_limited);
-    assert_eq!((r.cfg.vmax, g.ramp.len()), (103_923, 52));
+    assert_eq!((r.cfg.vmax, g.ramp.len()), (103_923, 53));
+    assert_eq!(g.ramp.periods()[52], ddastep::ramp::period_of_hz(103_923));
 }
 
 #[test]

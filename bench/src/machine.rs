@@ -12,6 +12,15 @@
 //! `min` at `position ≤ at_mm`, `max` at `position ≥ at_mm`. Each change of a pin level
 //! bounces: the new level, the old one at 20 %, the new at 45 %, the old at 70 % and the new
 //! for good at 100 % of `bounce_us`.
+//!
+//! An optional `[encoder]` puts a quadrature encoder on one axis's motor (issue 14): the
+//! carriage follows the motor's rotor, which follows the step pulses except where a `[[fault]]`
+//! says otherwise — `miss_steps` pulses that do not move it, or `slip_steps` it falls back at
+//! once (a crash) — from a time (`at_s`, taking effect at the next step edge) or a carriage
+//! position (`at_mm`, when the carriage reaches it). The encoder's count is
+//! `floor(rotor × counts_per_step)` (negated with `invert`); each count change is one edge of A
+//! (PA6) or B (PA7), A leading B going forward, `lag_us` after the step edge that caused it
+//! and at least `edge_ns` after the previous edge.
 
 use std::any::Any;
 use std::path::Path;
@@ -60,6 +69,49 @@ pub struct AxisSpec {
     pub step_active_low: bool,
 }
 
+/// GPIOA pins of the encoder's A and B outputs (TIM3 TI1, TI2; README pin map).
+pub const ENCODER_PINS: [u8; 2] = [6, 7];
+
+/// A quadrature encoder on one axis's motor.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct EncoderSpec {
+    /// The axis's name in the file (its motor).
+    pub axis: String,
+    /// Counts (edges of A and B) per motor step.
+    pub counts_per_step: f64,
+    #[serde(default)]
+    pub invert: bool,
+    /// Rotor lag behind the step edge, µs.
+    #[serde(default)]
+    pub lag_us: f64,
+    /// Shortest time between two encoder edges, ns (the firmware's TIM3 filter needs 111).
+    #[serde(default = "default_edge_ns")]
+    pub edge_ns: f64,
+}
+
+fn default_edge_ns() -> f64 {
+    125.0
+}
+
+/// Lost steps injected on the encoder's motor.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Fault {
+    /// From this simulated time (the next step edge after it).
+    #[serde(default)]
+    pub at_s: Option<f64>,
+    /// When the carriage reaches this position, mm.
+    #[serde(default)]
+    pub at_mm: Option<f64>,
+    /// The next this many step pulses do not move the rotor.
+    #[serde(default)]
+    pub miss_steps: u32,
+    /// The rotor falls back this many steps at once, against its last direction.
+    #[serde(default)]
+    pub slip_steps: u32,
+}
+
 /// A machine file.
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -68,6 +120,10 @@ pub struct MachineSpec {
     #[serde(default = "default_bounce")]
     pub bounce_us: f64,
     pub axis: Vec<AxisSpec>,
+    #[serde(default)]
+    pub encoder: Option<EncoderSpec>,
+    #[serde(default)]
+    pub fault: Vec<Fault>,
 }
 
 fn default_bounce() -> f64 {
@@ -83,6 +139,21 @@ impl MachineSpec {
         }
         if !(0.0..=1000.0).contains(&spec.bounce_us) {
             bail!("bounce_us must be 0..=1000");
+        }
+        if let Some(e) = &spec.encoder {
+            if !spec.axis.iter().any(|a| a.name == e.axis) {
+                bail!("encoder: no axis {}", e.axis);
+            }
+            if !(e.counts_per_step > 0.0 && e.counts_per_step <= 64.0 && e.lag_us >= 0.0 && e.edge_ns >= 0.0) {
+                bail!("encoder: counts_per_step must be in (0, 64], lag_us and edge_ns not negative");
+            }
+        } else if !spec.fault.is_empty() {
+            bail!("faults act on the encoder's motor: add an [encoder]");
+        }
+        for f in &spec.fault {
+            if f.at_s.is_some() == f.at_mm.is_some() {
+                bail!("a fault needs one of at_s and at_mm");
+            }
         }
         for a in &spec.axis {
             if !(a.steps_per_mm.is_finite() && a.steps_per_mm > 0.0) {
@@ -155,18 +226,108 @@ pub struct SwitchEvent {
     pub level: bool,
 }
 
+/// The encoder's motor: its rotor, the count it shows, the faults still to come.
+#[derive(Clone, Debug)]
+struct Motor {
+    spec: EncoderSpec,
+    axis: usize,
+    /// Rotor position, steps (the carriage's `steps` follow it).
+    rotor: i64,
+    count: i64,
+    /// Step pulses still to be missed.
+    missing: u32,
+    last_dir: i64,
+    faults: Vec<Fault>,
+    /// Cycle of the last encoder edge scheduled.
+    last_edge: u64,
+    /// Faults applied: (cycle, steps lost).
+    applied: Vec<(u64, u32)>,
+}
+
+/// (A, B) levels of quadrature state `count` (A leads B counting up).
+fn quadrature(count: i64) -> (bool, bool) {
+    [(false, false), (true, false), (true, true), (false, true)][count.rem_euclid(4) as usize]
+}
+
 /// The virtual machine: carriages and their switches.
 #[derive(Clone, Debug)]
 pub struct VirtualMachine {
     bounce_cycles: u64,
     carriages: Vec<Carriage>,
     events: Vec<SwitchEvent>,
+    motor: Option<Motor>,
 }
 
 impl VirtualMachine {
     pub fn new(spec: &MachineSpec) -> Self {
         let carriages = spec.axis.iter().map(|a| Carriage { spec: a.clone(), steps: 0, level: true }).collect();
-        VirtualMachine { bounce_cycles: (spec.bounce_us * HZ as f64 / 1e6) as u64, carriages, events: Vec::new() }
+        let motor = spec.encoder.as_ref().map(|e| Motor {
+            axis: spec.axis.iter().position(|a| a.name == e.axis).unwrap_or(0),
+            spec: e.clone(),
+            rotor: 0,
+            count: 0,
+            missing: 0,
+            last_dir: 1,
+            faults: spec.fault.clone(),
+            last_edge: 0,
+            applied: Vec::new(),
+        });
+        VirtualMachine { bounce_cycles: (spec.bounce_us * HZ as f64 / 1e6) as u64, carriages, events: Vec::new(), motor }
+    }
+
+    /// The encoder's count (what its A/B edges add up to), if the machine has one.
+    pub fn encoder_count(&self) -> Option<i64> {
+        self.motor.as_ref().map(|m| m.count)
+    }
+
+    /// Faults applied so far: (cycle, steps lost).
+    pub fn faults_applied(&self) -> &[(u64, u32)] {
+        self.motor.as_ref().map_or(&[], |m| &m.applied)
+    }
+
+    // one step pulse on the encoder's axis at `t`, in direction `dir`: the rotor's move (0 when
+    // missed), with the faults due applied; schedules the encoder's edges
+    fn motor_step(&mut self, t: u64, dir: i64, flips: &mut Vec<InputFlip>) -> i64 {
+        let Some(m) = &mut self.motor else { return dir };
+        let c = &self.carriages[m.axis];
+        let pos = c.position_mm();
+        let due = |f: &Fault| {
+            f.at_s.is_some_and(|s| t as f64 >= s * HZ as f64)
+                || f.at_mm.is_some_and(|x| (pos - x).abs() * c.spec.steps_per_mm < 0.5)
+        };
+        let mut moved = dir;
+        let mut i = 0;
+        while i < m.faults.len() {
+            if due(&m.faults[i]) {
+                let f = m.faults.remove(i);
+                m.missing += f.miss_steps;
+                moved -= f.slip_steps as i64 * m.last_dir;
+                m.applied.push((t, f.miss_steps + f.slip_steps));
+            } else {
+                i += 1;
+            }
+        }
+        if m.missing > 0 {
+            m.missing -= 1;
+            moved -= dir;
+        }
+        m.last_dir = dir;
+        m.rotor += moved;
+        let sign = if m.spec.invert { -1.0 } else { 1.0 };
+        let count = (m.rotor as f64 * m.spec.counts_per_step * sign).floor() as i64;
+        let gap = (m.spec.edge_ns * HZ as f64 / 1e9).ceil() as u64;
+        let start = t + (m.spec.lag_us * HZ as f64 / 1e6) as u64;
+        while m.count != count {
+            let (a0, b0) = quadrature(m.count);
+            m.count += (count - m.count).signum();
+            let (a1, b1) = quadrature(m.count);
+            let at = start.max(m.last_edge + gap);
+            m.last_edge = at;
+            let (pin, level) = if a0 != a1 { (ENCODER_PINS[0], a1) } else { (ENCODER_PINS[1], b1) };
+            debug_assert!(a0 != a1 || b0 != b1);
+            flips.push(InputFlip { cycle: at, port: Port::A, pin, level });
+        }
+        moved
     }
 
     /// Carriage positions, mm (machine file frame).
@@ -190,6 +351,10 @@ impl VirtualMachine {
         for (i, c) in self.carriages.iter().enumerate() {
             let hits = self.events.iter().filter(|e| e.axis == i).count();
             out += &format!("\n  {} at {:.4} mm ({:+} steps), limit pin changes {hits}", c.spec.name, c.position_mm(), c.steps);
+        }
+        if let Some(m) = &self.motor {
+            let lost: u32 = m.applied.iter().map(|a| a.1).sum();
+            out += &format!("\n  encoder on {}: count {:+}, {} fault(s) applied, {lost} steps lost", m.spec.axis, m.count, m.applied.len());
         }
         out
     }
@@ -219,6 +384,11 @@ impl Plant for VirtualMachine {
             c.level = c.pin_level();
             flips.push(InputFlip { cycle: 0, port: Port::A, pin, level: c.level });
         }
+        if self.motor.is_some() {
+            for pin in ENCODER_PINS {
+                flips.push(InputFlip { cycle: 0, port: Port::A, pin, level: false });
+            }
+        }
     }
 
     fn outputs(&mut self, t: u64, port: u8, old: u32, new: u32, flips: &mut Vec<InputFlip>) {
@@ -233,7 +403,10 @@ impl Plant for VirtualMachine {
                 continue;
             }
             let dir_low = new & 1 << DIR_PINS[i] == 0;
-            c.steps += if dir_low != c.spec.invert_dir { 1 } else { -1 };
+            let dir = if dir_low != c.spec.invert_dir { 1 } else { -1 };
+            let moved = if self.motor.as_ref().is_some_and(|m| m.axis == i) { self.motor_step(t, dir, flips) } else { dir };
+            let c = &mut self.carriages[i];
+            c.steps += moved;
             let level = c.pin_level();
             if level != c.level {
                 c.level = level;
@@ -277,6 +450,33 @@ mod tests {
             m.outputs(*t, 1, dir | 1 << STEP_PINS[0], dir, &mut flips);
         }
         flips
+    }
+
+    #[test]
+    fn encoder_edges_follow_the_rotor_and_faults_lose_steps() {
+        let text = "[[axis]]\nname='X'\nsteps_per_mm=10\n[encoder]\naxis='X'\ncounts_per_step=4\nlag_us=1\n\
+                    [[fault]]\nat_mm=1.0\nmiss_steps=3\n[[fault]]\nat_mm=0.5\nslip_steps=2\n";
+        let spec = MachineSpec::parse(text).unwrap();
+        let mut m = VirtualMachine::new(&spec);
+        let mut t = 0;
+        let flips = step(&mut m, 4, true, &mut t);
+        // 16 counts: alternating A and B edges, A first, 125 ns apart, the first 1 µs late.
+        assert_eq!(flips.len(), 16);
+        assert_eq!((flips[0].pin, flips[0].level, flips[1].pin, flips[1].level), (6, true, 7, true));
+        assert_eq!(flips[0].cycle, 100 + 72);
+        assert!(flips.windows(2).all(|w| w[1].cycle >= w[0].cycle));
+        assert_eq!(m.encoder_count(), Some(16));
+        // At 0.5 mm the rotor slips 2 steps back; at 1.0 mm (reached 2 steps later than
+        // commanded) it misses 3 pulses.
+        step(&mut m, 1 + 5 + 2 + 3 + 4, true, &mut t);
+        assert_eq!(m.steps(), [4 + 15 - 2 - 3]);
+        assert_eq!(m.encoder_count(), Some(4 * 14));
+        assert_eq!(m.faults_applied().iter().map(|f| f.1).collect::<Vec<_>>(), [2, 3]);
+        // Backwards: counts down.
+        step(&mut m, 14, false, &mut t);
+        assert_eq!(m.encoder_count(), Some(0));
+        assert!(MachineSpec::parse("[[axis]]\nname='X'\nsteps_per_mm=1\n[[fault]]\nat_s=1\n").is_err());
+        assert!(MachineSpec::parse("[[axis]]\nname='X'\nsteps_per_mm=1\n[encoder]\naxis='Y'\ncounts_per_step=1\n").is_err());
     }
 
     #[test]

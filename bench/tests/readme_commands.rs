@@ -91,6 +91,7 @@ fn plan(cmd: &str) -> Option<Plan> {
         "cargo sim -- --vcd paper.vcd --json paper.json" => Run(&["paper.vcd", "paper.json"]),
         "cargo sim -- --gcode my.gcode --max-seconds 5 --pin PA0@0.25=0" => Run(&[]),
         "cargo sim -- --machine bench/demo/gantry300.toml" => Run(&[]),
+        "cargo sim -- --machine bench/demo/encoder_x.toml" => Run(&[]),
         "cargo sim -- --sweep" => Skip("the step-rate benchmark: about a minute of both cores"),
         "cargo sim -- --serve --pty-link /tmp/ttyBLUEPILL --tcp 127.0.0.1:23000 --max-seconds 2" => Run(&[]),
         "socat pty,raw,echo=0,link=/tmp/ttyGRBL tcp:127.0.0.1:23000" => {

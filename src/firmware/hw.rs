@@ -177,6 +177,7 @@ impl Board {
 
         setup_tim2(&mut rcc);
         setup_tim1(&mut rcc);
+        super::encoder::setup(&mut rcc);
 
         // SysTick at 1 kHz from the 72 MHz core clock.
         syst.set_clock_source(SystClkSource::Core);
@@ -197,12 +198,12 @@ fn setup_pins() {
     // SAFETY: init owns the GPIO ports; the HAL configured only PA9/PA10 (USART1).
     let (a, c) = unsafe { (&*pac::GPIOA::ptr(), &*pac::GPIOC::ptr()) };
     // Limits PA0..PA2 pulled up; PA3/PA4/PA5 mist, flood, spindle direction (outputs, low);
-    // PA6/PA7 (encoder, later) floating; PA8 TIM1_CH1 (alternate function push-pull 50 MHz,
+    // PA6/PA7 encoder A/B (TIM3) pulled up (open-collector encoders; not 5 V tolerant); PA8 TIM1_CH1 (alternate function push-pull 50 MHz,
     // 0xB); PA9/PA10 as the HAL left them; PA11..PA14 untouched (USB, SWD); PA15 spindle
     // enable (output, low).
     let tool = 1 << board::SPINDLE_ENABLE_PIN | 1 << board::SPINDLE_DIR_PIN | 1 << board::COOLANT_FLOOD_PIN | 1 << board::COOLANT_MIST_PIN;
-    a.bsrr().write(|w| unsafe { w.bits(board::LIMIT_INPUTS | tool << 16) });
-    a.crl().write(|w| unsafe { w.bits(0x4422_2888) });
+    a.bsrr().write(|w| unsafe { w.bits(board::LIMIT_INPUTS | board::ENCODER_INPUTS | tool << 16) });
+    a.crl().write(|w| unsafe { w.bits(0x8822_2888) });
     a.crh().modify(|r, w| unsafe { w.bits((r.bits() & !0xF000_000F) | 0x2000_000B) });
     // PC13 LED (active low): off.
     c.bsrr().write(|w| unsafe { w.bits(1 << board::LED_PIN) });

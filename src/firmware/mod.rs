@@ -1,6 +1,7 @@
 //! The RTIC application and its hardware glue (MCU only).
 
 mod boot;
+mod encoder;
 mod hw;
 mod limits;
 mod mem;
@@ -26,7 +27,7 @@ mod app {
     use stm32f1xx_hal::pac;
     use stm32f1xx_hal::serial::{Rx, Tx};
 
-    use super::{hw, limits, watchdog};
+    use super::{encoder, hw, limits, watchdog};
 
     /// Axes the firmware drives: X Y Z A B C U.
     pub const AXES: usize = ddastep::MAX_AXES;
@@ -181,9 +182,11 @@ mod app {
         });
     }
 
-    /// 1 kHz clock for the protocol (dwell, idle delay) and the heartbeat; wakes `idle`.
-    #[task(binds = SysTick, priority = 1)]
-    fn systick(_: systick::Context) {
+    /// 1 kHz clock for the protocol (dwell, idle delay) and the heartbeat; wakes `idle`;
+    /// extends the encoder count.
+    #[task(binds = SysTick, priority = 1, local = [enc: ddastep::encoder::count::Sampler = ddastep::encoder::count::Sampler::new()])]
+    fn systick(cx: systick::Context) {
+        encoder::sample(cx.local.enc);
         MILLIS.store(MILLIS.load(Relaxed).wrapping_add(1), Relaxed);
         POLL.store(true, Relaxed);
         STEP_TIME.tick_ms();
@@ -218,6 +221,8 @@ mod app {
             let idr = hw::gpioa_idr();
             ctl.set_limit_inputs(idr);
             let invert = ctl.settings().limit_invert;
+            let (counts, window) = encoder::read();
+            ctl.encoder(counts, window, tx_in);
             let act = idle_step(ctl, rx_out, tx_in, now, &REQUESTS);
             // After the poll: a homing pass it just queued is watched before its move starts.
             limits::arm(ctl.settings().hard_limits, invert, ddastep::limits::active_pins(idr, invert), ctl.homing_watch());

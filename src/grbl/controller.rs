@@ -18,6 +18,7 @@
 //! program coordinates into machine ones in the interpreter, and reports subtract them again.
 
 mod homing;
+mod encoder;
 mod jogging;
 mod soft_limits;
 mod status;
@@ -199,6 +200,8 @@ pub struct Controller<'a, const N: usize> {
     watchdog_note: bool,
     /// Limit pins active (bit i = axis i), for `Pn:` and homing.
     limit_pins: u8,
+    /// Encoder feedback's step-loss check (see `encoder.rs`).
+    enc: crate::encoder::loss::Monitor,
     /// A `$H` cycle in progress (see `homing.rs`).
     homing: Option<homing::Homing>,
 }
@@ -273,9 +276,11 @@ impl<'a, const N: usize> Controller<'a, N> {
             soft_limit: SoftLimit::Off,
             watchdog_note: false,
             limit_pins: 0,
+            enc: crate::encoder::loss::Monitor::OFF,
             homing: None,
         });
         c.startup_next = c.next_startup(0);
+        c.enc_configure();
         c.apply_profile();
         c.planner.sync(shared.positions(), &c.limits);
         c
@@ -505,17 +510,6 @@ impl<'a, const N: usize> Controller<'a, N> {
         }
     }
 
-    /// The limits a program move is planned with: the feed and rapid overrides in force (a jog
-    /// uses `self.limits`: overrides do not apply to jogs, as in Grbl).
-    fn move_limits(&self) -> Limits<N> {
-        let o = self.shared.overrides();
-        // (Copy, then set: `Limits { .., ..self.limits }` copies field by field.)
-        let mut l = self.limits;
-        l.feed_ovr = o.feed as f64 / 100.0;
-        l.rapid_ovr = o.rapid as f64 / 100.0;
-        l
-    }
-
     /// Queue empty and engine idle (not held): G4, flash writes, `$` settings may act.
     fn drained(&self) -> bool {
         self.feeder.pending() == 0 && self.shared.state() == State::Idle
@@ -657,8 +651,7 @@ impl<'a, const N: usize> Controller<'a, N> {
                     job.arc = None;
                     break;
                 };
-                let lim = self.move_limits();
-                job.mv = plan(&mut self.planner, &p, job.rate, &lim, &self.ramped.cfg).unwrap_or(None);
+                job.mv = plan(&mut self.planner, &p, job.rate, &self.limits, &self.ramped.cfg).unwrap_or(None);
                 if let Some(pl) = job.mv {
                     if !self.push(pl, false, job.power) {
                         break 'run false;
@@ -719,13 +712,13 @@ impl<'a, const N: usize> Controller<'a, N> {
         // G93: F is 1/minutes (checked positive where a motion needs it).
         let rate = if modal.inverse_time { Rate::Minutes(1.0 / modal.feed) } else { Rate::Feed(modal.feed) };
         let cfg = self.ramped.cfg;
-        let lim = self.move_limits();
+        let lim = &self.limits;
         let mv = match &fx.motion {
-            Some((t, rapid)) => plan(&mut planner, t, if *rapid { Rate::Rapid } else { rate }, &lim, &cfg)?,
+            Some((t, rapid)) => plan(&mut planner, t, if *rapid { Rate::Rapid } else { rate }, lim, &cfg)?,
             None => None,
         };
         let mv2 = match &fx.home {
-            Some(t) => planner.line(t, None, &lim)?,
+            Some(t) => planner.line(t, None, lim)?,
             None => None,
         };
         let (arc, rate) = match &fx.arc {

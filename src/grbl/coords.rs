@@ -56,7 +56,7 @@ impl Coords {
     pub fn to_bytes(&self) -> [u8; COORDS_LEN] {
         let mut b = [0u8; COORDS_LEN];
         for (w, v) in b.chunks_exact_mut(4).zip(self.slots.iter().flatten()) {
-            w.copy_from_slice(&v.to_le_bytes());
+            crate::settings::put4(w, 0, v.to_le_bytes());
         }
         b
     }

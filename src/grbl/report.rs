@@ -29,6 +29,9 @@ pub const ALARM_HARD_LIMIT: &[u8] = b"ALARM:1\r\n[MSG:Reset to continue]\r\n";
 /// A G-code target outside the travel box (Grbl's ALARM:2, "Soft limit"), then Grbl's
 /// critical-event message: nothing is read until Ctrl-X.
 pub const ALARM_SOFT_LIMIT: &[u8] = b"ALARM:2\r\n[MSG:Reset to continue]\r\n";
+/// Step loss with `$98=1` (grblHAL's ALARM:17, "motor fault"), then the critical-event
+/// message: nothing is read until Ctrl-X.
+pub const ALARM_STEP_LOSS: &[u8] = b"ALARM:17\r\n[MSG:Reset to continue]\r\n";
 /// M2 / M30.
 pub const PROGRAM_END: &[u8] = b"[MSG:Pgm End]\r\n";
 /// `$RST=`.
@@ -40,9 +43,10 @@ pub const CHECK_OFF: &[u8] = b"[MSG:Disabled]\r\n";
 /// `$SLP`.
 pub const SLEEPING: &[u8] = b"[MSG:Sleeping]\r\n";
 /// Longest status report for `n` axes: `<Hold:1|WPos:` + 13 per axis + `|Bf:15,128` +
-/// `|FS:1000000,1000000` + `|Pn:XYZ` + `|WCO:` + 13 per axis + `|Ov:100,100,100|A:SFM>\r\n`.
+/// `|FS:1000000,1000000` + `|Pn:XYZ` + `|WCO:` + 13 per axis + `|Ov:100,100,100|A:SFM` +
+/// `|Enc:` + two numbers of at most 17 and 16 characters (`put_fixed`'s 10^15 cap) + `>\r\n`.
 pub const fn status_len(n: usize) -> usize {
-    83 + 26 * n
+    122 + 26 * n
 }
 /// Longest `$#` line for `n` axes.
 pub const fn param_len(n: usize) -> usize {
@@ -73,9 +77,11 @@ pub struct Status<'a> {
     pub wco: Option<&'a [f64]>,
     /// `Ov:` when due.
     pub ov: Option<Overrides>,
+    /// `Enc:` encoder position (mm) and speed (mm/min), when an encoder is on.
+    pub enc: Option<(f64, f64)>,
 }
 
-/// `<State|MPos:x,y,z|Bf:15,128|FS:feed,speed|Pn:XZ|WCO:x,y,z|Ov:100,100,100|A:SF>`.
+/// `<State|MPos:x,y,z|Bf:15,128|FS:feed,speed|Pn:XZ|WCO:x,y,z|Ov:100,100,100|A:SF|Enc:p,v>`.
 pub fn status(out: &mut impl Out, s: &Status) {
     out.put(b"<");
     out.put(s.state);
@@ -115,7 +121,45 @@ pub fn status(out: &mut impl Out, s: &Status) {
             out.put(s.acc);
         }
     }
+    if let Some((pos, speed)) = s.enc {
+        out.put(b"|Enc:");
+        put_fixed(out, pos, 3);
+        out.put(b",");
+        put_fixed(out, speed, 0);
+    }
     out.put(b">\r\n");
+}
+
+/// `[MSG:Step loss X 12]`: the axis and how far the motor is behind, steps (negative: ahead).
+pub fn step_loss(out: &mut impl Out, axis: usize, steps: f64) {
+    values(out, [b"[MSG:Step loss ", axis_letter(axis), b" "], &[(steps, 0)], b"]\r\n");
+}
+
+/// `$ENC`: `[ENC:X,10.000,9.960,4]`: axis, commanded and measured position (mm, machine),
+/// commanded − measured steps.
+pub fn encoder(out: &mut impl Out, axis: usize, commanded_mm: f64, measured_mm: f64, steps: f64) {
+    values(out, [b"[ENC:", axis_letter(axis), b","], &[(commanded_mm, 3), (measured_mm, 3), (steps, 0)], b"]\r\n");
+}
+
+/// The letter of axis `i` (X Y Z A B C U).
+fn axis_letter(i: usize) -> &'static [u8] {
+    b"XYZABCU".get(i..=i).unwrap_or_default()
+}
+
+/// `head`, then `(value, decimals)` separated by commas, then `tail`: one copy of the writes
+/// for the encoder's two lines.
+#[inline(never)]
+fn values(out: &mut impl Out, head: [&[u8]; 3], values: &[(f64, u32)], tail: &[u8]) {
+    for part in head {
+        out.put(part);
+    }
+    for (i, &(v, d)) in values.iter().enumerate() {
+        if i > 0 {
+            out.put(b",");
+        }
+        put_fixed(out, v, d);
+    }
+    out.put(tail);
 }
 
 fn axes(out: &mut impl Out, v: &[f64]) {
@@ -270,7 +314,7 @@ mod tests {
 
     #[test]
     fn formats_match_grbl() {
-        let st = Status { state: b"Idle", pos: &[0.0; 3], mpos: true, bf: None, feed: 0.0, speed: 0.0, acc: b"", pins: 0, wco: None, ov: None };
+        let st = Status { state: b"Idle", pos: &[0.0; 3], mpos: true, bf: None, feed: 0.0, speed: 0.0, acc: b"", pins: 0, wco: None, ov: None, enc: None };
         assert_eq!(text(|o| status(o, &st)), "<Idle|MPos:0.000,0.000,0.000|FS:0,0>\r\n");
         let st = Status { state: b"Run", pos: &[-1.2345, 0.0005, 12.0], feed: 2999.6, ..st };
         assert_eq!(text(|o| status(o, &st)), "<Run|MPos:-1.235,0.001,12.000|FS:3000,0>\r\n");
@@ -279,6 +323,10 @@ mod tests {
             text(|o| status(o, &st)),
             "<Run|WPos:-1.235,0.001,12.000|Bf:15,128|FS:3000,0|WCO:1.000,2.000,3.000|Ov:100,100,100>\r\n"
         );
+        let st = Status { enc: Some((-0.0625, 1234.4)), wco: None, ov: None, bf: None, ..st };
+        assert_eq!(text(|o| status(o, &st)), "<Run|WPos:-1.235,0.001,12.000|FS:3000,0|Enc:-0.063,1234>\r\n");
+        assert_eq!(text(|o| step_loss(o, 0, 37.25)), "[MSG:Step loss X 37]\r\n");
+        assert_eq!(text(|o| encoder(o, 6, 10.0, 9.96, -4.0)), "[ENC:U,10.000,9.960,-4]\r\n");
         assert_eq!(text(|o| modes(o, &Modal::RESET)), "[GC:G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0]\r\n");
         assert_eq!(text(|o| setting(o, 110, 36000.0, 3)), "$110=36000.000\r\n");
         let off = Offsets::<3>::default();
@@ -325,6 +373,7 @@ mod tests {
             pins: 7,
             wco: Some(&far),
             ov,
+            enc: Some((-999_999_999_999.999, -999_999_999_999_999.0)),
         };
         assert!(text(|o| status(o, &st)).len() <= status_len(7));
         let mut off = Offsets::<7>::default();

@@ -11,6 +11,7 @@
 //! it to its master's share of the path, so axes that do not move never slow a move down.
 
 use crate::protocol::Error;
+use crate::encoder::{self, EncoderSettings};
 use crate::ramp::{Profile, RampConfig, RampError, RampTable, Shape, MAX_RATE_HZ};
 #[allow(unused_imports)]
 use crate::ramp::MAX_RATE_HZ as _;
@@ -19,13 +20,16 @@ use crate::timing::{ns_to_ticks, Timing};
 use crate::MAX_AXES;
 
 /// Bytes of the flash image.
-pub const SETTINGS_LEN: usize = 176;
+pub const SETTINGS_LEN: usize = 200;
 const MAGIC: u8 = 0xD5;
-const VERSION: u8 = 4;
+const VERSION: u8 = 5;
 /// Byte offset of the settings after the axis arrays: `$12`, `$30`, `$31`, `$33` (f32, u32),
-/// `$32` (flag byte), then from `TAIL + 20` the homing `$24`, `$25`, `$27` (f32) and `$26`
-/// (u32); `$23` is byte 23; CRC last.
+/// `$32` (flag byte), the encoder's `$87`-`$99` from `TAIL + 20`, the homing `$24`, `$25`,
+/// `$27` (f32) and `$26` (u32) from [`HOME`] (`$23` is byte 23); CRC last.
 const TAIL: usize = 24 + 4 * 4 * MAX_AXES;
+/// Byte offset of the homing settings, after the encoder's.
+const HOME: usize = TAIL + 20 + crate::encoder::IMAGE_LEN;
+const _: () = assert!(HOME + 16 <= SETTINGS_LEN - 4);
 /// Byte offset of the flag bits (`$4`, `$5`, `$6`, `$20`, `$22`, `$21` as bits 0..=5).
 const FLAGS: usize = 19;
 /// Absolute floor of the step period (ticks; 144 = 500 kHz, the engine's design limit). The
@@ -87,7 +91,7 @@ const fn spec(id: u16, range: u8, decimals: u8, change: Change, at: usize, bit: 
 }
 
 /// Settings below 100 in `$$` order: Grbl's, ours and the [`FIXED`] ones.
-const LOW: [Spec; 27] = {
+const LOW: [Spec; 33] = {
     use Change::{None as Fixed, Pins, Profile, Shell};
     [
         spec(0, 1, 3, Profile, 4, 0),
@@ -105,10 +109,10 @@ const LOW: [Spec; 27] = {
         spec(21, 0, 0, Shell, FLAGS, 5),
         spec(22, 0, 0, Shell, FLAGS, 4),
         spec(23, 0, 0, Shell, 23, 0),
-        spec(24, 8, 3, Shell, TAIL + 20, 0),
-        spec(25, 8, 3, Shell, TAIL + 24, 0),
-        spec(26, 9, 0, Shell, TAIL + 32, 0),
-        spec(27, 3, 3, Shell, TAIL + 28, 0),
+        spec(24, 8, 3, Shell, HOME, 0),
+        spec(25, 8, 3, Shell, HOME + 4, 0),
+        spec(26, 9, 0, Shell, HOME + 12, 0),
+        spec(27, 3, 3, Shell, HOME + 8, 0),
         spec(DIR_SETUP, 5, 3, Profile, 8, 0),
         spec(30, 3, 0, Shell, TAIL + 4, 0),
         spec(31, 3, 0, Shell, TAIL + 8, 0),
@@ -117,6 +121,13 @@ const LOW: [Spec; 27] = {
         spec(RAMP_START, 6, 0, Profile, 12, 0),
         spec(RAMP_SHAPE, 0, 0, Profile, 20, WHOLE),
         spec(AXIS_COUNT, 0, 0, Profile, 21, 0),
+        // The encoder's (`encoder::IDS`): read, written and stored by `EncoderSettings`.
+        spec(encoder::AXIS, 0, 0, Fixed, 0, 0),
+        spec(encoder::COUNTS_PER_STEP, 0, 0, Fixed, 0, 0),
+        spec(encoder::INVERT, 0, 0, Fixed, 0, 0),
+        spec(encoder::THRESHOLD, 0, 0, Fixed, 0, 0),
+        spec(encoder::ACTION, 0, 0, Fixed, 0, 0),
+        spec(encoder::LAG, 0, 0, Fixed, 0, 0),
     ]
 };
 
@@ -191,6 +202,8 @@ pub struct Settings {
     pub status_mask: u8,
     /// `$42` axes the machine has, 3..=7.
     pub axes: u8,
+    /// `$87`-`$89`, `$97`-`$99`: encoder feedback.
+    pub encoder: EncoderSettings,
 }
 
 impl Default for Settings {
@@ -264,6 +277,7 @@ impl Settings {
         max_travel: [200.0; MAX_AXES],
         status_mask: 1,
         axes: 3,
+        encoder: EncoderSettings::DEFAULT,
     };
 
     /// The seed paper's bench (the settings before the safe defaults, which the demos and
@@ -364,6 +378,10 @@ impl Settings {
 
     /// Value of setting `id` and its decimals for `$$`, if it exists for `axes` axes.
     pub fn get(&self, id: u16, axes: usize) -> Option<(f64, u32)> {
+        // The encoder's first: `EncoderSettings` keeps their values and decimals.
+        if let Some(v) = self.encoder.get(id) {
+            return Some(v);
+        }
         let spec = Self::spec(id, axes.min(self.axes as usize))?;
         let mut s = *self;
         let v = match s.slot(id) {
@@ -385,6 +403,10 @@ impl Settings {
         }
         if value < 0.0 {
             return Err(Error::NegativeValue);
+        }
+        if encoder::IDS.contains(&id) {
+            self.encoder.set(id, value, axes.min(self.axes as usize))?;
+            return Ok(Change::Shell);
         }
         let int = libm::trunc(value);
         let spec = Self::spec(id, axes.min(self.axes as usize)).ok_or(Error::InvalidStatement)?;
@@ -541,6 +563,9 @@ impl Settings {
                 w.copy_from_slice(&(if own { word } else { old | word }).to_le_bytes());
             }
         }
+        for (w, v) in b[TAIL + 20..].chunks_exact_mut(4).zip(self.encoder.0) {
+            w.copy_from_slice(&v.to_le_bytes());
+        }
         let crc = crc32(&b[..SETTINGS_LEN - 4]);
         b[SETTINGS_LEN - 4..].copy_from_slice(&crc.to_le_bytes());
         b
@@ -575,12 +600,21 @@ impl Settings {
                 Slot::Shape(v) => *v = if flag { Shape::SCurve } else { Shape::Trapezoid },
             }
         }
+        s.encoder = EncoderSettings::from_bytes(&b[TAIL + 20..]);
         s.is_valid().then_some(s)
     }
 
     /// Settings from a flash image, or the defaults if it is not a valid one.
     pub fn from_bytes(b: &[u8]) -> Settings {
         Self::decode(b).unwrap_or(Settings::DEFAULT)
+    }
+}
+
+/// Stores 4 bytes at `at` (one call instead of a slice index and copy at each field).
+#[inline(never)]
+pub(crate) fn put4(b: &mut [u8], at: usize, v: [u8; 4]) {
+    if let Some(w) = b.get_mut(at..at + 4) {
+        w.copy_from_slice(&v);
     }
 }
 
@@ -603,8 +637,8 @@ mod tests {
     #[test]
     fn low_ids_are_ours_and_every_fixed_one() {
         let ours = [
-            0, 1, 2, 3, 4, 5, 6, STATUS_MASK, 12, 20, 21, 22, 23, 24, 25, 26, 27, 30, 31, 32, SPINDLE_PWM_HZ, DIR_SETUP, RAMP_START, RAMP_SHAPE,
-            AXIS_COUNT,
+            0, 1, 2, 3, 4, 5, 6, STATUS_MASK, 12, 20, 21, 22, 23, 24, 25, 26, 27, 30, 31, 32, SPINDLE_PWM_HZ, DIR_SETUP,
+            RAMP_START, RAMP_SHAPE, AXIS_COUNT, 87, 88, 89, 97, 98, 99,
         ];
         assert_eq!(LOW.len(), ours.len() + FIXED.len());
         assert!(ours.iter().chain(FIXED.iter().map(|f| &f.0)).all(|id| LOW.iter().any(|s| s.id == *id)));

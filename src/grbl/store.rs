@@ -12,7 +12,7 @@
 //! Each page sees every second write, halving flash wear per page.
 
 use crate::coords::{Coords, COORDS_LEN};
-use crate::settings::{crc32, Settings, SETTINGS_LEN};
+use crate::settings::{crc32, put4, Settings, SETTINGS_LEN};
 
 /// Bytes a stored text line can hold (Grbl keeps 80 with its terminator).
 pub const TEXT_LEN: usize = 79;
@@ -105,10 +105,11 @@ impl Stored {
     }
 
     /// The flash image.
+    #[inline(never)]
     pub fn to_bytes(&self) -> [u8; IMAGE_LEN] {
         let mut b = [0u8; IMAGE_LEN];
-        b[..4].copy_from_slice(&MAGIC);
-        b[4..8].copy_from_slice(&self.seq.to_le_bytes());
+        put4(&mut b, 0, MAGIC);
+        put4(&mut b, 4, self.seq.to_le_bytes());
         b[SETTINGS_AT..COORDS_AT].copy_from_slice(&self.settings.to_bytes());
         b[COORDS_AT..TEXT_AT].copy_from_slice(&self.coords.to_bytes());
         let texts = self.startup.iter().chain(core::iter::once(&self.build_info));
@@ -117,7 +118,7 @@ impl Stored {
             w[1..].copy_from_slice(&t.buf);
         }
         let crc = crc32(&b[..IMAGE_LEN - 4]);
-        b[IMAGE_LEN - 4..].copy_from_slice(&crc.to_le_bytes());
+        put4(&mut b, IMAGE_LEN - 4, crc.to_le_bytes());
         b
     }
 

@@ -172,6 +172,14 @@ impl<const L: usize> RampTable<L> {
                 self.periods[i] = self.periods[i - 1];
             }
         }
+        // The last millisecond's mean is below `vmax` when the ramp ends inside it: one more
+        // entry at `vmax` itself, so every cruise up to `vmax` has an index to walk to.
+        let top = period_of_millihz(cfg.vmax as u64 * 1000);
+        let mut n = n;
+        if n < L && self.periods[n - 1] > top {
+            self.periods[n] = top;
+            n += 1;
+        }
         // Distance walked: the rate is interpolated between entries, so integrate each
         // entry-to-entry stretch as a trapezoid (the last entry counts flat).
         let per_ms = |p: Period| (TIMER_HZ / 1000 * 16 * SUM_ONE) / p.to_bits().max(1);

@@ -31,7 +31,30 @@ impl Out for Tx {
     }
 }
 
+/// A motor with a quadrature encoder on one axis, as TIM3 and the firmware's SysTick see it:
+/// the count follows the axis's position `lag_ms` milliseconds late, times `counts_per_step`,
+/// minus the counts slipped so far; the controller gets the library's own 16-bit extension.
+pub struct EncoderModel {
+    pub axis: usize,
+    pub counts_per_step: f64,
+    pub lag_ms: usize,
+    /// Counts lost so far (missed steps × counts per step).
+    pub slipped: f64,
+    history: std::collections::VecDeque<i32>,
+    sampler: ddastep::encoder::count::Sampler,
+    /// The last sample: extended count, counts of the window.
+    last: (i32, i32),
+}
+
+impl EncoderModel {
+    pub fn new(axis: usize, counts_per_step: f64, lag_ms: usize) -> Self {
+        EncoderModel { axis, counts_per_step, lag_ms, slipped: 0.0, history: Default::default(), sampler: Default::default(), last: (0, 0) }
+    }
+}
+
 pub struct Bench<const N: usize> {
+    /// An encoder read before every poll, when set.
+    pub encoder: Option<EncoderModel>,
     pub shared: &'static Shared<N>,
     pub ctl: Controller<'static, N>,
     pub engine: Engine<'static, N>,
@@ -52,6 +75,8 @@ pub struct Bench<const N: usize> {
     /// Their pins reach the controller at each poll; while homing watches an axis, its switch
     /// stops the engine at once (the firmware's limit interrupt).
     pub switches: Vec<(usize, i32, bool)>,
+    /// When set, every change of the master rate: (timer ticks, steps/s, moves done).
+    pub trace: Option<Vec<(u64, u32, u32)>>,
     /// The RX ring and the requests, as the firmware's USART interrupt leaves them.
     rx_in: Producer<'static, u8>,
     rx_out: Consumer<'static, u8>,
@@ -75,6 +100,7 @@ impl<const N: usize> Bench<N> {
         let rxq: &'static mut Queue<u8, 256> = Box::leak(Box::new(Queue::new()));
         let (rx_in, rx_out) = rxq.split();
         let mut b = Bench {
+            encoder: None,
             shared,
             ctl,
             engine,
@@ -88,6 +114,7 @@ impl<const N: usize> Bench<N> {
             enabled: false,
             switches: Vec::new(),
             carriage: [0; N],
+            trace: None,
             rx_in,
             rx_out,
             req: Box::leak(Box::new(Requests::new())),
@@ -124,15 +151,31 @@ impl<const N: usize> Bench<N> {
             for (c, (a, b)) in self.carriage.iter_mut().zip(self.shared.positions().iter().zip(was)) {
                 *c += (a.wrapping_sub(b)) as i64;
             }
-            self.peak_hz = self.peak_hz.max(self.shared.rate_hz());
             if let Some(w) = self.ctl.homing_watch() {
                 if self.limit_mask() & w != 0 {
                     self.shared.stop_now();
                 }
             }
+            let hz = self.shared.rate_hz();
+            self.peak_hz = self.peak_hz.max(hz);
+            if let Some(t) = self.trace.as_mut() {
+                let done = self.shared.moves_done();
+                if t.last().is_none_or(|l| (l.1, l.2) != (hz, done)) {
+                    t.push((self.timer.now(), hz, done));
+                }
+            }
         }
         if self.shared.positions() != before && !self.enabled {
             self.stepped_while_disabled = true;
+        }
+        if let Some(e) = &mut self.encoder {
+            // SysTick's sample, once a millisecond.
+            e.history.push_back(self.shared.positions()[e.axis]);
+            while e.history.len() > e.lag_ms + 1 {
+                e.history.pop_front();
+            }
+            let counts = (e.history[0] as f64 * e.counts_per_step - e.slipped).floor() as i64;
+            e.last = e.sampler.sample(counts as u16);
         }
         self.idle_step();
     }
@@ -150,10 +193,14 @@ impl<const N: usize> Bench<N> {
         })
     }
 
-    /// One pass of the firmware's idle loop (the library's `idle_step`).
+    /// One pass of the firmware's idle loop (the encoder check, then the library's
+    /// `idle_step`).
     fn idle_step(&mut self) {
         // GPIOA as the shell reads it: pulled up, a pressed (NO) switch pulls its pin low.
         self.ctl.set_limit_inputs(!(self.limit_mask() as u32) & 0xFFFF);
+        if let Some(e) = &self.encoder {
+            self.ctl.encoder(e.last.0, e.last.1, &mut self.tx);
+        }
         let a = idle_step(&mut self.ctl, &mut self.rx_out, &mut self.tx, self.now_ms, self.req);
         self.enabled = a.enable;
         self.actions.push(a);

@@ -296,6 +296,11 @@ impl Board {
         &self.cpu.get_data().tim1.changes
     }
 
+    // TIM3, the quadrature encoder counter (count, filter setting, how often it was read)
+    pub fn encoder_timer(&self) -> &super::qenc::EncoderTimer {
+        &self.cpu.get_data().tim3
+    }
+
     // every output latch change so far
     pub fn edges(&self) -> &[PinEdge] {
         &self.cpu.get_data().edges

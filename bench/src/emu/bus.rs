@@ -19,6 +19,7 @@ use super::memory::{apb_divider, bridge_cycles, bus_of, Bus, FlashConfig};
 use super::nvic::{Nvic, IRQ0};
 use super::profile::Histogram;
 use super::pwm::Pwm;
+use super::qenc::EncoderTimer;
 use super::systick::SysTick;
 use super::timer::Timer;
 use super::usart::Usart;
@@ -30,6 +31,9 @@ pub const USART1_IRQ: u32 = 37;
 
 const TIM2: u32 = 0x4000_0000;
 const TIM1: u32 = 0x4001_2C00;
+const TIM3: u32 = 0x4000_0400;
+/// GPIOA pins of TIM3's encoder inputs TI1, TI2.
+const ENCODER_PINS: [u8; 2] = [6, 7];
 const USART1: u32 = 0x4001_3800;
 const GPIOA: u32 = 0x4001_0800;
 const RCC: u32 = 0x4002_1000;
@@ -107,6 +111,8 @@ pub struct Machine {
     pub tim2: Timer,
     /// TIM1: the spindle/laser PWM.
     pub tim1: Pwm,
+    /// TIM3: the quadrature encoder counter on PA6/PA7.
+    pub tim3: EncoderTimer,
     pub usart1: Usart,
     pub systick: SysTick,
     pub ports: Vec<Port>,
@@ -161,6 +167,7 @@ impl Machine {
             nvic: Nvic::default(),
             tim2: Timer::new(),
             tim1: Pwm::default(),
+            tim3: EncoderTimer::default(),
             usart1: Usart::default(),
             systick: SysTick::default(),
             ports: vec![Port::new(); 5],
@@ -318,6 +325,7 @@ impl Machine {
         let v = match word {
             TIM2..=0x4000_03FF => self.tim2.read(word - TIM2, t),
             TIM1..=0x4001_2FFF => self.tim1.read(word - TIM1),
+            TIM3..=0x4000_07FF => self.tim3.read(word - TIM3, t),
             USART1..=0x4001_3BFF => self.usart1.read(word - USART1, t),
             IWDG..=0x4000_33FF => self.iwdg.read(word - IWDG),
             EXTI..=0x4001_07FF => self.exti.read(word - EXTI),
@@ -361,6 +369,11 @@ impl Machine {
                 let merged = (self.tim1.read(word - TIM1) & !mask) | v;
                 self.tim1.write(word - TIM1, merged, t)
             }
+            TIM3..=0x4000_07FF => {
+                let off = word - TIM3;
+                let merged = if off == 0x24 { v } else { (self.tim3.read(off, t) & !mask) | v };
+                self.tim3.write(off, merged)
+            }
             USART1..=0x4001_3BFF => self.usart1.write(word - USART1, v, t),
             IWDG..=0x4000_33FF => self.iwdg.write(word - IWDG, v, t),
             EXTI..=0x4001_07FF => {
@@ -403,6 +416,12 @@ impl Machine {
     // an external level change of input `pin` on port `port` (index): EXTI edge detection
     pub fn input_edge(&mut self, port: usize, pin: u8, before: bool) {
         let after = self.ports[port].idr() & 1 << pin != 0;
+        if let (0, Some(ch)) = (port, ENCODER_PINS.iter().position(|&p| p == pin)) {
+            if before != after {
+                let other = self.ports[0].idr() & 1 << ENCODER_PINS[1 - ch] != 0;
+                self.tim3.input(ch, after, other);
+            }
+        }
         if pin as u32 >= exti::LINES || before == after {
             return;
         }

@@ -29,6 +29,7 @@ pub mod plant;
 pub mod nvic;
 pub mod profile;
 pub mod pwm;
+pub mod qenc;
 mod report;
 mod stats;
 pub mod stream;

@@ -20,8 +20,8 @@ use crate::report;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) enum SoftLimit {
     Off,
-    /// Tripped: holding until the engine has stopped.
-    Stopping,
+    /// Tripped: holding until the engine has stopped, then this alarm is reported.
+    Stopping(&'static [u8]),
     /// ALARM:2 reported: waiting for Ctrl-X.
     Locked,
 }
@@ -34,11 +34,17 @@ impl<const N: usize> Controller<'_, N> {
 
     /// A G-code line asked for a target outside the box: stop everything (see the module).
     pub(super) fn soft_limit_trip(&mut self) {
+        self.trip(report::ALARM_SOFT_LIMIT);
+    }
+
+    /// Stops everything as a soft-limit trip does, reporting `alarm` (its `ALARM:N` and
+    /// `[MSG:Reset to continue]`) once the machine has stopped.
+    pub(super) fn trip(&mut self, alarm: &'static [u8]) {
         self.job = None;
         self.lines.clear();
         self.alarm = true;
         self.shared.set_hold(true);
-        self.soft_limit = SoftLimit::Stopping;
+        self.soft_limit = SoftLimit::Stopping(alarm);
     }
 
     /// A limit switch stopped the step output (the shell already halted the step timer):
@@ -61,17 +67,18 @@ impl<const N: usize> Controller<'_, N> {
 
     /// Finishes a trip once the engine stands still: flush, re-sync, ALARM:2.
     pub(super) fn soft_limit_poll(&mut self, out: &mut impl Out) {
-        if self.soft_limit != SoftLimit::Stopping || matches!(self.shared.state(), State::Run | State::Holding) {
+        let SoftLimit::Stopping(alarm) = self.soft_limit else { return };
+        if matches!(self.shared.state(), State::Run | State::Holding) {
             return;
         }
-        if out.room() < report::ALARM_SOFT_LIMIT.len() {
+        if out.room() < alarm.len() {
             return;
         }
         self.feeder.abort();
         self.shared.set_hold(false);
         self.pushed = self.shared.moves_done();
         self.planner.sync(self.shared.positions(), &self.limits);
-        out.put(report::ALARM_SOFT_LIMIT);
+        out.put(alarm);
         self.soft_limit = SoftLimit::Locked;
     }
 }

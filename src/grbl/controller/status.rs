@@ -93,6 +93,7 @@ impl<const N: usize> Controller<'_, N> {
                 pins: self.limit_pins,
                 wco: show_wco.then_some(&wco[..n]),
                 ov: show_ov.then_some(ov),
+                enc: self.encoder_status(),
             },
         );
     }

@@ -25,6 +25,7 @@ impl<const N: usize> Controller<'_, N> {
                 out.put(report::UNLOCKED);
             }
             b"X" => {}
+            b"ENC" => self.encoder_report(out)?,
             [b'H', rest @ ..] if rest.len() < 2 => self.home_start(rest.first().copied(), out)?,
             b"C" if self.check => {
                 // Leaving check mode resets, as in Grbl: state and position as before `$C`.
@@ -161,6 +162,8 @@ impl<const N: usize> Controller<'_, N> {
                 self.planner.sync(self.shared.positions(), &self.limits);
             }
         }
+        // Any change re-zeroes the encoder check (settings change only at rest).
+        self.enc_configure();
     }
 
     /// Writes listing lines while they fit; the listing left, if any.
