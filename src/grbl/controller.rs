@@ -19,6 +19,7 @@
 
 mod encoder;
 mod jogging;
+mod probe;
 mod soft_limits;
 mod status;
 mod system;
@@ -117,6 +118,8 @@ struct Job<const N: usize> {
     end: bool,
     /// Write the persistent image (once the machine is idle) before the `ok`.
     save: bool,
+    /// G38.2–G38.5: the probe cycle (see `probe.rs`), 0 for none.
+    probe: u8,
 }
 
 impl<const N: usize> Job<N> {
@@ -138,6 +141,7 @@ impl<const N: usize> Job<N> {
             pause: false,
             end: false,
             save: false,
+            probe: 0,
         }
     }
 }
@@ -198,6 +202,8 @@ pub struct Controller<'a, const N: usize> {
     limit_pins: u8,
     /// Encoder feedback's step-loss check (see `encoder.rs`).
     enc: crate::encoder::loss::Monitor,
+    /// The probe input is active (`$6` applied).
+    probe_pin: bool,
 }
 
 impl<'a, const N: usize> Controller<'a, N> {
@@ -270,6 +276,7 @@ impl<'a, const N: usize> Controller<'a, N> {
             soft_limit: SoftLimit::Off,
             watchdog_note: false,
             limit_pins: 0,
+            probe_pin: false,
             enc: crate::encoder::loss::Monitor::OFF,
         });
         c.startup_next = c.next_startup(0);
@@ -631,6 +638,9 @@ impl<'a, const N: usize> Controller<'a, N> {
                 self.save = true;
                 job.save = false;
             }
+            if job.probe != 0 && job.probe & probe::ARMED == 0 && !self.probe_step(&mut job, out) {
+                break 'run false;
+            }
             for slot in [&mut job.mv, &mut job.mv2] {
                 if let Some(pl) = *slot {
                     if !self.push(pl, job.jog, job.power) {
@@ -655,6 +665,9 @@ impl<'a, const N: usize> Controller<'a, N> {
                     }
                     job.mv = None;
                 }
+            }
+            if job.probe & probe::ARMED != 0 && !self.probe_step(&mut job, out) {
+                break 'run false;
             }
             if job.drivers_off || job.pause || job.end {
                 if !self.drained() {
@@ -790,6 +803,7 @@ impl<'a, const N: usize> Controller<'a, N> {
         job.pause = fx.stop == Some(Stop::Pause);
         job.end = fx.stop == Some(Stop::End);
         job.save = store;
+        job.probe = fx.probe;
         self.start(job, out);
         Ok(())
     }
