@@ -98,8 +98,9 @@ fn plan(c: &Chain, s: &Settings, lim: &Limits<N>) -> Vec<Seen> {
         let d: Vec<f64> = (0..N).map(|i| steps[i] as f64 / s.steps_per_mm[i] as f64).collect();
         let len = d.iter().map(|x| x * x).sum::<f64>().sqrt();
         let master = steps.iter().map(|x| x.unsigned_abs()).max().unwrap() as f64;
-        let path = pl.mv.path().unwrap();
-        out.push(Seen { steps, unit: core::array::from_fn(|i| d[i] / len), share: master / len, nominal: path.speed as f64 });
+        // The nominal path speed: the cruise rate over the master's share of the path.
+        let nominal = ddastep::ramp::hz_of_period(pl.mv.cruise()) / (master / len);
+        out.push(Seen { steps, unit: core::array::from_fn(|i| d[i] / len), share: master / len, nominal });
         let _ = &pl;
     }
     out

@@ -98,3 +98,51 @@ fn jog_cancel_when_idle_and_door_byte_do_nothing() {
     assert!(b.status().starts_with("<Idle|"));
     assert_eq!(b.line("G0 X1"), "ok\r\n");
 }
+
+/// Grbl runs queued jogs through its planner like program moves: consecutive `$J=` lines join
+/// at speed, and 0x85 decelerates at the jog's acceleration across the buffered jogs (never
+/// faster, never speeding up) before they are flushed.
+#[test]
+fn queued_jogs_join_at_speed_and_a_cancel_decelerates_across_them() {
+    // 200 mm/s² on every axis (100 steps/mm): X's master changes by 20 Hz per ms.
+    let mut s = ddastep::settings::Settings::BENCH;
+    s.accel = [200.0; ddastep::MAX_AXES];
+    let mut b = Bench::<3>::new(s);
+    b.take();
+    b.trace = Some(Vec::new());
+    for _ in 0..10 {
+        assert_eq!(b.line("$J=G91X5F3000"), "ok\r\n"); // 50 mm/s: 5 kHz
+    }
+    b.run_ms(700);
+    let done = b.shared.moves_done();
+    assert!(done >= 3, "{done} jogs done");
+    assert_eq!(b.shared.rate_hz(), 5_000);
+    let at = b.shared.positions()[0];
+    let t0 = b.timer.now();
+    b.byte(0x85);
+    b.run_to_idle(2_000);
+    let tr = b.trace.take().unwrap();
+    // Every jog after the first ran into the next at its full 5 kHz.
+    for w in tr.windows(2) {
+        if w[1].2 == w[0].2 + 1 && w[1].2 <= done && w[0].2 >= 1 {
+            assert_eq!(w[0].1, 5_000, "jog {} ended at {} Hz", w[0].2, w[0].1);
+        }
+    }
+    // The cancel: from 50 mm/s down to the table's start (10 mm/s) at 200 mm/s² is
+    // (50² − 10²) / 400 = 6 mm, through at least one more jog, slowing by one walk per ms.
+    let after: Vec<_> = tr.iter().filter(|e| e.0 > t0 && e.1 > 0).collect();
+    assert!(after.windows(2).all(|w| w[1].1 <= w[0].1), "never speeds up while cancelling");
+    // (The table's entries are 202 Hz apart and it interpolates periods: within an entry the
+    // rate may change faster by the ratio of its ends.)
+    for w in after.windows(2) {
+        let allowed = 20.0 * (1.0 + 202.0 / w[1].1 as f64) + 1.0;
+        assert!((w[0].1 - w[1].1) as f64 <= allowed, "one walk (20 Hz) per ms at most: {:?}", w);
+    }
+    assert!(after.last().unwrap().2 > done, "decelerated across a jog boundary");
+    let ms = (after.last().unwrap().0 - t0) as f64 / ddastep::TICKS_PER_MS as f64;
+    assert!((195.0..=215.0).contains(&ms), "decelerated in {ms} ms (200 expected)");
+    let moved = b.shared.positions()[0] - at;
+    assert!((560..=640).contains(&moved), "{moved} steps after the cancel (600 expected)");
+    assert_eq!(b.ctl.pending_moves(), 0, "the rest flushed");
+    assert!(b.shared.positions()[0] < 5_000);
+}

@@ -505,17 +505,6 @@ impl<'a, const N: usize> Controller<'a, N> {
         }
     }
 
-    /// The limits a program move is planned with: the feed and rapid overrides in force (a jog
-    /// uses `self.limits`: overrides do not apply to jogs, as in Grbl).
-    fn move_limits(&self) -> Limits<N> {
-        let o = self.shared.overrides();
-        // (Copy, then set: `Limits { .., ..self.limits }` copies field by field.)
-        let mut l = self.limits;
-        l.feed_ovr = o.feed as f64 / 100.0;
-        l.rapid_ovr = o.rapid as f64 / 100.0;
-        l
-    }
-
     /// Queue empty and engine idle (not held): G4, flash writes, `$` settings may act.
     fn drained(&self) -> bool {
         self.feeder.pending() == 0 && self.shared.state() == State::Idle
@@ -657,8 +646,7 @@ impl<'a, const N: usize> Controller<'a, N> {
                     job.arc = None;
                     break;
                 };
-                let lim = self.move_limits();
-                job.mv = plan(&mut self.planner, &p, job.rate, &lim, &self.ramped.cfg).unwrap_or(None);
+                job.mv = plan(&mut self.planner, &p, job.rate, &self.limits, &self.ramped.cfg).unwrap_or(None);
                 if let Some(pl) = job.mv {
                     if !self.push(pl, false, job.power) {
                         break 'run false;
@@ -722,13 +710,13 @@ impl<'a, const N: usize> Controller<'a, N> {
         // G93: F is 1/minutes (checked positive where a motion needs it).
         let rate = if modal.inverse_time { Rate::Minutes(1.0 / modal.feed) } else { Rate::Feed(modal.feed) };
         let cfg = self.ramped.cfg;
-        let lim = self.move_limits();
+        let lim = &self.limits;
         let mv = match &fx.motion {
-            Some((t, rapid)) => plan(&mut planner, t, if *rapid { Rate::Rapid } else { rate }, &lim, &cfg)?,
+            Some((t, rapid)) => plan(&mut planner, t, if *rapid { Rate::Rapid } else { rate }, lim, &cfg)?,
             None => None,
         };
         let mv2 = match &fx.home {
-            Some(t) => planner.line(t, None, &lim)?,
+            Some(t) => planner.line(t, None, lim)?,
             None => None,
         };
         let (arc, rate) = match &fx.arc {

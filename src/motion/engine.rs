@@ -240,14 +240,15 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
         self.set_period();
     }
 
-    /// The exit target: 0 under a hold or when no successor is queued yet.
+    /// The exit target: 0 under a hold or when no successor is queued yet; never above the
+    /// cruise (an override may have lowered it below the planned exit).
     #[inline(always)]
     fn target(&self) -> u32 {
         if self.hold || !self.ring.has_next() {
             0
         } else {
             // SAFETY: an atomic field of the running slot.
-            unsafe { (*self.cur).exit_q.load(Relaxed) }
+            unsafe { (*self.cur).exit_q.load(Relaxed) }.min(self.plan.cruise_q)
         }
     }
 
@@ -257,6 +258,7 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
         if !matches!(self.phase, Phase::Run | Phase::Dir) {
             return;
         }
+        self.cruise_update();
         let target = self.target();
         while self.walk.unsettled() {
             // Slower than a step per ms: the work of the ticks in between happens here.
@@ -269,6 +271,20 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
                 self.publish(State::Held);
             }
             _ => self.set_period(),
+        }
+    }
+
+    /// The running move's cruise as the feeder last priced it (an override changed); a new
+    /// index re-plans the trigger. (Relaxed: the interrupt reads both while the feeder cannot
+    /// run, so it sees either store order's halves as [`Prepared`] describes.)
+    #[inline(always)]
+    fn cruise_update(&mut self) {
+        // SAFETY: atomic fields of the running slot.
+        let (bits, q) = unsafe { ((*self.cur).cruise_bits.load(Relaxed), (*self.cur).cruise_q.load(Relaxed)) };
+        self.plan.cruise = Period::from_bits(bits);
+        if q != self.plan.cruise_q {
+            self.plan.cruise_q = q;
+            self.walk.replan();
         }
     }
 

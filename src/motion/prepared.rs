@@ -16,6 +16,7 @@ use core::sync::atomic::AtomicU32;
 
 use crate::board::PinMap;
 use crate::interp::Dda;
+use crate::queue::Rates;
 use crate::ramp::Period;
 use crate::timing::{Timing, STORE_JITTER_TICKS};
 
@@ -67,7 +68,16 @@ pub struct Prepared<const N: usize> {
     pub(crate) ramp: RampPlan,
     /// The feeder raises this (from `ramp.exit_q`) while the move is the last one queued.
     pub(crate) exit_q: AtomicU32,
+    /// The cruise under the overrides in force (index Q20, floor period bits): the feeder
+    /// stores the index, then the floor (release), when an override changes; the engine reads
+    /// both once per ramp millisecond in its interrupt, where the feeder cannot run between the
+    /// two loads, so at worst it pairs a new index with the old floor (harmless: the floor only
+    /// holds at or below the index), never a new floor with an old index.
+    pub(crate) cruise_q: AtomicU32,
+    pub(crate) cruise_bits: AtomicU32,
     pub(crate) min_period: Period,
+    /// The feeder's: how overrides scale the cruise.
+    pub(crate) rates: Rates,
     // Edges.
     /// Direction pins to change before the first step (0: none, no setup gap).
     pub(crate) dir_word: u32,
@@ -94,13 +104,15 @@ impl DirState {
 
 impl<const N: usize> Prepared<N> {
     /// Prepares `steps` (signed, master `master`) starting at absolute `start`, for the pins,
-    /// timing and ramp plan given; `dir` is updated to the pins after this move.
+    /// timing and ramp plan given (priced for the overrides in force from `rates`); `dir` is
+    /// updated to the pins after this move.
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         steps: [i32; N],
         master: usize,
         start: [i32; N],
         ramp: RampPlan,
+        rates: Rates,
         timing: &Timing,
         pins: &PinMap<N>,
         dir: &mut DirState,
@@ -137,7 +149,10 @@ impl<const N: usize> Prepared<N> {
             slaves,
             ramp,
             exit_q: AtomicU32::new(ramp.exit_q),
+            cruise_q: AtomicU32::new(ramp.cruise_q),
+            cruise_bits: AtomicU32::new(ramp.cruise.to_bits()),
             min_period: Period::from_bits(t.min_period_for(n as u32).saturating_mul(16)),
+            rates,
             dir_word,
             dir_setup: (t.dir_setup_ticks + STORE_JITTER_TICKS).max(t.min_period_ticks),
             min_gap: t.min_period_ticks,

@@ -47,23 +47,64 @@ pub enum MoveError {
 pub struct Move<const N: usize> {
     pub(crate) steps: [i32; N],
     pub(crate) master: u8,
+    pub(crate) ovr: Ovr,
     pub(crate) cruise: Period,
     pub(crate) path: Option<Path>,
+}
+
+/// Which override scales a move: feed for G1/G2/G3 (and G93), rapid for G0, none for jogs
+/// (Grbl 1.1).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+pub enum Ovr {
+    None,
+    Feed,
+    Rapid,
+}
+
+/// A move's master cruise rate and what an override makes of it: Grbl scales the programmed
+/// rate (F, or the axes' limit for G0), then the axes' max rates still bind.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Rates {
+    pub ovr: Ovr,
+    /// Master steps/s asked at 100 % and allowed (see [`Path`]).
+    pub asked_hz: f32,
+    pub cap_hz: f32,
+    /// Master period at 100 % (every clamp applied).
+    pub cruise: Period,
+}
+
+impl Rates {
+    /// The master cruise under the overrides `o`.
+    pub fn cruise_at(&self, o: Overrides) -> Period {
+        let pct = match self.ovr {
+            Ovr::Feed => o.feed,
+            Ovr::Rapid => o.rapid,
+            Ovr::None => 100,
+        };
+        if pct == 100 {
+            return self.cruise;
+        }
+        // max/min, not clamp (no panic path); f64 like the planner (no f32 soft float set).
+        let hz = (self.asked_hz as f64 * pct as f64 * 0.01).min(self.cap_hz as f64).max(MIN_RATE_HZ as f64);
+        period_of_millihz(crate::num::u64_of(hz * 1000.0))
+    }
 }
 
 /// A move's length and limits in path units (mm, s), for the look-ahead.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Path {
-    /// Length, mm.
-    pub len: f32,
     /// Master steps per mm of path.
     pub share: f32,
-    /// Nominal (cruise) path speed, mm/s, after every clamp.
-    pub speed: f32,
     /// Path acceleration the moving axes allow, mm/s².
     pub accel: f32,
-    /// Highest speed at the junction with the previous move (junction deviation `$11` and
-    /// both moves' nominal speeds), mm/s.
+    /// Master steps/s asked at 100 % (F, or the axes' limit for G0), before any clamp, and
+    /// the most the axes' max rates, the step timing and the table's top allow: an override
+    /// scales the first, the second still binds.
+    pub asked_hz: f32,
+    pub cap_hz: f32,
+    /// Highest speed at the junction with the previous move from junction deviation `$11`
+    /// (0 from rest, +∞ straight on), mm/s; the look-ahead also caps it by both moves' speeds.
     pub junction: f32,
 }
 
@@ -92,7 +133,7 @@ impl<const N: usize> Move<N> {
         if counts[master] == 0 {
             return Err(MoveError::ZeroLength);
         }
-        Ok(Move { steps: s, master: master as u8, cruise: period_of_millihz(cruise_millihz), path: None })
+        Ok(Move { steps: s, master: master as u8, ovr: Ovr::None, cruise: period_of_millihz(cruise_millihz), path: None })
     }
 
     /// Signed steps per axis.
@@ -108,6 +149,21 @@ impl<const N: usize> Move<N> {
     /// Master cruise period.
     pub fn cruise(&self) -> Period {
         self.cruise
+    }
+
+    /// Its cruise and how the overrides scale it (a move without a path: not at all).
+    pub fn rates(&self) -> Rates {
+        let (ovr, asked_hz, cap_hz) = match self.path {
+            Some(p) => (self.ovr, p.asked_hz, p.cap_hz),
+            None => (Ovr::None, 0.0, 0.0),
+        };
+        Rates { ovr, asked_hz, cap_hz, cruise: self.cruise }
+    }
+
+    /// The same move, never overridden (a jog).
+    pub fn fixed(mut self) -> Self {
+        self.ovr = Ovr::None;
+        self
     }
 
     /// The same move with its geometry, so the look-ahead can join it to its neighbours.

@@ -87,6 +87,16 @@ impl<const N: usize> RingProducer<'_, N> {
         Ok(())
     }
 
+    /// The published moves, oldest first (the running one included), as raw slots: the
+    /// producer may read the plain fields it wrote and store the atomic ones, never through a
+    /// reference to a move (the engine runs the oldest in place). A slot the engine frees
+    /// meanwhile keeps its contents until the producer pushes again.
+    pub fn slots(&self) -> impl Iterator<Item = *const Prepared<N>> + '_ {
+        let h = self.ring.head.load(Acquire);
+        let n = self.ring.tail.load(Relaxed).wrapping_sub(h);
+        (0..n).map(move |k| self.ring.slot(h.wrapping_add(k)) as *const Prepared<N>)
+    }
+
     /// Raises (or sets) the exit index of the last published move, if it is still in the
     /// ring; call before publishing its successor.
     pub fn set_last_exit(&mut self, exit_q: u32) {

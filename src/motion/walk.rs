@@ -12,6 +12,10 @@
 //! way down samples the table exactly as the distance assumes (a left Riemann sum: the sums'
 //! integral less half the end slopes). The walk goes up only if the way down from one walk up
 //! still fits in the steps left, otherwise it stays (cruises) until the trigger fires.
+//! An override may move the cruise index while the move runs (the engine reads it once per
+//! ms): above it the walk goes down to it at the same rate, below it up as above; a target
+//! that rises while walking down (a successor queued late, a higher cruise) ends the
+//! deceleration.
 //!
 //! Cost: a ramp millisecond only moves the index and sets the period; the distances it needs
 //! next (the trigger here, the one from a walk up) are computed one per tick on the ticks that
@@ -78,7 +82,20 @@ impl Walk {
                 self.idx = self.idx.saturating_sub(plan.walk_q).max(target);
                 return Step::Moved;
             }
+            if target > self.idx {
+                // The target rose (a successor came after all, or an override raised the
+                // cruise): the deceleration is over; up again where the way down fits.
+                self.decel = false;
+                self.pending = TRIGGER;
+            }
             return if target == 0 { Step::AtRest } else { Step::Same };
+        }
+        if self.idx > plan.cruise_q {
+            // An override lowered the cruise: down to it at the move's own rate (the trigger
+            // from the higher index fires early until it is computed again).
+            self.idx = self.idx.saturating_sub(plan.walk_q).max(plan.cruise_q);
+            self.pending = TRIGGER;
+            return Step::Moved;
         }
         if target != self.decel_for {
             self.pending = TRIGGER; // a successor came (or went): both distances again
@@ -102,6 +119,13 @@ impl Walk {
         self.decel_for = target;
         self.up_at = u32::MAX;
         self.pending = UP;
+    }
+
+    /// Both distances again on the next ticks (the cruise changed); the trigger in force
+    /// stays until then.
+    #[inline(always)]
+    pub fn replan(&mut self) {
+        self.pending = TRIGGER;
     }
 
     /// The trigger for a new move at the next tick; until then it cannot fire.
@@ -153,11 +177,14 @@ impl Walk {
             self.idx = self.idx.saturating_sub(plan.walk_q).max(target);
         }
     }
-    /// The master period at the current index for a move's plan, never below `min`.
+    /// The master period at the current index for a move's plan, never below `min`, nor
+    /// below the cruise up to its index (above it, walking down to a lowered cruise, the
+    /// table alone).
     #[inline(always)]
     pub fn period<const L: usize>(&self, plan: &RampPlan, min: Period, table: &RampTable<L>) -> Period {
         let p = if table.is_empty() { Period::ZERO } else { table.period_at(self.idx) };
         let scaled = ((p.to_bits() as u64 * plan.scale as u64) >> 16).min(u32::MAX as u64) as u32;
-        Period::from_bits(scaled).max(plan.cruise).max(min)
+        let floor = if self.idx > plan.cruise_q { min } else { plan.cruise.max(min) };
+        Period::from_bits(scaled).max(floor)
     }
 }

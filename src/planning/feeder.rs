@@ -10,13 +10,21 @@
 //! first raises the exit of the last prepared move to the new move's entry, then publishes the
 //! new move; until then the engine plans that last move's exit as a stop. So the engine never
 //! runs out of moves at speed: at worst it slows to rest at the end of what it has.
+//!
+//! Overrides (Grbl's feed and rapid): when one changes, every queued move gets its new cruise
+//! (as Grbl recomputes its plan). A prepared move gets its new cruise index and floor in its
+//! slot, which the engine reads at its next ramp millisecond and walks to at the move's own
+//! acceleration; the buffered moves are priced again and replanned. Exits already handed over
+//! stay: they are junction and stopping limits, which no override changes (a move whose new
+//! cruise is below its exit leaves at its cruise).
 
 use crate::board::PinMap;
-use crate::lookahead::{replan, Block, Buffer, Tail, LOOKAHEAD};
+use crate::lookahead::{cruise_for, replan, Block, Buffer, Tail, LOOKAHEAD};
 use crate::prepared::{DirState, Prepared};
-use crate::queue::{Move, Shared, State};
+use crate::queue::{Move, Overrides, Shared, State};
 use crate::ramp::RampSlot;
 use crate::ring::{RingProducer, RING};
+use core::sync::atomic::Ordering::{Relaxed, Release};
 
 /// Motion the feeder keeps prepared ahead of the engine, µs (several poll intervals).
 pub const HORIZON_US: u32 = 8_000;
@@ -35,10 +43,9 @@ pub struct Feeder<'a, const N: usize> {
     /// Absolute position after the last move handed over.
     pos: [i32; N],
     resync: bool,
-    /// Moves handed over (wrapping), and per ring slot their estimated µs and master steps.
-    pushed: u32,
-    est: [(u32, u32); RING],
     accepted: u32,
+    /// The overrides the queued moves are priced for.
+    ovr: Overrides,
 }
 
 impl<'a, const N: usize> Feeder<'a, N> {
@@ -61,9 +68,8 @@ impl<'a, const N: usize> Feeder<'a, N> {
             dir: DirState::UNKNOWN,
             pos: shared.positions(),
             resync: false,
-            pushed: shared.moves_done(),
-            est: [(0, 1); RING],
             accepted: shared.moves_done(),
+            ovr: Overrides::NONE,
         }
     }
 
@@ -73,6 +79,7 @@ impl<'a, const N: usize> Feeder<'a, N> {
         if !self.synced() {
             return Err(mv);
         }
+        self.sync_overrides();
         if self.blocks.is_full() {
             self.service();
             if self.blocks.is_full() {
@@ -81,7 +88,7 @@ impl<'a, const N: usize> Feeder<'a, N> {
         }
         let profile = self.slot.producer_view();
         let joins = !(self.blocks.is_empty() && self.ring.is_empty());
-        let block = Block::new(mv, profile, joins);
+        let block = Block::new(mv, profile, joins, self.ovr);
         if self.blocks.push_back(block).is_err() {
             return Err(mv); // unreachable: checked above
         }
@@ -96,6 +103,7 @@ impl<'a, const N: usize> Feeder<'a, N> {
         if !self.synced() {
             return;
         }
+        self.sync_overrides();
         while !self.blocks.is_empty() && self.ring.len() < RING {
             let must = self.blocks.is_full() || self.ring.len() < 2 || self.horizon_us() < HORIZON_US;
             if !must {
@@ -130,7 +138,6 @@ impl<'a, const N: usize> Feeder<'a, N> {
         self.resync = true;
         // Dropped moves never count as done; forget them here.
         self.accepted = self.shared.moves_done();
-        self.pushed = self.accepted;
     }
 
     /// Sets positions while idle (G92): the engine's record and the next move's start.
@@ -143,8 +150,7 @@ impl<'a, const N: usize> Feeder<'a, N> {
     fn synced(&mut self) -> bool {
         if self.resync && self.shared.state() == State::Idle {
             self.pos = self.shared.positions();
-            self.pushed = self.shared.moves_done();
-            self.accepted = self.pushed;
+            self.accepted = self.shared.moves_done();
             self.resync = false;
         }
         !self.resync
@@ -165,7 +171,7 @@ impl<'a, const N: usize> Feeder<'a, N> {
         ramp.exit_q = b.exit_q;
         let start = self.pos;
         let steps = b.mv.steps;
-        let p = Prepared::new(steps, b.mv.master as usize, start, ramp, &profile.timing, &self.pins, &mut self.dir, self.shared.epoch());
+        let p = Prepared::new(steps, b.mv.master as usize, start, ramp, b.mv.rates(), &profile.timing, &self.pins, &mut self.dir, self.shared.epoch());
         // The last prepared move may now run through into this one.
         self.ring.set_last_exit(b.entry_q);
         if self.ring.push(p).is_err() {
@@ -174,25 +180,49 @@ impl<'a, const N: usize> Feeder<'a, N> {
         for (q, s) in self.pos.iter_mut().zip(steps) {
             *q = q.wrapping_add(s);
         }
-        self.est[self.pushed as usize % RING] = (b.est_us, steps[b.mv.master as usize].unsigned_abs().max(1));
-        self.pushed = self.pushed.wrapping_add(1);
         self.tail = Some(b.tail());
     }
 
-    /// Estimated motion the engine has left, µs.
-    fn horizon_us(&self) -> u32 {
-        let done = self.shared.moves_done();
-        let queued = self.pushed.wrapping_sub(done);
-        let mut us = 0u32;
-        for k in 0..queued.min(RING as u32) {
-            let (est, total) = self.est[done.wrapping_add(k) as usize % RING];
-            let left = if k == 0 {
-                let made = self.shared.mv_done.load(core::sync::atomic::Ordering::Relaxed).min(total);
-                crate::queue::mul_div(est, total - made, 0, total)
-            } else {
-                est
+    /// An override changed: prices every queued move again (see the module docs).
+    fn sync_overrides(&mut self) {
+        let o = self.shared.overrides();
+        if o == self.ovr {
+            return;
+        }
+        self.ovr = o;
+        let profile = self.slot.producer_view();
+        for p in self.ring.slots() {
+            // SAFETY: a published slot (or one just freed, not yet rewritten): plain fields the
+            // engine never writes, and its atomics.
+            let q = unsafe {
+                let (cruise, q) = cruise_for(&(*p).rates, o, (*p).ramp.scale, (*p).min_period.to_bits(), &profile.ramp);
+                (*p).cruise_q.store(q, Relaxed);
+                (*p).cruise_bits.store(cruise.to_bits(), Release);
+                q
             };
-            us = us.saturating_add(left);
+            if let Some(t) = self.tail.as_mut() {
+                t.cruise_q = q; // the last one's stays
+            }
+        }
+        for b in self.blocks.iter_mut() {
+            b.price(profile, o);
+        }
+        self.replan();
+    }
+
+    /// Estimated motion the engine has left at cruise, µs (counted only up to [`HORIZON_US`]).
+    fn horizon_us(&self) -> u32 {
+        let made = self.shared.mv_done.load(Relaxed);
+        let mut us = 0u32;
+        for (k, p) in self.ring.slots().enumerate() {
+            // SAFETY: as in `sync_overrides`.
+            let (total, bits) = unsafe { ((*p).total, (*p).cruise_bits.load(Relaxed).max((*p).min_period.to_bits())) };
+            // The running move (the oldest) counts what it has left.
+            let left = if k == 0 { total.saturating_sub(made) } else { total };
+            us = us.saturating_add(crate::num::u32_of(left as f64 * bits as f64 * (1e6 / 16.0 / crate::TIMER_HZ as f64)));
+            if us >= HORIZON_US {
+                break;
+            }
         }
         us
     }

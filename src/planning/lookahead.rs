@@ -20,8 +20,8 @@
 
 use crate::num::u32_of;
 use crate::prepared::RampPlan;
-use crate::queue::Move;
-use crate::ramp::{Profile, RampTable, IDX_ONE};
+use crate::queue::{Move, Overrides, Rates};
+use crate::ramp::{Period, Profile, RampTable, IDX_ONE};
 use crate::timing::Timing;
 use crate::walk::DECEL_MARGIN;
 
@@ -40,15 +40,16 @@ pub struct Block<const N: usize> {
     pub ramp: RampPlan,
     /// Table distance the move covers at its walk rate (1/256 step of the table).
     pub budget: u32,
-    /// Highest entry the junction and the nominal speeds allow.
+    /// The junction deviation's limit on the entry (0 from rest).
+    pub junction_q: u32,
+    /// Highest entry the junction and the move's cruise allow (the previous move's cruise
+    /// caps it in the forward pass).
     pub max_entry_q: u32,
     /// Highest entry the moves after it allow (reverse pass; kept to stop early).
     pub rev_entry_q: u32,
     /// Planned entry and exit.
     pub entry_q: u32,
     pub exit_q: u32,
-    /// Estimated duration at cruise, µs (for the feeder's horizon).
-    pub est_us: u32,
 }
 
 /// What the passes need of the last move handed to the engine.
@@ -61,60 +62,61 @@ pub struct Tail {
 
 impl<const N: usize> Block<N> {
     /// Plans `mv` on `table` (`per_mm`: table rate per mm/s of path; 0 if the table is in
-    /// master steps); `joins` when a move runs before it (else it starts from rest).
-    pub fn new<const L: usize>(mv: Move<N>, profile: &Profile<L>, joins: bool) -> Self {
+    /// master steps) under the overrides `o`; `joins` when a move runs before it (else it
+    /// starts from rest).
+    pub fn new<const L: usize>(mv: Move<N>, profile: &Profile<L>, joins: bool, o: Overrides) -> Self {
         // f64 arithmetic (the inputs are stored as f32): the firmware links f64 soft float for the
         // planner anyway, and f32 arithmetic here would add a second set (~2 KB of flash).
         let (table, per_mm) = (&profile.ramp, profile.per_mm as f64);
         let total = mv.steps[mv.master as usize].unsigned_abs();
-        // The cruise the engine will hold: the move's own, at most the step timing's ceiling.
-        let timing = match profile.timing {
-            Timing::UNSET => Timing::DEFAULT,
-            t => t,
-        };
-        let slaves = mv.steps.iter().filter(|s| **s != 0).count().saturating_sub(1) as u32;
-        let min_bits = timing.min_period_for(slaves).saturating_mul(16);
-        let cruise_hz = (crate::ramp::hz_of_period(mv.cruise) as f64).min(timing.max_rate_for(slaves) as f64);
-        // The period the engine holds at cruise (its own, never below the timing's floor).
-        let cruise_bits = mv.cruise.to_bits().max(min_bits);
         let t_accel = table.config().accel.max(1) as f64;
         // `per_mm > 0.0` on the f32's bits (positive: 1 ..= +inf): LLVM would narrow an f64 compare of
         // a widened f32 back to an f32 one and link the f32 compare routines for it.
         let positive = (1..=0x7F80_0000).contains(&profile.per_mm.to_bits());
-        let (ramp, budget, max_entry_q, est_us) = match (&mv.path, positive) {
+        let (ramp, budget, junction_q) = match (&mv.path, positive) {
             (Some(p), true) => {
                 let (s, walk_q) = walk_of(p.share as f64, p.accel as f64, per_mm, t_accel);
                 let r = walk_q as f64 / IDX_ONE as f64;
                 let scale = u32_of((65536.0 / s).min(u32::MAX as f64));
-                let cruise_q = cruise_index(table, scale, cruise_bits);
-                let plan = RampPlan {
-                    cruise_q,
-                    exit_q: 0,
-                    walk_q,
-                    scale,
-                    dist_q: u32_of(((s / r) * 65536.0).min(u32::MAX as f64)),
-                    cruise: mv.cruise,
-                };
+                let dist_q = u32_of(((s / r) * 65536.0).min(u32::MAX as f64));
+                let plan = RampPlan { cruise_q: 0, exit_q: 0, walk_q, scale, dist_q, cruise: mv.cruise };
                 let budget = usable(total) * 256.0 * r / s;
-                // min(junction, speed) · per_mm as the min of the products (per_mm > 0: same
-                // value; the min of two widened f32s would be narrowed to fminf).
-                let v_j = if joins { (p.junction as f64 * per_mm).min(p.speed as f64 * per_mm) } else { 0.0 };
-                let est = p.len as f64 / (p.speed as f64).max(1e-3) * 1e6;
-                (plan, budget, table.index_of_hz(v_j).min(cruise_q), est)
+                let v_j = if joins { p.junction as f64 * per_mm } else { 0.0 };
+                (plan, budget, table.index_of_hz(v_j))
             }
-            _ => {
-                let plan = RampPlan::lone(cruise_index(table, 1 << 16, cruise_bits), mv.cruise);
-                (plan, usable(total) * 256.0, 0, total as f64 / cruise_hz.max(1.0) * 1e6)
-            }
+            _ => (RampPlan::lone(0, mv.cruise), usable(total) * 256.0, 0),
         };
         let budget = u32_of(budget.clamp(0.0, u32::MAX as f64));
-        Block { mv, ramp, budget, max_entry_q, rev_entry_q: u32::MAX, entry_q: 0, exit_q: 0, est_us: u32_of(est_us.min(4e9)) }
+        let mut b = Block { mv, ramp, budget, junction_q, max_entry_q: 0, rev_entry_q: u32::MAX, entry_q: 0, exit_q: 0 };
+        b.price(profile, o);
+        b
+    }
+
+    /// Sets the cruise (and what follows from it) for the overrides `o`; the passes must run
+    /// again ([`replan`]).
+    pub fn price<const L: usize>(&mut self, profile: &Profile<L>, o: Overrides) {
+        let timing = match profile.timing {
+            Timing::UNSET => Timing::DEFAULT,
+            t => t,
+        };
+        let slaves = self.mv.steps.iter().filter(|s| **s != 0).count().saturating_sub(1) as u32;
+        let min_bits = timing.min_period_for(slaves).saturating_mul(16);
+        (self.ramp.cruise, self.ramp.cruise_q) = cruise_for(&self.mv.rates(), o, self.ramp.scale, min_bits, &profile.ramp);
+        self.max_entry_q = self.junction_q.min(self.ramp.cruise_q);
+        self.rev_entry_q = u32::MAX;
     }
 
     /// What the passes keep of it once it is handed over.
     pub fn tail(&self) -> Tail {
         Tail { entry_q: self.entry_q, budget: self.budget, cruise_q: self.ramp.cruise_q }
     }
+}
+
+/// A move's cruise under the overrides `o`: its floor period and its index on `table` (scaled
+/// by `scale`, Q16; the engine holds no period below `min_bits`, the step timing's floor).
+pub fn cruise_for<const L: usize>(rates: &Rates, o: Overrides, scale: u32, min_bits: u32, table: &RampTable<L>) -> (Period, u32) {
+    let cruise = rates.cruise_at(o);
+    (cruise, cruise_index(table, scale, cruise.to_bits().max(min_bits)))
 }
 
 /// How a move walks the table: its master's share of the table rate `s` (≤ 1: master steps

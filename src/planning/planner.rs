@@ -17,7 +17,7 @@
 //! `$11`, Grbl's formula); the look-ahead ([`crate::lookahead`]) does the rest.
 
 use crate::protocol::Error;
-use crate::queue::{Move, Path};
+use crate::queue::{Move, Ovr, Path};
 use crate::settings::Settings;
 use crate::timing::Timing;
 
@@ -39,9 +39,6 @@ pub struct Limits<const N: usize> {
     pub per_mm: f64,
     /// Junction deviation, mm.
     pub junction_dev: f64,
-    /// Feed and rapid overrides as factors (1.0 = 100 %).
-    pub feed_ovr: f64,
-    pub rapid_ovr: f64,
     /// Step timing: a move with more slave axes has a lower ceiling (`Timing::max_rate_for`).
     pub timing: Timing,
 }
@@ -57,8 +54,6 @@ impl<const N: usize> Limits<N> {
             // The table's own path units: the axes in use ($42), as `Settings::build_profile`.
             per_mm: s.per_mm(s.axis_count(N)) as f64,
             junction_dev: JUNCTION_DEVIATION_MM as f64,
-            feed_ovr: 1.0,
-            rapid_ovr: 1.0,
             timing: s.timing(),
         }
     }
@@ -79,8 +74,8 @@ pub struct Planned<const N: usize> {
 pub struct Planner<const N: usize> {
     mm: [f64; N],
     steps: [i64; N],
-    /// Direction and nominal speed of the last planned move (for the junction).
-    prev: Option<([f64; N], f64)>,
+    /// Direction of the last planned move (for the junction).
+    prev: Option<[f64; N]>,
 }
 
 impl<const N: usize> Default for Planner<N> {
@@ -161,12 +156,13 @@ impl<const N: usize> Planner<N> {
                 accel = accel.min(lim.accel[i] / u);
             }
         }
-        let wanted = match feed {
-            Some(f) => (f / 60.0 * lim.feed_ovr).min(vmax),
-            None => vmax * lim.rapid_ovr,
+        // The overrides scale the asked speed later, in the feeder ([`crate::queue::Rates`]).
+        let (asked, ovr) = match feed {
+            Some(f) => (f / 60.0, Ovr::Feed),
+            None => (vmax, Ovr::Rapid),
         };
         let share = master_steps as f64 / len;
-        let wanted_hz = wanted * share;
+        let wanted_hz = asked.min(vmax) * share;
         // The step handler's ceiling for this many slave axes, and the ramp table's top.
         let slaves = delta.iter().filter(|d| **d != 0).count() as u32 - 1;
         let top = (lim.timing.max_rate_for(slaves) as f64).min(lim.vmax_hz as f64 * share / lim.per_mm.max(1e-9));
@@ -174,19 +170,21 @@ impl<const N: usize> Planner<N> {
         // Milli-steps/s: G93 times need more than whole steps/s at low rates.
         let top_millihz = crate::ramp::MAX_RATE_HZ as u64 * 1000;
         let cruise_millihz = crate::num::u64_of(libm::round(wanted_hz.max(1.0).min(top) * 1000.0)).min(top_millihz);
-        let mv = Move::new_millihz(delta, cruise_millihz).map_err(|_| Error::InvalidTarget)?;
-        let speed = cruise_millihz as f64 / 1000.0 / share;
+        let mut mv = Move::new_millihz(delta, cruise_millihz).map_err(|_| Error::InvalidTarget)?;
+        mv.ovr = ovr;
+        // Junction deviation only: the look-ahead caps it by both moves' speeds under the
+        // overrides in force.
         let junction = match self.prev {
-            Some((pu, pspeed)) => junction_speed(&pu, &unit, &lim.accel, lim.junction_dev).min(pspeed),
+            Some(pu) => junction_speed(&pu, &unit, &lim.accel, lim.junction_dev),
             None => 0.0,
         };
-        self.prev = Some((unit, speed));
+        self.prev = Some(unit);
         let path = Path {
-            len: len as f32,
             share: share as f32,
-            speed: speed as f32,
             accel: accel.min(1e12) as f32,
-            junction: junction.min(speed) as f32,
+            asked_hz: (asked * share) as f32,
+            cap_hz: (vmax * share).min(top) as f32,
+            junction: junction as f32,
         };
         self.mm = *target;
         self.steps = to;

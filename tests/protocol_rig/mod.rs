@@ -75,6 +75,8 @@ pub struct Bench<const N: usize> {
     pub peak_hz: u32,
     pub stepped_while_disabled: bool,
     pub enabled: bool,
+    /// When set, every change of the master rate: (timer ticks, steps/s, moves done).
+    pub trace: Option<Vec<(u64, u32, u32)>>,
     /// The RX ring and the requests, as the firmware's USART interrupt leaves them.
     rx_in: Producer<'static, u8>,
     rx_out: Consumer<'static, u8>,
@@ -113,6 +115,7 @@ impl<const N: usize> Bench<N> {
             peak_hz: 0,
             stepped_while_disabled: false,
             enabled: false,
+            trace: None,
             rx_in,
             rx_out,
             req: Box::leak(Box::new(Requests::new())),
@@ -145,7 +148,14 @@ impl<const N: usize> Bench<N> {
         let end = self.now_ms as u64 * TICKS_PER_MS as u64;
         while self.timer.now() < end {
             self.timer.update(&mut self.engine);
-            self.peak_hz = self.peak_hz.max(self.shared.rate_hz());
+            let hz = self.shared.rate_hz();
+            self.peak_hz = self.peak_hz.max(hz);
+            if let Some(t) = self.trace.as_mut() {
+                let done = self.shared.moves_done();
+                if t.last().is_none_or(|l| (l.1, l.2) != (hz, done)) {
+                    t.push((self.timer.now(), hz, done));
+                }
+            }
             let active = self.probe_contact();
             if active != self.probe_was {
                 self.probe_was = active;

@@ -4,6 +4,7 @@
 
 use super::{Controller, Job, Jogging};
 use crate::jog;
+use crate::planner::Planned;
 use crate::protocol::{Error, Out};
 use crate::queue::State;
 
@@ -31,7 +32,8 @@ impl<const N: usize> Controller<'_, N> {
             return Err(Error::TravelExceeded);
         }
         let mut planner = self.planner;
-        let mv = planner.line(&j.target, Some(j.feed), &self.limits)?;
+        // Overrides never scale a jog (Grbl).
+        let mv = planner.line(&j.target, Some(j.feed), &self.limits)?.map(|p| Planned { mv: p.mv.fixed(), ..p });
         self.planner = planner;
         let mut job = Job::none();
         job.mv = mv;
