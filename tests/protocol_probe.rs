@@ -112,3 +112,22 @@ fn bad_probe_words_get_grbls_errors() {
     assert_eq!(b.shared.positions(), [0, 0, 0]);
     assert_eq!(b.line("$G").split(' ').next(), Some("[GC:G0"));
 }
+
+#[test]
+fn reset_during_a_probe_cycle_disarms_it() {
+    let (mut b, spm) = bench(-5.0);
+    b.send("G38.2 Z-10 F100\n");
+    b.run_ms(300);
+    assert!(b.shared.positions()[2] < 0, "probing");
+    b.byte(0x18);
+    b.run_ms(50);
+    assert!(b.take().contains("Grbl"));
+    let at = b.shared.positions();
+    assert!(b.status().starts_with("<Alarm|"), "reset while moving: ALARM:3");
+    assert!(b.line("$X").ends_with("ok\r\n"));
+    // A move through the probe's contact afterwards is not stopped by it.
+    assert_eq!(b.line("G91 G1 Z-6 F3000"), "ok\r\n");
+    b.run_to_idle(10_000);
+    assert_eq!(b.shared.positions()[2], at[2] - (6.0 * spm) as i32);
+    assert!(b.line("$#").contains(":0]"), "no success flag after the reset");
+}

@@ -429,7 +429,12 @@ impl<'a, const N: usize> Controller<'a, N> {
         self.lines.clear();
         self.job = None;
         self.modal = Modal::RESET;
+        // A probe cycle ends (its edge must not stop a later move); Grbl keeps the last probe
+        // position, not its success flag.
+        self.shared.probe_disarm();
+        let prb = self.offsets.prb;
         self.offsets = Offsets::new(self.stored.coords);
+        self.offsets.prb = prb;
         self.jog = Jogging::Off;
         self.check = false;
         self.soft_limit = SoftLimit::Off;
