@@ -144,6 +144,7 @@ proptest! {
         axes in prop::array::uniform4(prop::array::uniform7(0.001f32..1e5)),
         flip in 0usize..SETTINGS_LEN, bit in 0u8..8,
         mask in 0u8..4, count in 3u8..=7,
+        home in (any::<u8>(), 0.001f32..1e5, 0.001f32..1e5, 0u32..=65_535, 0.0f32..1e6),
         enc in (0u8..=7, 0.001f64..64.0, any::<bool>(), 0u32..=1_000_000, any::<bool>(), 0.0f64..1000.0),
     ) {
         let mut encoder = ddastep::encoder::EncoderSettings::DEFAULT;
@@ -164,6 +165,11 @@ proptest! {
             soft_limits: flags & 24 == 24,
             homing: flags & 16 != 0,
             hard_limits: flags & 32 != 0,
+            homing_dir: home.0,
+            homing_feed: home.1,
+            homing_seek: home.2,
+            homing_debounce_ms: home.3,
+            homing_pulloff: home.4,
             arc_tolerance: arc_tol,
             spindle_max: spindle.0,
             spindle_min: spindle.1,

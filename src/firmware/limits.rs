@@ -17,7 +17,8 @@ use stm32f1xx_hal::pac;
 /// The limit interrupt stopped the step output (cleared only by the restart).
 pub static HALTED: AtomicBool = AtomicBool::new(false);
 /// Bit 0: `$21` on; bit 1: `$5` (pins inverted); bits 8–10: pins already active at the last
-/// poll (a carriage resting on or leaving its switch: the release bounce must not trip).
+/// poll (a carriage resting on or leaving its switch: the release bounce must not trip);
+/// bits 16–18: homing's watched axes (their switch closing stops the engine, no alarm).
 /// Written by `idle`, read by the handler.
 static ARMED: AtomicU32 = AtomicU32::new(0);
 /// EXTI lines 0, 1, 2 (PA0, PA1, PA2: AFIO_EXTICR1 selects port A at reset).
@@ -57,21 +58,27 @@ pub fn on_probe_edge() {
     super::app::SHARED.probe_input(super::hw::probe_low() != PROBE_INVERT.load(Relaxed));
 }
 
-/// Follows `$21` and `$5`, and the pins active now (every poll: two stores).
-pub fn arm(on: bool, invert: bool, active: u8) {
-    ARMED.store(on as u32 | (invert as u32) << 1 | (active as u32) << 8, Relaxed);
-    exti().imr().write(|w| unsafe { w.bits(if on { LINES | PROBE_LINE } else { PROBE_LINE }) });
+/// Follows `$21` and `$5`, the pins active now, and homing (`watch`: `Some(axes)` while a
+/// cycle runs; hard limits are off then, as in Grbl) (every poll: two stores).
+pub fn arm(on: bool, invert: bool, active: u8, watch: Option<u8>) {
+    let on = on && watch.is_none();
+    let watch = watch.unwrap_or(0) as u32;
+    ARMED.store(on as u32 | (invert as u32) << 1 | (active as u32) << 8 | watch << 16, Relaxed);
+    exti().imr().write(|w| unsafe { w.bits(if on || watch != 0 { LINES | PROBE_LINE } else { PROBE_LINE }) });
 }
 
-/// The EXTI0/1/2 handler body: stop all step output if a limit pin is active.
-pub fn on_edge() {
+/// The EXTI0/1/2 handler body: homing's stop for a watched switch, else (hard limits) stop
+/// all step output if a limit pin went active.
+pub fn on_edge<const N: usize>(shared: &ddastep::queue::Shared<N>) {
     exti().pr().write(|w| unsafe { w.bits(LINES) });
     let armed = ARMED.load(Relaxed);
-    if armed & 1 == 0 || HALTED.load(Relaxed) {
+    let active = ddastep::limits::active_pins(super::hw::gpioa_idr(), armed & 2 != 0) as u32;
+    if active & armed >> 16 != 0 {
+        // Homing: the engine ends its move at its next tick, the position exact.
+        shared.stop_now();
         return;
     }
-    let active = ddastep::limits::active_pins(super::hw::gpioa_idr(), armed & 2 != 0) as u32;
-    if active & !(armed >> 8) == 0 {
+    if armed & 1 == 0 || HALTED.load(Relaxed) || active & !(armed >> 8) & 7 == 0 {
         return;
     }
     // TIM2 off (counter, interrupt enables, flags, NVIC pending), then the step pins low.

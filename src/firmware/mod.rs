@@ -143,17 +143,17 @@ mod app {
     /// Limit inputs X, Y, Z (hard limits, `$21`): at the step interrupt's priority.
     #[task(binds = EXTI0, priority = 3)]
     fn limit_x(_: limit_x::Context) {
-        limits::on_edge();
+        limits::on_edge(&SHARED);
     }
 
     #[task(binds = EXTI1, priority = 3)]
     fn limit_y(_: limit_y::Context) {
-        limits::on_edge();
+        limits::on_edge(&SHARED);
     }
 
     #[task(binds = EXTI2, priority = 3)]
     fn limit_z(_: limit_z::Context) {
-        limits::on_edge();
+        limits::on_edge(&SHARED);
     }
 
     /// The probe input (PC14, EXTI line 14): at the step interrupt's priority.
@@ -233,10 +233,11 @@ mod app {
             limits::PROBE_INVERT.store(ctl.settings().probe_invert, Relaxed);
             SHARED.probe_input(low != ctl.settings().probe_invert);
             let invert = ctl.settings().limit_invert;
-            limits::arm(ctl.settings().hard_limits, invert, ddastep::limits::active_pins(idr, invert));
             let (counts, window) = encoder::read();
             ctl.encoder(counts, window, tx_in);
             let act = idle_step(ctl, rx_out, tx_in, now, &REQUESTS);
+            // After the poll: a homing pass it just queued is watched before its move starts.
+            limits::arm(ctl.settings().hard_limits, invert, ddastep::limits::active_pins(idr, invert), ctl.homing_watch());
             hw::ENABLE_OFF_HIGH.store(!ctl.settings().enable_invert, Relaxed);
             hw::set_enable(act.enable_pin_high);
             if let Some(ticks) = act.pulse_ticks {

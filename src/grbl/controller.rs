@@ -17,6 +17,7 @@
 //! Positions: the planner works in machine millimetres; work offsets ([`Offsets`]) turn
 //! program coordinates into machine ones in the interpreter, and reports subtract them again.
 
+mod homing;
 mod encoder;
 mod jogging;
 mod probe;
@@ -106,6 +107,8 @@ struct Job<const N: usize> {
     mv2: Option<Planned<N>>,
     /// The moves are a jog.
     jog: bool,
+    /// `$H`: done when the homing cycle ends.
+    home: bool,
     /// G2/G3: chord ends still to plan, at `rate` each.
     arc: Option<Segments<N>>,
     rate: Rate,
@@ -133,6 +136,7 @@ impl<const N: usize> Job<N> {
             mv: None,
             mv2: None,
             jog: false,
+            home: false,
             arc: None,
             rate: Rate::Rapid,
             tool: None,
@@ -198,12 +202,14 @@ pub struct Controller<'a, const N: usize> {
     soft_limit: SoftLimit,
     /// The MCU was reset by the watchdog: say so after the next banner.
     watchdog_note: bool,
-    /// Limit pins active (bit i = axis i), for `Pn:`.
+    /// Limit pins active (bit i = axis i), for `Pn:` and homing.
     limit_pins: u8,
     /// Encoder feedback's step-loss check (see `encoder.rs`).
     enc: crate::encoder::loss::Monitor,
     /// The probe input is active (`$6` applied).
     probe_pin: bool,
+    /// A `$H` cycle in progress (see `homing.rs`).
+    homing: Option<homing::Homing>,
 }
 
 impl<'a, const N: usize> Controller<'a, N> {
@@ -278,6 +284,7 @@ impl<'a, const N: usize> Controller<'a, N> {
             limit_pins: 0,
             probe_pin: false,
             enc: crate::encoder::loss::Monitor::OFF,
+            homing: None,
         });
         c.startup_next = c.next_startup(0);
         c.enc_configure();
@@ -444,7 +451,11 @@ impl<'a, const N: usize> Controller<'a, N> {
         self.take_position();
         self.wco_count = 0;
         self.ovr_count = 0;
-        if moving {
+        if self.homing.take().is_some() {
+            // Grbl's ALARM:6: reset during the homing cycle.
+            self.alarm = true;
+            out.put(b"ALARM:6\r\n");
+        } else if moving {
             self.alarm = true;
             out.put(report::ALARM_RESET);
         }
@@ -465,6 +476,7 @@ impl<'a, const N: usize> Controller<'a, N> {
         }
         self.feeder.service();
         self.jog_poll(out);
+        self.homing_poll(out);
         self.soft_limit_poll(out);
         self.drive_enable();
         if self.job.is_some() && out.room() >= POLL_REPLY_ROOM && self.advance(true, out) {
@@ -597,6 +609,9 @@ impl<'a, const N: usize> Controller<'a, N> {
     fn advance(&mut self, in_poll: bool, out: &mut impl Out) -> bool {
         let Some(mut job) = self.job else { return false };
         let done = 'run: {
+            if job.home && self.homing.is_some() {
+                break 'run false;
+            }
             if let Some(l) = job.listing {
                 job.listing = self.list(l, out);
                 if job.listing.is_some() {

@@ -20,13 +20,16 @@ use crate::timing::{ns_to_ticks, Timing};
 use crate::MAX_AXES;
 
 /// Bytes of the flash image.
-pub const SETTINGS_LEN: usize = 184;
+pub const SETTINGS_LEN: usize = 200;
 const MAGIC: u8 = 0xD5;
-const VERSION: u8 = 4;
+const VERSION: u8 = 5;
 /// Byte offset of the settings after the axis arrays: `$12`, `$30`, `$31`, `$33` (f32, u32),
-/// `$32` (flag byte), the encoder's `$87`-`$99` from `TAIL + 20`; CRC last.
+/// `$32` (flag byte), the encoder's `$87`-`$99` from `TAIL + 20`, the homing `$24`, `$25`,
+/// `$27` (f32) and `$26` (u32) from [`HOME`] (`$23` is byte 23); CRC last.
 const TAIL: usize = 24 + 4 * 4 * MAX_AXES;
-const _: () = assert!(TAIL + 20 + crate::encoder::IMAGE_LEN <= SETTINGS_LEN - 4);
+/// Byte offset of the homing settings, after the encoder's.
+const HOME: usize = TAIL + 20 + crate::encoder::IMAGE_LEN;
+const _: () = assert!(HOME + 16 <= SETTINGS_LEN - 4);
 /// Byte offset of the flag bits (`$4`, `$5`, `$6`, `$20`, `$22`, `$21` as bits 0..=5).
 const FLAGS: usize = 19;
 /// Absolute floor of the step period (ticks; 144 = 500 kHz, the engine's design limit). The
@@ -47,14 +50,9 @@ pub const SPINDLE_PWM_HZ: u16 = 33; // grblHAL's number for the spindle PWM freq
 
 /// Grbl settings we report but do not implement, with the only value they accept.
 /// (Their decimals for `$$` are in [`LOW`].)
-const FIXED: [(u16, f32); 7] = [
+const FIXED: [(u16, f32); 2] = [
     (11, 0.010), // junction deviation (the look-ahead's)
     (13, 0.0),   // report inches: no
-    (23, 0.0),   // homing direction mask
-    (24, 25.0),  // homing feed
-    (25, 500.0), // homing seek
-    (26, 250.0), // homing debounce
-    (27, 1.0),   // homing pull-off
 ];
 
 /// How `$N=` checks one setting: the value range (an index into [`RANGES`]; bytes, flags and
@@ -75,7 +73,7 @@ struct Spec {
 const WHOLE: u8 = 8;
 
 /// Value ranges of the `f32` and `u32` settings (inclusive).
-const RANGES: [(f64, f64); 9] = [
+const RANGES: [(f64, f64); 10] = [
     (0.0, 0.0),                  // 0: no range (bytes, flags, fixed)
     (0.2, 100.0),                // 1: $0 pulse (0.2 µs: TMC drivers need 100 ns; shorter no driver takes)
     (1e-4, 1000.0),              // 2: $12 arc tolerance (below 0.1 µm a chord is far below a step)
@@ -84,7 +82,8 @@ const RANGES: [(f64, f64); 9] = [
     (0.0, 1000.0),               // 5: $29 direction setup
     (1.0, MAX_RATE_HZ as f64),   // 6: $40 ramp start
     (1e-3, 1e5),                 // 7: $100+ steps per unit
-    (1e-3, 1e8),                 // 8: $110+ max rate, $120+ acceleration
+    (1e-3, 1e8),                 // 8: $110+ max rate, $120+ acceleration, $24/$25 homing rates
+    (0.0, 65_535.0),             // 9: $26 homing debounce, ms (Grbl's u16)
 ];
 
 const fn spec(id: u16, range: u8, decimals: u8, change: Change, at: usize, bit: u8) -> Spec {
@@ -109,11 +108,11 @@ const LOW: [Spec; 33] = {
         spec(20, 0, 0, Shell, FLAGS, 3),
         spec(21, 0, 0, Shell, FLAGS, 5),
         spec(22, 0, 0, Shell, FLAGS, 4),
-        spec(23, 0, 0, Fixed, 0, 0),
-        spec(24, 0, 3, Fixed, 0, 0),
-        spec(25, 0, 3, Fixed, 0, 0),
-        spec(26, 0, 0, Fixed, 0, 0),
-        spec(27, 0, 3, Fixed, 0, 0),
+        spec(23, 0, 0, Shell, 23, 0),
+        spec(24, 8, 3, Shell, HOME, 0),
+        spec(25, 8, 3, Shell, HOME + 4, 0),
+        spec(26, 9, 0, Shell, HOME + 12, 0),
+        spec(27, 3, 3, Shell, HOME + 8, 0),
         spec(DIR_SETUP, 5, 3, Profile, 8, 0),
         spec(30, 3, 0, Shell, TAIL + 4, 0),
         spec(31, 3, 0, Shell, TAIL + 8, 0),
@@ -166,6 +165,15 @@ pub struct Settings {
     pub hard_limits: bool,
     /// `$22` homing enabled: the controller boots in the alarm state (Grbl's homing lock).
     pub homing: bool,
+    /// `$23` homing direction mask: bit i set homes axis i toward its min end (negative).
+    pub homing_dir: u8,
+    /// `$24` homing locate feed, `$25` seek rate, mm/min.
+    pub homing_feed: f32,
+    pub homing_seek: f32,
+    /// `$26` homing debounce: pause after each homing pass, ms (0..=65 535).
+    pub homing_debounce_ms: u32,
+    /// `$27` homing pull-off, mm.
+    pub homing_pulloff: f32,
     /// `$12` arc tolerance: largest distance of a chord from its arc, mm.
     pub arc_tolerance: f32,
     /// `$30` spindle speed at full PWM duty (rpm, or laser power units).
@@ -250,6 +258,11 @@ impl Settings {
         soft_limits: false,
         hard_limits: false,
         homing: false,
+        homing_dir: 0,
+        homing_feed: 25.0,
+        homing_seek: 500.0,
+        homing_debounce_ms: 250,
+        homing_pulloff: 1.0,
         arc_tolerance: 0.002,
         spindle_max: 1000.0,
         spindle_min: 0.0,
@@ -337,6 +350,11 @@ impl Settings {
             20 => Flag(&mut self.soft_limits),
             21 => Flag(&mut self.hard_limits),
             22 => Flag(&mut self.homing),
+            23 => Byte(&mut self.homing_dir),
+            24 => Real(&mut self.homing_feed),
+            25 => Real(&mut self.homing_seek),
+            26 => Whole(&mut self.homing_debounce_ms),
+            27 => Real(&mut self.homing_pulloff),
             DIR_SETUP => Real(&mut self.dir_setup_us),
             30 => Real(&mut self.spindle_max),
             31 => Real(&mut self.spindle_min),
@@ -619,8 +637,8 @@ mod tests {
     #[test]
     fn low_ids_are_ours_and_every_fixed_one() {
         let ours = [
-            0, 1, 2, 3, 4, 5, 6, STATUS_MASK, 12, 20, 21, 22, 30, 31, 32, SPINDLE_PWM_HZ, DIR_SETUP, RAMP_START, RAMP_SHAPE,
-            AXIS_COUNT, 87, 88, 89, 97, 98, 99,
+            0, 1, 2, 3, 4, 5, 6, STATUS_MASK, 12, 20, 21, 22, 23, 24, 25, 26, 27, 30, 31, 32, SPINDLE_PWM_HZ, DIR_SETUP,
+            RAMP_START, RAMP_SHAPE, AXIS_COUNT, 87, 88, 89, 97, 98, 99,
         ];
         assert_eq!(LOW.len(), ours.len() + FIXED.len());
         assert!(ours.iter().chain(FIXED.iter().map(|f| &f.0)).all(|id| LOW.iter().any(|s| s.id == *id)));

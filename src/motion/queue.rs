@@ -329,6 +329,13 @@ impl<const N: usize> Shared<N> {
         self.ctl.load().hold()
     }
 
+    /// Immediate stop from an interrupt (homing: a limit switch closed): the running move ends
+    /// at the engine's next tick, its position exact. The owner of the feeder must then call
+    /// `Feeder::abort` (the controller's homing does) before queueing again.
+    pub fn stop_now(&self) {
+        self.ctl.stop();
+    }
+
     /// The immediate-stop epoch moves are stamped with.
     pub(crate) fn epoch(&self) -> u32 {
         self.ctl.load().epoch()

@@ -117,14 +117,20 @@ pub fn stored(b: &mut Board) -> Option<Stored> {
 /// A booted board with `base` plus the sample gantry's steps/mm (`bench/demo/gantry300.toml`)
 /// in flash, wired to that virtual machine (carriages, limit switches): banner seen.
 pub fn boot_gantry(base: Settings) -> Board {
-    use ddastep_bench::machine::{MachineSpec, VirtualMachine};
+    use ddastep_bench::machine::MachineSpec;
     let spec = MachineSpec::load(&ddastep_bench::emu::repo_root().join("bench/demo/gantry300.toml")).unwrap();
+    boot_machine(&spec, base)
+}
+
+/// A booted board with `base` plus `spec`'s steps/mm in flash, wired to that virtual machine.
+pub fn boot_machine(spec: &ddastep_bench::machine::MachineSpec, base: Settings) -> Board {
+    use ddastep_bench::machine::VirtualMachine;
     let mut s = base;
     for (i, a) in spec.axis.iter().enumerate() {
         s.steps_per_mm[i] = a.steps_per_mm as f32;
     }
     let mut b = Board::load(firmware_elf().unwrap()).unwrap();
-    b.attach_plant(Box::new(VirtualMachine::new(&spec)));
+    b.attach_plant(Box::new(VirtualMachine::new(spec)));
     b.write_mem(STORE_ADDR, &Stored::from(s).to_bytes()).unwrap();
     assert!(b.run_until(HZ / 2, |b| b.serial_output().contains("Grbl")).unwrap());
     b

@@ -75,6 +75,13 @@ pub struct Bench<const N: usize> {
     pub peak_hz: u32,
     pub stepped_while_disabled: bool,
     pub enabled: bool,
+    /// Carriage positions, steps: the engine's steps only (a position the controller sets,
+    /// as homing does, moves no carriage).
+    pub carriage: [i64; N],
+    /// Limit switches (axis, carriage position in steps, max end): pressed at or past it.
+    /// Their pins reach the controller at each poll; while homing watches an axis, its switch
+    /// stops the engine at once (the firmware's limit interrupt).
+    pub switches: Vec<(usize, i32, bool)>,
     /// When set, every change of the master rate: (timer ticks, steps/s, moves done).
     pub trace: Option<Vec<(u64, u32, u32)>>,
     /// The RX ring and the requests, as the firmware's USART interrupt leaves them.
@@ -115,6 +122,8 @@ impl<const N: usize> Bench<N> {
             peak_hz: 0,
             stepped_while_disabled: false,
             enabled: false,
+            switches: Vec::new(),
+            carriage: [0; N],
             trace: None,
             rx_in,
             rx_out,
@@ -147,7 +156,16 @@ impl<const N: usize> Bench<N> {
         self.now_ms += 1;
         let end = self.now_ms as u64 * TICKS_PER_MS as u64;
         while self.timer.now() < end {
+            let was = self.shared.positions();
             self.timer.update(&mut self.engine);
+            for (c, (a, b)) in self.carriage.iter_mut().zip(self.shared.positions().iter().zip(was)) {
+                *c += (a.wrapping_sub(b)) as i64;
+            }
+            if let Some(w) = self.ctl.homing_watch() {
+                if self.limit_mask() & w != 0 {
+                    self.shared.stop_now();
+                }
+            }
             let hz = self.shared.rate_hz();
             self.peak_hz = self.peak_hz.max(hz);
             if let Some(t) = self.trace.as_mut() {
@@ -180,9 +198,24 @@ impl<const N: usize> Bench<N> {
         self.idle_step();
     }
 
+    /// Limit switches pressed now (bit i = axis i).
+    pub fn limit_mask(&self) -> u8 {
+        let p = self.carriage;
+        self.switches.iter().fold(0, |m, &(i, at, max)| {
+            let (p, at) = (p[i], at as i64);
+            if (max && p >= at) || (!max && p <= at) {
+                m | 1 << i
+            } else {
+                m
+            }
+        })
+    }
+
     /// One pass of the firmware's idle loop (the encoder check, then the library's
     /// `idle_step`).
     fn idle_step(&mut self) {
+        // GPIOA as the shell reads it: pulled up, a pressed (NO) switch pulls its pin low.
+        self.ctl.set_limit_inputs(!(self.limit_mask() as u32) & 0xFFFF);
         if let Some(e) = &self.encoder {
             self.ctl.encoder(e.last.0, e.last.1, &mut self.tx);
         }

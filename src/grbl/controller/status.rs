@@ -17,6 +17,7 @@ impl<const N: usize> Controller<'_, N> {
     fn state_name(&self) -> &'static [u8] {
         let moving = self.feeder.pending() > 0;
         match self.shared.state() {
+            _ if self.homing.is_some() => b"Home",
             _ if self.alarm => b"Alarm",
             _ if self.sleep => b"Sleep",
             _ if self.check => b"Check",

@@ -26,7 +26,7 @@ impl<const N: usize> Controller<'_, N> {
             }
             b"X" => {}
             b"ENC" => self.encoder_report(out)?,
-            b"H" => return Err(Error::SettingDisabled),
+            [b'H', rest @ ..] if rest.len() < 2 => self.home_start(rest.first().copied(), out)?,
             b"C" if self.check => {
                 // Leaving check mode resets, as in Grbl: state and position as before `$C`.
                 out.put(report::CHECK_OFF);
