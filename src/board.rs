@@ -33,6 +33,11 @@ pub const ENCODER_PINS: [u8; 2] = [6, 7];
 /// The encoder inputs as a GPIOA mask.
 pub const ENCODER_INPUTS: u32 = 1 << ENCODER_PINS[0] | 1 << ENCODER_PINS[1];
 
+/// GPIOC pin of the probe input (pull-up, probe to ground; `$6` inverts): EXTI line 14. Every
+/// GPIOA/GPIOB pin is taken (PB2 is BOOT1 and its EXTI line 2 is Z's limit), PC14 is on the
+/// header and free when no 32 kHz crystal runs.
+pub const PROBE_PIN: u8 = 14;
+
 /// GPIOC pin of the on-board LED (active low).
 pub const LED_PIN: u8 = 13;
 

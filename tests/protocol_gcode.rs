@@ -36,7 +36,9 @@ fn words_follow_grbl_error_codes() {
     assert_eq!(e("X1X2"), Some(Error::WordRepeated));
     assert_eq!(e("F-1"), Some(Error::NegativeValue));
     assert_eq!(e("G1.5"), Some(Error::CommandValueNotInteger));
-    assert_eq!(e("G38.2X1"), Some(Error::UnsupportedCommand));
+    assert_eq!(e("G38.2X1"), None);
+    assert_eq!(e("G38.1X1"), Some(Error::UnsupportedCommand));
+    assert_eq!(e("G38X1"), Some(Error::UnsupportedCommand));
     assert_eq!(e("G2X1I1"), None);
     assert_eq!(e("G91.1"), None);
     assert_eq!(e("A1"), Some(Error::UnsupportedCommand));

@@ -21,6 +21,11 @@
 //! `floor(rotor × counts_per_step)` (negated with `invert`); each count change is one edge of A
 //! (PA6) or B (PA7), A leading B going forward, `lag_us` after the step edge that caused it
 //! and at least `edge_ns` after the previous edge.
+//!
+//! An optional `[probe]` (issue 12) is a touch probe on one axis (`axis = "Z"`, `at_mm = -5.0`):
+//! in contact while that carriage is at or below `at_mm`, wired NO to ground on the probe input
+//! (PC14, pulled up: contact = low), with no bounce, its level changing at the step edge that
+//! crosses `at_mm`.
 
 use std::any::Any;
 use std::path::Path;
@@ -112,6 +117,17 @@ pub struct Fault {
     pub slip_steps: u32,
 }
 
+/// GPIOC pin of the probe input (README pin map; `ddastep::board::PROBE_PIN`).
+pub const PROBE_PIN: u8 = 14;
+
+/// A touch probe: contact while the axis's carriage is at or below `at_mm`.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ProbeSpec {
+    pub axis: String,
+    pub at_mm: f64,
+}
+
 /// A machine file.
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -124,6 +140,8 @@ pub struct MachineSpec {
     pub encoder: Option<EncoderSpec>,
     #[serde(default)]
     pub fault: Vec<Fault>,
+    #[serde(default)]
+    pub probe: Option<ProbeSpec>,
 }
 
 fn default_bounce() -> f64 {
@@ -256,6 +274,10 @@ pub struct VirtualMachine {
     carriages: Vec<Carriage>,
     events: Vec<SwitchEvent>,
     motor: Option<Motor>,
+    /// The probe: axis, contact at or below this position (mm), in contact now.
+    probe: Option<(usize, f64, bool)>,
+    /// Probe input changes: (cycle, in contact).
+    probe_events: Vec<(u64, bool)>,
 }
 
 impl VirtualMachine {
@@ -272,7 +294,33 @@ impl VirtualMachine {
             last_edge: 0,
             applied: Vec::new(),
         });
-        VirtualMachine { bounce_cycles: (spec.bounce_us * HZ as f64 / 1e6) as u64, carriages, events: Vec::new(), motor }
+        let probe = spec.probe.as_ref().map(|p| (spec.axis.iter().position(|a| a.name == p.axis).unwrap_or(0), p.at_mm, false));
+        VirtualMachine {
+            bounce_cycles: (spec.bounce_us * HZ as f64 / 1e6) as u64,
+            carriages,
+            events: Vec::new(),
+            motor,
+            probe,
+            probe_events: Vec::new(),
+        }
+    }
+
+    /// Probe input changes: (cycle, in contact), in time order.
+    pub fn probe_events(&self) -> &[(u64, bool)] {
+        &self.probe_events
+    }
+
+    // the probe's contact after a move of its axis: a flip of PC14 when it changed
+    fn probe_check(&mut self, t: u64, flips: &mut Vec<InputFlip>) {
+        let Some((axis, at, was)) = self.probe else { return };
+        let on = self.carriages.get(axis).is_some_and(|c| c.position_mm() <= at + 1e-9);
+        if on != was || t == 0 {
+            self.probe = Some((axis, at, on));
+            if t > 0 {
+                self.probe_events.push((t, on));
+            }
+            flips.push(InputFlip { cycle: t, port: Port::C, pin: PROBE_PIN, level: !on });
+        }
     }
 
     /// The encoder's count (what its A/B edges add up to), if the machine has one.
@@ -384,6 +432,7 @@ impl Plant for VirtualMachine {
             c.level = c.pin_level();
             flips.push(InputFlip { cycle: 0, port: Port::A, pin, level: c.level });
         }
+        self.probe_check(0, flips);
         if self.motor.is_some() {
             for pin in ENCODER_PINS {
                 flips.push(InputFlip { cycle: 0, port: Port::A, pin, level: false });
@@ -412,6 +461,9 @@ impl Plant for VirtualMachine {
                 c.level = level;
                 self.events.push(SwitchEvent { cycle: t, axis: i, level });
                 self.bounce(t, LIMIT_PINS[i], level, flips);
+            }
+            if self.probe.is_some_and(|p| p.0 == i) {
+                self.probe_check(t, flips);
             }
         }
     }

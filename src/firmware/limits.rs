@@ -23,6 +23,11 @@ pub static HALTED: AtomicBool = AtomicBool::new(false);
 static ARMED: AtomicU32 = AtomicU32::new(0);
 /// EXTI lines 0, 1, 2 (PA0, PA1, PA2: AFIO_EXTICR1 selects port A at reset).
 const LINES: u32 = 0b111;
+/// EXTI line 14: the probe input, PC14 (AFIO_EXTICR4 selects port C). Always unmasked: its
+/// handler acts only while the controller has a probe cycle armed.
+const PROBE_LINE: u32 = 1 << board::PROBE_PIN;
+/// `$6` (probe input inverted), written by `idle`.
+pub static PROBE_INVERT: AtomicBool = AtomicBool::new(false);
 /// Marker in RAM the startup code leaves alone: "restarted after a hard limit".
 const LOST_MAGIC: u32 = 0x4C49_4D54;
 #[link_section = ".uninit.DDASTEP_LOST"]
@@ -37,10 +42,20 @@ fn exti() -> &'static pac::exti::RegisterBlock {
 /// Both edges of the three lines; masked until [`arm`].
 pub fn setup() {
     let e = exti();
-    e.imr().write(|w| unsafe { w.bits(0) });
-    e.rtsr().write(|w| unsafe { w.bits(LINES) });
-    e.ftsr().write(|w| unsafe { w.bits(LINES) });
-    e.pr().write(|w| unsafe { w.bits(LINES) });
+    e.imr().write(|w| unsafe { w.bits(PROBE_LINE) });
+    e.rtsr().write(|w| unsafe { w.bits(LINES | PROBE_LINE) });
+    e.ftsr().write(|w| unsafe { w.bits(LINES | PROBE_LINE) });
+    e.pr().write(|w| unsafe { w.bits(LINES | PROBE_LINE) });
+    // SAFETY: init only; AFIO's clock is on (the JTAG remap). EXTI14 from port C (0b0010).
+    let afio = unsafe { &*pac::AFIO::ptr() };
+    afio.exticr4().write(|w| unsafe { w.bits(0b0010 << 8) });
+}
+
+/// The EXTI15_10 handler body: the probe input changed; a probe cycle's edge stops the engine
+/// at its next tick (see `Shared::probe_input`).
+pub fn on_probe_edge() {
+    exti().pr().write(|w| unsafe { w.bits(PROBE_LINE) });
+    super::app::SHARED.probe_input(super::hw::probe_low() != PROBE_INVERT.load(Relaxed));
 }
 
 /// Follows `$21` and `$5`, the pins active now, and homing (`watch`: `Some(axes)` while a
@@ -49,7 +64,7 @@ pub fn arm(on: bool, invert: bool, active: u8, watch: Option<u8>) {
     let on = on && watch.is_none();
     let watch = watch.unwrap_or(0) as u32;
     ARMED.store(on as u32 | (invert as u32) << 1 | (active as u32) << 8 | watch << 16, Relaxed);
-    exti().imr().write(|w| unsafe { w.bits(if on || watch != 0 { LINES } else { 0 }) });
+    exti().imr().write(|w| unsafe { w.bits(if on || watch != 0 { LINES | PROBE_LINE } else { PROBE_LINE }) });
 }
 
 /// The EXTI0/1/2 handler body: homing's stop for a watched switch, else (hard limits) stop

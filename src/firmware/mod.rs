@@ -136,6 +136,12 @@ mod app {
         limits::on_edge(&SHARED);
     }
 
+    /// The probe input (PC14, EXTI line 14): at the step interrupt's priority.
+    #[task(binds = EXTI15_10, priority = 3)]
+    fn probe(_: probe::Context) {
+        limits::on_probe_edge();
+    }
+
     /// USART1: realtime bytes act at once, line bytes go to the RX ring, the TX ring drains.
     #[task(binds = USART1, priority = 2, local = [rx, rx_in, tx_out], shared = [tx])]
     fn usart(mut cx: usart::Context) {
@@ -200,6 +206,12 @@ mod app {
             }
             let idr = hw::gpioa_idr();
             ctl.set_limit_inputs(idr);
+            // The probe: for `Pn:P` and the cycle's start; the level also backs up the edge
+            // (contact made between the controller's check and its arming).
+            let low = hw::probe_low();
+            ctl.set_probe_input(low);
+            limits::PROBE_INVERT.store(ctl.settings().probe_invert, Relaxed);
+            SHARED.probe_input(low != ctl.settings().probe_invert);
             let invert = ctl.settings().limit_invert;
             let (counts, window) = encoder::read();
             ctl.encoder(counts, window, tx_in);

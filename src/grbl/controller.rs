@@ -20,6 +20,7 @@
 mod homing;
 mod encoder;
 mod jogging;
+mod probe;
 mod soft_limits;
 mod status;
 mod system;
@@ -123,6 +124,8 @@ struct Job<const N: usize> {
     end: bool,
     /// Write the persistent image (once the machine is idle) before the `ok`.
     save: bool,
+    /// G38.2–G38.5: the probe cycle (see `probe.rs`), 0 for none.
+    probe: u8,
 }
 
 impl<const N: usize> Job<N> {
@@ -145,6 +148,7 @@ impl<const N: usize> Job<N> {
             pause: false,
             end: false,
             save: false,
+            probe: 0,
         }
     }
 }
@@ -205,6 +209,8 @@ pub struct Controller<'a, const N: usize> {
     limit_pins: u8,
     /// Encoder feedback's step-loss check (see `encoder.rs`).
     enc: crate::encoder::loss::Monitor,
+    /// The probe input is active (`$6` applied).
+    probe_pin: bool,
     /// A `$H` cycle in progress (see `homing.rs`).
     homing: Option<homing::Homing>,
 }
@@ -279,6 +285,7 @@ impl<'a, const N: usize> Controller<'a, N> {
             soft_limit: SoftLimit::Off,
             watchdog_note: false,
             limit_pins: 0,
+            probe_pin: false,
             enc: crate::encoder::loss::Monitor::OFF,
             homing: None,
         });
@@ -432,7 +439,12 @@ impl<'a, const N: usize> Controller<'a, N> {
         self.lines.clear();
         self.job = None;
         self.modal = Modal::RESET;
+        // A probe cycle ends (its edge must not stop a later move); Grbl keeps the last probe
+        // position, not its success flag.
+        self.shared.probe_disarm();
+        let prb = self.offsets.prb;
         self.offsets = Offsets::new(self.stored.coords);
+        self.offsets.prb = prb;
         self.jog = Jogging::Off;
         self.check = false;
         self.soft_limit = SoftLimit::Off;
@@ -638,6 +650,9 @@ impl<'a, const N: usize> Controller<'a, N> {
                 self.save = true;
                 job.save = false;
             }
+            if job.probe != 0 && job.probe & probe::ARMED == 0 && !self.probe_step(&mut job, out) {
+                break 'run false;
+            }
             for slot in [&mut job.mv, &mut job.mv2] {
                 if let Some(pl) = *slot {
                     if !self.push(pl, job.jog, job.power) {
@@ -661,6 +676,9 @@ impl<'a, const N: usize> Controller<'a, N> {
                     }
                     job.mv = None;
                 }
+            }
+            if job.probe & probe::ARMED != 0 && !self.probe_step(&mut job, out) {
+                break 'run false;
             }
             if job.drivers_off || job.pause || job.end {
                 if !self.drained() {
@@ -796,6 +814,7 @@ impl<'a, const N: usize> Controller<'a, N> {
         job.pause = fx.stop == Some(Stop::Pause);
         job.end = fx.stop == Some(Stop::End);
         job.save = store;
+        job.probe = fx.probe;
         self.start(job, out);
         Ok(())
     }

@@ -83,6 +83,9 @@ pub struct Offsets<const N: usize> {
     pub g92: [f64; N],
     /// G43.1 tool length offset on Z, mm (not persistent).
     pub tlo: f64,
+    /// The last probe cycle's position (machine mm) and whether it made contact (`[PRB:]`).
+    pub prb: [f64; N],
+    pub prb_ok: bool,
 }
 
 impl<const N: usize> Default for Offsets<N> {
@@ -94,7 +97,7 @@ impl<const N: usize> Default for Offsets<N> {
 impl<const N: usize> Offsets<N> {
     /// The stored systems with no G92 and no tool length offset (after a reset).
     pub const fn new(stored: Coords) -> Self {
-        Offsets { stored, g92: [0.0; N], tlo: 0.0 }
+        Offsets { stored, g92: [0.0; N], tlo: 0.0, prb: [0.0; N], prb_ok: false }
     }
 
     /// Work coordinate system `sel` (0 = G54).

@@ -88,6 +88,9 @@ pub enum Motion {
     CcwArc,
     /// G80: no motion mode (axis words are an error).
     Cancel,
+    /// G38.2–G38.5 (the digit after the point): probe toward (2, 3) or away (4, 5) at the feed
+    /// rate; 2 and 4 alarm when the move ends without the probe changing.
+    Probe(u8),
 }
 
 /// Non-modal command (group 0).
@@ -278,6 +281,15 @@ fn g_word<const N: usize>(b: &mut Block<N>, v: f64) -> Result<(), Error> {
             });
             MOTION
         }
+        38 => {
+            b.axis_command()?;
+            if !(20..=50).contains(&mantissa) || mantissa % 10 != 0 {
+                return Err(Error::UnsupportedCommand);
+            }
+            b.motion = Some(Motion::Probe((mantissa / 10) as u8));
+            mantissa = 0;
+            MOTION
+        }
         4 | 10 | 28 | 30 | 53 | 92 => {
             non_modal(b, code, &mut mantissa)?;
             NON_MODAL
@@ -435,12 +447,14 @@ pub struct Effects<const N: usize> {
     /// G28/G30: the rapid to the stored position that follows.
     pub home: Option<[f64; N]>,
     pub stop: Option<Stop>,
+    /// G38.2–G38.5 (2–5): `motion` is a probe move; 0 when not.
+    pub probe: u8,
 }
 
 impl<const N: usize> Effects<N> {
     /// Nothing to do.
     pub fn none() -> Self {
-        Effects { drivers: None, dwell_ms: None, coord_write: None, g92: None, tlo: None, motion: None, arc: None, home: None, stop: None }
+        Effects { drivers: None, dwell_ms: None, coord_write: None, g92: None, tlo: None, motion: None, arc: None, home: None, stop: None, probe: 0 }
     }
 }
 
@@ -531,7 +545,8 @@ impl Modal {
         let unit = if m.inches { 25.4 } else { 1.0 };
         m.inverse_time = b.inverse_time.unwrap_or(m.inverse_time);
         let arc_mode = matches!(m.motion, Motion::CwArc | Motion::CcwArc);
-        let feed_motion = arc_mode || m.motion == Motion::Linear;
+        let probe = matches!(m.motion, Motion::Probe(_));
+        let feed_motion = arc_mode || probe || m.motion == Motion::Linear;
         // A motion command: axis words no non-modal command takes, or an explicit G0-G3.
         let axis_nonmodal = b.tool_length.is_some()
             || matches!(b.non_modal, Some(NonModal::SetCoordData | NonModal::SetPosition | NonModal::GoHome(_)));
@@ -609,6 +624,9 @@ impl Modal {
             return Err(Error::AxisWordsExist);
         }
         let uses_axes = b.tool_length.is_some() || matches!(nm, Some(NonModal::SetCoordData | NonModal::SetPosition));
+        if probe && moves && !uses_axes && !b.has_axes() {
+            return Err(Error::NoAxisWords);
+        }
         if (b.has_axes() || (moves && arc_mode)) && !uses_axes {
             let mut target = *pos;
             for (i, t) in target.iter_mut().enumerate() {
@@ -623,6 +641,13 @@ impl Modal {
             let home = matches!(nm, Some(NonModal::GoHome(_)));
             if feed_motion && !home && m.feed <= 0.0 {
                 return Err(Error::UndefinedFeedRate);
+            }
+            if let (Motion::Probe(k), false) = (m.motion, home) {
+                // Grbl: a probe to where the machine already is (error:33).
+                if target == *pos {
+                    return Err(Error::InvalidTarget);
+                }
+                fx.probe = k;
             }
             if arc_mode && !home {
                 fx.arc = Some(arc(b, &m, pos, target, unit)?);

@@ -43,10 +43,17 @@ pub const CHECK_OFF: &[u8] = b"[MSG:Disabled]\r\n";
 /// `$SLP`.
 pub const SLEEPING: &[u8] = b"[MSG:Sleeping]\r\n";
 /// Longest status report for `n` axes: `<Hold:1|WPos:` + 13 per axis + `|Bf:15,128` +
-/// `|FS:1000000,1000000` + `|Pn:XYZ` + `|WCO:` + 13 per axis + `|Ov:100,100,100|A:SFM` +
+/// `Pn:` bit of the probe input (bits 0–2: the X, Y, Z limits).
+pub const PIN_PROBE: u8 = 0x80;
+/// Probe fail: already in the state the cycle looks for (Grbl's ALARM:4).
+pub const ALARM_PROBE_INITIAL: &[u8] = b"ALARM:4\r\n";
+/// Probe fail: G38.2/G38.4 ended without contact (Grbl's ALARM:5).
+pub const ALARM_PROBE_CONTACT: &[u8] = b"ALARM:5\r\n";
+
+/// `|FS:1000000,1000000` + `|Pn:PXYZ` + `|WCO:` + 13 per axis + `|Ov:100,100,100|A:SFM` +
 /// `|Enc:` + two numbers of at most 17 and 16 characters (`put_fixed`'s 10^15 cap) + `>\r\n`.
 pub const fn status_len(n: usize) -> usize {
-    122 + 26 * n
+    123 + 26 * n
 }
 /// Longest `$#` line for `n` axes.
 pub const fn param_len(n: usize) -> usize {
@@ -99,6 +106,9 @@ pub fn status(out: &mut impl Out, s: &Status) {
     put_fixed(out, s.speed, 0);
     if s.pins != 0 {
         out.put(b"|Pn:");
+        if s.pins & PIN_PROBE != 0 {
+            out.put(b"P");
+        }
         for (i, &letter) in b"XYZ".iter().enumerate() {
             if s.pins & 1 << i != 0 {
                 out.put(&[letter]);
@@ -183,11 +193,15 @@ pub fn setting(out: &mut impl Out, id: u16, value: f64, decimals: u32) {
 /// `$G`: `[GC:G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0]`.
 pub fn modes(out: &mut impl Out, m: &Modal) {
     out.put(match m.motion {
-        Motion::Rapid => b"[GC:G0",
+        Motion::Rapid => b"[GC:G0" as &[u8],
         Motion::Linear => b"[GC:G1",
         Motion::CwArc => b"[GC:G2",
         Motion::CcwArc => b"[GC:G3",
         Motion::Cancel => b"[GC:G80",
+        Motion::Probe(2) => b"[GC:G38.2",
+        Motion::Probe(3) => b"[GC:G38.3",
+        Motion::Probe(4) => b"[GC:G38.4",
+        Motion::Probe(_) => b"[GC:G38.5",
     });
     out.put(b" G");
     put_u32(out, 54 + m.coord as u32);
@@ -264,7 +278,7 @@ pub fn step_time(out: &mut impl Out, t: &crate::steptime::StepTimeReport) {
 /// Lines `$#` prints: G54..G59, G28, G30, G92, TLO, PRB.
 pub const PARAM_LINES: usize = 11;
 
-/// Line `i` of `$#` (machine millimetres; no probe yet, so `[PRB:0,…:0]`).
+/// Line `i` of `$#` (machine millimetres; `[PRB:…:1]` after a probe made contact).
 pub fn param<const N: usize>(out: &mut impl Out, i: usize, off: &Offsets<N>, axes_used: usize) {
     let n = axes_used.min(N);
     let v: [f64; N] = match i {
@@ -290,8 +304,8 @@ pub fn param<const N: usize>(out: &mut impl Out, i: usize, off: &Offsets<N>, axe
         }
         _ => {
             out.put(b"[PRB:");
-            axes(out, &[0.0; N][..n]);
-            out.put(b":0]\r\n");
+            axes(out, &off.prb[..n]);
+            out.put(if off.prb_ok { b":1]\r\n" } else { b":0]\r\n" });
             return;
         }
     };

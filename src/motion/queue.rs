@@ -244,7 +244,16 @@ pub struct Shared<const N: usize> {
     pub(crate) starved: AtomicU32,
     /// Override percentages: feed | rapid << 8 | spindle << 16.
     ovr: AtomicU32,
+    /// Probe cycle: [`PROBE_ARMED`], [`PROBE_AWAY`], [`PROBE_TRIPPED`] bits.
+    probe: AtomicU8,
 }
+
+/// A probe cycle is running: the probe input's edge stops the engine.
+pub const PROBE_ARMED: u8 = 1;
+/// The cycle waits for the probe to *lose* contact (G38.4/G38.5).
+pub const PROBE_AWAY: u8 = 2;
+/// The probe edge stopped the engine.
+pub const PROBE_TRIPPED: u8 = 4;
 
 impl<const N: usize> Default for Shared<N> {
     fn default() -> Self {
@@ -265,12 +274,43 @@ impl<const N: usize> Shared<N> {
             period_bits: AtomicU32::new(0),
             starved: AtomicU32::new(0),
             ovr: AtomicU32::new(100 | 100 << 8 | 100 << 16),
+            probe: AtomicU8::new(0),
         }
     }
 
     /// Feed hold on (decelerate and pause) or off (resume).
     pub fn set_hold(&self, on: bool) {
         self.ctl.set_hold(on);
+    }
+
+    /// Controller: a probe cycle starts (`away`: G38.4/G38.5).
+    pub fn probe_arm(&self, away: bool) {
+        self.probe.store(PROBE_ARMED | if away { PROBE_AWAY } else { 0 }, Relaxed);
+    }
+
+    /// The probe cycle's bits now.
+    pub fn probe_bits(&self) -> u8 {
+        self.probe.load(Relaxed)
+    }
+
+    /// Controller: the probe cycle ends; true when the probe edge had stopped the engine.
+    pub fn probe_disarm(&self) -> bool {
+        self.probe.swap(0, Relaxed) & PROBE_TRIPPED != 0
+    }
+
+    /// The probe input's interrupt (same priority as the step interrupt), or a bench after
+    /// each tick: with a cycle armed and the probe in the state it looks for (`active`: in
+    /// contact, `$6` applied), an immediate stop: the engine drops the move at its next tick,
+    /// so the last step comes at most one step period after the edge, and the position stays
+    /// the pulses made.
+    pub fn probe_input(&self, active: bool) {
+        let p = self.probe.load(Relaxed);
+        if p & (PROBE_ARMED | PROBE_TRIPPED) == PROBE_ARMED
+            && active != (p & PROBE_AWAY != 0)
+            && self.probe.compare_exchange(p, p | PROBE_TRIPPED, Relaxed, Relaxed).is_ok()
+        {
+            self.ctl.stop();
+        }
     }
 
     /// The override percentages in force.

@@ -55,6 +55,13 @@ impl EncoderModel {
 pub struct Bench<const N: usize> {
     /// An encoder read before every poll, when set.
     pub encoder: Option<EncoderModel>,
+    /// A probe switch: in contact while axis `.0` is at or below step `.1`. Its input is
+    /// offered to the engine's probe check after every timer event (the firmware's EXTI
+    /// handler at the step interrupt's priority) and to the controller before every poll.
+    pub probe: Option<(usize, i32)>,
+    /// Step positions at the timer events where the probe input changed (contact made/lost).
+    pub probe_edges: Vec<[i32; N]>,
+    probe_was: bool,
     pub shared: &'static Shared<N>,
     pub ctl: Controller<'static, N>,
     pub engine: Engine<'static, N>,
@@ -101,6 +108,9 @@ impl<const N: usize> Bench<N> {
         let (rx_in, rx_out) = rxq.split();
         let mut b = Bench {
             encoder: None,
+            probe: None,
+            probe_edges: Vec::new(),
+            probe_was: false,
             shared,
             ctl,
             engine,
@@ -164,7 +174,15 @@ impl<const N: usize> Bench<N> {
                     t.push((self.timer.now(), hz, done));
                 }
             }
+            let active = self.probe_contact();
+            if active != self.probe_was {
+                self.probe_was = active;
+                self.probe_edges.push(self.shared.positions());
+            }
+            self.shared.probe_input(active);
         }
+        let active = self.probe_contact();
+        self.ctl.set_probe_input(active);
         if self.shared.positions() != before && !self.enabled {
             self.stepped_while_disabled = true;
         }
@@ -205,6 +223,11 @@ impl<const N: usize> Bench<N> {
         self.enabled = a.enable;
         self.actions.push(a);
         self.drain();
+    }
+
+    /// The probe switch is in contact now.
+    pub fn probe_contact(&self) -> bool {
+        self.probe.is_some_and(|(axis, at)| self.shared.positions()[axis] <= at)
     }
 
     pub fn run_ms(&mut self, ms: u32) {

@@ -301,8 +301,11 @@ impl Machine {
             self.reset_due = Some(iwdg::CSR_IWDGRSTF);
         }
         self.nvic.level[(IRQ0 + TIM2_IRQ) as usize] = self.tim2.irq();
+        for irq in [6, 7, 8, 9, 10, 23, 40] {
+            self.nvic.level[(IRQ0 + irq) as usize] = false;
+        }
         for line in 0..exti::LINES {
-            self.nvic.level[(IRQ0 + exti::EXTI0_IRQ + line) as usize] = self.exti.irq(line);
+            self.nvic.level[(IRQ0 + exti::irq_of(line)) as usize] |= self.exti.irq(line);
         }
         self.nvic.level[(IRQ0 + USART1_IRQ) as usize] = self.usart1.irq();
         self.pending = self.nvic.any_pending();

@@ -1,12 +1,22 @@
-//! External interrupt controller, lines 0–4 (RM0008 §10.2): IMR, EMR, RTSR, FTSR, SWIER, PR
-//! (rc_w1). AFIO_EXTICR1/2 choose the port of each line. An edge of a GPIO input level (a test,
+//! External interrupt controller, lines 0–15 (RM0008 §10.2): IMR, EMR, RTSR, FTSR, SWIER, PR
+//! (rc_w1). AFIO_EXTICR1–4 choose the port of each line. An edge of a GPIO input level (a test,
 //! the CLI or the virtual machine driving it) sets the line's pending bit when its edge is
-//! enabled; lines 0–4 raise IRQ 6–10 while pending and unmasked. For the bus.
+//! enabled; lines 0–4 raise IRQ 6–10 while pending and unmasked, lines 5–9 share IRQ 23 and
+//! lines 10–15 IRQ 40 (EXTI15_10: the probe input, PC14). For the bus.
 
 /// IRQ number of EXTI line 0 (lines 1–4 follow).
 pub const EXTI0_IRQ: u32 = 6;
 /// Lines modeled.
-pub const LINES: u32 = 5;
+pub const LINES: u32 = 16;
+
+/// The IRQ that line `line` raises.
+pub const fn irq_of(line: u32) -> u32 {
+    match line {
+        0..=4 => EXTI0_IRQ + line,
+        5..=9 => 23,
+        _ => 40,
+    }
+}
 
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Exti {

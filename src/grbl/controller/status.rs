@@ -90,7 +90,7 @@ impl<const N: usize> Controller<'_, N> {
                 feed: rate * per_step * 60.0,
                 speed,
                 acc: &acc[..n_acc],
-                pins: self.limit_pins,
+                pins: self.limit_pins | if self.probe_pin { report::PIN_PROBE } else { 0 },
                 wco: show_wco.then_some(&wco[..n]),
                 ov: show_ov.then_some(ov),
                 enc: self.encoder_status(),
