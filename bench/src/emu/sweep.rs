@@ -34,8 +34,9 @@ const STEPS_PER_MM: f64 = 100.0;
 const ACCEL_MM_S2: f64 = 1_000_000.0;
 /// `$110..126` for the sweep, mm/min (1 MHz at 100 steps/mm: never the limit).
 const MAX_RATE_MM_MIN: f64 = 600_000.0;
-/// `$0` for the sweep, µs. The firmware's period floor is max(2 × pulse + 48 ticks, 144 ticks);
-/// 0.5 µs (36 ticks) leaves the 144-tick (500 kHz) interrupt floor as the limit.
+/// `$0` for the sweep, µs. The firmware's cap (`Timing::max_rate_for`, src/motion/timing.rs)
+/// combines the pulse rule (2 × pulse + 72 ticks) with the step handler's measured cost; the
+/// search runs up to whatever `$I` reports for it.
 pub const PULSE_US: f64 = 0.5;
 
 /// What to sweep.
@@ -598,8 +599,8 @@ pub fn results_markdown(s: &Sweep, command: &str, firmware: &str, elf: &Path) ->
     writeln!(m, "firmware's own DWT measurement of the step interrupt.\n")?;
     writeln!(m, "Per point: reset, then `{}`, `G91` and one `G1` on N axes", s.settings.join("`, `"))?;
     writeln!(m, "(steps X:Y:Z:A:B:C:U = 10:6:4:8:2:7:5, all positive, F for the target master rate, trapezoid")?;
-    writeln!(m, "ramp at 10⁸ steps/s²). `$0={PULSE_US}` because the firmware's period floor is max(2·pulse + 48")?;
-    writeln!(m, "ticks, 144 ticks): with `$0=1` it would be 192 ticks (375 kHz). `$I` reports {} Hz with these", s.cap_hz)?;
+    writeln!(m, "ramp at 10⁸ steps/s²). The firmware's cap (`Timing::max_rate_for`) combines the pulse rule")?;
+    writeln!(m, "(2·pulse + 72 ticks) with the step handler's measured cost. `$I` reports {} Hz with these", s.cap_hz)?;
     writeln!(m, "settings: the cap of the search.\n")?;
     writeln!(m, "Measured: {cruise_ms} whole 1 ms windows starting 2 ms after the ramp; each must have X within 1 % of")?;
     writeln!(m, "the target (first-to-last X edge of the window). A rate is **sustainable** when, for the move,")?;
