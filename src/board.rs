@@ -65,13 +65,15 @@ pub struct PinMap<const N: usize> {
     pub dir_neg: [u32; N],
     /// BSRR bits that make each axis's direction pin say "positive".
     pub dir_pos: [u32; N],
+    /// Dual-edge stepping ([`PinMap::dual_edge`]).
+    pub dual: bool,
 }
 
 impl<const N: usize> PinMap<N> {
     /// Pin map from pin numbers on one port and Grbl-style invert masks (bit i = axis i).
     /// Positive motion has the direction pin low unless inverted, as in Grbl.
     pub const fn new(step_pins: [u8; N], dir_pins: [u8; N], step_invert: u8, dir_invert: u8) -> Self {
-        let mut m = PinMap { step_on: [0; N], step_off: 0, dir_neg: [0; N], dir_pos: [0; N] };
+        let mut m = PinMap { step_on: [0; N], step_off: 0, dir_neg: [0; N], dir_pos: [0; N], dual: false };
         let mut i = 0;
         while i < N {
             let s = 1u32 << step_pins[i];
@@ -93,6 +95,21 @@ impl<const N: usize> PinMap<N> {
             i += 1;
         }
         m
+    }
+
+    /// The same pins in dual-edge mode (`$580`): every step toggles its pin, so `step_on` holds
+    /// each pin's bit in the set half whatever `$2` says (the engine turns it into a set or a
+    /// reset from its shadow of the pins' level) and there is no falling-edge word.
+    pub const fn dual_edge(mut self) -> Self {
+        let mut i = 0;
+        while i < N {
+            let b = self.step_on[i];
+            self.step_on[i] = (b | b >> 16) & 0xFFFF;
+            i += 1;
+        }
+        self.step_off = 0;
+        self.dual = true;
+        self
     }
 }
 

@@ -181,6 +181,45 @@ proptest! {
         }
     }
 
+    /// Dual-edge mode (`$580`): every step is one toggle of its pin, so the toggles per axis are
+    /// its step count (net: its signed steps), two toggles of a pin are at least the pulse
+    /// (plus the store jitter the firmware allows for) apart, a direction change leads the next
+    /// toggle by the setup, and the pins end at the parity of their step counts (the engine's
+    /// shadow of their level never drifts).
+    #[test]
+    fn dual_edge_toggles_once_per_step_and_keeps_the_pulse_apart(moves in prop::collection::vec(
+            prop::array::uniform3(-3000i64..3000), 1..6), setup in 1u32..2000, pulse in 15u32..800,
+            cruise in 1_000u32..400_000) {
+        use ddastep::timing::{Timing, STORE_JITTER_TICKS};
+        let timing = Timing::new(pulse, setup, 144).dual_edge(0);
+        let cfg = RampConfig { v0: 1000, vmax: 400_000, accel: 20_000_000, shape: Shape::Trapezoid };
+        let mut rig = Rig::<3>::new(cfg, timing);
+        prop_assert!(rig.pins.dual);
+        let (mut want, mut count) = ([0i64; 3], [0usize; 3]);
+        for m in &moves {
+            if Move::new(*m, cruise).is_ok() {
+                rig.push(*m, cruise);
+                for a in 0..3 {
+                    want[a] += m[a];
+                    count[a] += m[a].unsigned_abs() as usize;
+                }
+            }
+        }
+        rig.run_to_idle(u64::MAX);
+        prop_assert_eq!(rig.net_steps(), want);
+        for a in 0..3 {
+            let t = rig.times(a);
+            prop_assert_eq!(t.len(), count[a], "axis {}", a);
+            prop_assert!(t.windows(2).all(|w| w[1] - w[0] >= (pulse + STORE_JITTER_TICKS) as u64), "axis {}", a);
+            let bit = 1u16 << ddastep::board::STEP_PINS[a];
+            prop_assert_eq!(rig.odr & bit != 0, count[a] % 2 == 1, "axis {} level", a);
+        }
+        for s in &rig.steps {
+            let d = s.dir_changed_at.expect("direction written before the first toggle");
+            prop_assert!(s.t - d >= setup as u64);
+        }
+    }
+
     #[test]
     fn extreme_inputs_never_panic(v0 in any::<u32>(), vmax in any::<u32>(), accel in any::<u32>(),
                                   s in any::<[i64; 3]>(), hz in any::<u32>(), curve in any::<bool>()) {

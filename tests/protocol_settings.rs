@@ -45,12 +45,16 @@ fn set_follows_grbl_rules() {
 fn ids_cover_every_gettable_setting_once() {
     let s = Settings::DEFAULT;
     let ids: heapless::Vec<u16, 64> = Settings::ids(3).collect();
-    // ours: $29, $33, $40, $41, $42 and $10's mask; the encoder's $87-$89, $97-$99
-    assert_eq!(ids.len(), 7 + 14 + 6 + 6 + 12);
-    assert!(ids.windows(2).all(|w| w[0] < w[1]), "{ids:?}");
+    // ours: $29, $33, $40, $41, $42 and $10's mask; the encoder's $87-$89, $97-$99; $580
+    assert_eq!(ids.len(), 7 + 14 + 6 + 6 + 1 + 12);
+    // In `$$` order: ascending up to the axis settings, which follow the others (Grbl's order;
+    // $580 is the one number above them).
+    let low: heapless::Vec<u16, 64> = ids.iter().copied().filter(|&id| id < 100).collect();
+    assert!(low.windows(2).all(|w| w[0] < w[1]), "{ids:?}");
+    assert!(ids[low.len()..].iter().all(|&id| id >= 100), "{ids:?}");
     assert!(ids.iter().all(|&id| s.get(id, 3).is_some()));
     assert_eq!(s.get(133, 3), None);
-    assert_eq!(Settings::ids(7).count(), 7 + 14 + 6 + 6 + 28);
+    assert_eq!(Settings::ids(7).count(), 7 + 14 + 6 + 6 + 1 + 28);
 }
 
 #[test]
@@ -142,4 +146,39 @@ fn short_pulses_raise_the_rate_limit() {
     s.set(0, 0.5, 3).unwrap();
     assert_eq!(s.timing().max_rate_hz(), 72_000_000 / (LONG - 36 - LAT - TAIL));
     assert!(s.set(0, 0.1, 3).is_err());
+}
+
+#[test]
+fn dual_edge_is_a_pin_setting_with_its_own_rate_rule() {
+    use ddastep::settings::DUAL_EDGE;
+    use ddastep::timing::{DUAL_BASE_TICKS as BASE, DUAL_LONG_TICKS as LONG, HANDLER_PER_SLAVE_TICKS as SLAVE, STORE_JITTER_TICKS as JIT};
+    let mut s = Settings::BENCH;
+    assert_eq!(s.get(DUAL_EDGE, 3), Some((0.0, 0)));
+    // Like `$2`: the engine's pin map changes, so the MCU restarts.
+    assert_eq!(s.set(DUAL_EDGE, 1.0, 3), Ok(Change::Pins));
+    assert!(s.dual_edge && s.timing().dual);
+    assert_eq!(s.get(DUAL_EDGE, 3), Some((1.0, 0)));
+    assert_eq!(s.set(DUAL_EDGE, f64::NAN, 3), Err(Error::BadNumberFormat));
+    assert_eq!(s.set(DUAL_EDGE, -1.0, 3), Err(Error::NegativeValue));
+    // Stored as a flag bit next to `$4`-`$21`: an image from before `$580` (bit clear) loads as
+    // single-edge, the image with it round-trips.
+    let b = s.to_bytes();
+    assert_eq!(Settings::decode(&b), Some(s));
+    s.dual_edge = false;
+    assert_eq!(Settings::decode(&s.to_bytes()).map(|d| d.dual_edge), Some(false));
+    // One event per step: the handler's cost binds, not twice the pulse; every pulse from
+    // 0.2 µs up to the period the cost allows runs at the same cap, above the full-pulse one.
+    for (pulse, slaves) in [(0.2, 0u32), (0.5, 0), (0.5, 2), (2.0, 6), (3.0, 0)] {
+        let mut d = Settings { dual_edge: true, ..Settings::BENCH };
+        d.set(0, pulse, 3).unwrap();
+        let t = d.timing();
+        let want = (BASE + SLAVE * slaves).max(LONG + SLAVE * slaves).max(t.pulse_ticks + JIT);
+        assert_eq!(t.min_period_for(slaves), want, "{pulse} µs, {slaves} slaves");
+        d.dual_edge = false;
+        assert!(t.max_rate_for(slaves) > d.timing().max_rate_for(slaves), "{pulse} µs, {slaves} slaves");
+    }
+    // A pulse longer than the handler's cost sets the period: toggles of a pin ≥ pulse apart.
+    let mut d = Settings { dual_edge: true, ..Settings::BENCH };
+    d.set(0, 10.0, 3).unwrap();
+    assert_eq!(d.timing().min_period_for(0), 720 + JIT);
 }

@@ -2,7 +2,8 @@
 //! sustainable master rate and CPU load per axis count, in modeled cycles. Prints the table;
 //! `cargo sim -- --sweep --results bench/RESULTS.md` also writes the results file.
 //!
-//! `cargo bench -p ddastep-bench --target host-tuple --bench sweep` (about a minute).
+//! `cargo bench -p ddastep-bench --target host-tuple --bench sweep` (about a minute per mode: single-edge, then
+//! dual-edge `$580=1`).
 
 use ddastep_bench::emu::{firmware_elf, sweep};
 
@@ -13,9 +14,12 @@ fn main() -> anyhow::Result<()> {
         return Ok(());
     }
     let elf = firmware_elf()?;
-    let s = sweep::sweep(&elf, &sweep::Options::default())?;
-    println!("max step rate ($I with the sweep settings): {} Hz", s.cap_hz);
-    print!("{}", s.table());
-    println!("{} points in {:.1} s wall", s.points, s.wall_s);
+    for dual_edge in [false, true] {
+        let s = sweep::sweep(&elf, &sweep::Options { dual_edge, ..Default::default() })?;
+        let mode = if dual_edge { "dual-edge, $580=1" } else { "single-edge" };
+        println!("max step rate ($I with the sweep settings, {mode}): {} Hz", s.cap_hz);
+        print!("{}", s.table());
+        println!("{} points in {:.1} s wall", s.points, s.wall_s);
+    }
     Ok(())
 }

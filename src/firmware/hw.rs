@@ -99,6 +99,12 @@ pub fn set_pulse_ticks(ticks: u32) {
     tim2().ccr1().write(|w| unsafe { w.bits((ticks + ddastep::timing::STORE_LATENCY_TICKS).min(0xFFFF)) });
 }
 
+/// Dual-edge mode: no compare event (interrupt off, CCR1 past every period the engine sets).
+pub fn no_falling_edge() {
+    tim2().dier().write(|w| unsafe { w.bits(SR_UIF) });
+    tim2().ccr1().write(|w| unsafe { w.bits(0xFFFF) });
+}
+
 /// TIM1's registers (written only by `idle` after init).
 #[inline(always)]
 fn tim1() -> &'static pac::tim1::RegisterBlock {

@@ -83,7 +83,12 @@ mod app {
         let (mv_in, mv_out) = cx.local.moves.split();
         let (rx_in, rx_out) = cx.local.rxq.split();
         let (tx_in, tx_out) = cx.local.txq.split();
-        let pins = board::pin_map::<AXES>(settings.step_invert, settings.dir_invert);
+        let mut pins = board::pin_map::<AXES>(settings.step_invert, settings.dir_invert);
+        if settings.dual_edge {
+            // Dual-edge stepping (`$580`, fixed until the next boot: a change restarts).
+            pins = pins.dual_edge();
+            hw::no_falling_edge();
+        }
         let engine = Engine::new(&SHARED, mv_out, &PROFILE, pins);
         let controller = Controller::init(
             cx.local.ctl,
@@ -220,8 +225,9 @@ mod app {
             limits::arm(ctl.settings().hard_limits, invert, ddastep::limits::active_pins(idr, invert), ctl.homing_watch());
             hw::ENABLE_OFF_HIGH.store(!ctl.settings().enable_invert, Relaxed);
             hw::set_enable(act.enable_pin_high);
-            if let Some(ticks) = act.pulse_ticks {
-                hw::set_pulse_ticks(ticks);
+            match act.pulse_ticks {
+                Some(ticks) if !ctl.settings().dual_edge => hw::set_pulse_ticks(ticks),
+                _ => {}
             }
             if let Some(t) = act.pwm {
                 hw::set_pwm_timing(t);

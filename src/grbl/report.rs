@@ -246,7 +246,7 @@ pub fn build_info(out: &mut impl Out, info: &[u8], queue_moves: usize, r: &Rampe
     put_u32(out, RX_BUFFER_LEN as u32);
     out.put(b"]\r\n[MSG:max step rate ");
     put_u32(out, r.max_rate_hz);
-    out.put(b" Hz]\r\n[MSG:ramp ");
+    out.put(if r.dual { b" Hz dual-edge]\r\n[MSG:ramp " as &[u8] } else { b" Hz]\r\n[MSG:ramp " });
     put_u32(out, r.cfg.v0);
     out.put(b"-");
     put_u32(out, r.cfg.vmax);
@@ -352,6 +352,7 @@ mod tests {
             cfg: RampConfig { v0: 1000, vmax: 60_000, accel: 1_000_000, shape: Shape::Trapezoid },
             max_rate_hz: 166_666,
             table_limited: false,
+            dual: false,
         };
         let info = text(|o| build_info(o, b"", 15, &r));
         assert_eq!(
@@ -363,7 +364,9 @@ mod tests {
         let t = crate::steptime::StepTimeReport { entries: 9, min: 190, mean: 191.44, max: 1402, load: 0.0812, peak_load: 0.156 };
         assert_eq!(text(|o| step_time(o, &t)), "[MSG:step isr 190/191.4/1402 cycles min/mean/max, load 8.1 % peak 15.6 %]\r\n");
         let worst = crate::steptime::StepTimeReport { entries: 1, min: u32::MAX, mean: u32::MAX as f32, max: u32::MAX, load: 1.0, peak_load: 1.0 };
-        let r = Ramped { table_limited: true, ..r };
+        let dual = text(|o| build_info(o, b"", 15, &Ramped { dual: true, ..r }));
+        assert!(dual.contains("[MSG:max step rate 166666 Hz dual-edge]\r\n"), "{dual}");
+        let r = Ramped { table_limited: true, dual: true, ..r };
         let all = text(|o| {
             build_info(o, &[b'x'; crate::grbl::store::TEXT_LEN], 15, &r);
             step_time(o, &worst);

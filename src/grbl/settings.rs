@@ -30,7 +30,8 @@ const TAIL: usize = 24 + 4 * 4 * MAX_AXES;
 /// Byte offset of the homing settings, after the encoder's.
 const HOME: usize = TAIL + 20 + crate::encoder::IMAGE_LEN;
 const _: () = assert!(HOME + 16 <= SETTINGS_LEN - 4);
-/// Byte offset of the flag bits (`$4`, `$5`, `$6`, `$20`, `$22`, `$21` as bits 0..=5).
+/// Byte offset of the flag bits (`$4`, `$5`, `$6`, `$20`, `$22`, `$21`, `$580` as bits 0..=6;
+/// an image from before `$580` has bit 6 clear: single-edge, as it ran).
 const FLAGS: usize = 19;
 /// Absolute floor of the step period (ticks; 144 = 500 kHz, the engine's design limit). The
 /// binding limits are the pulse rule and the step handler's measured cost, both applied by
@@ -47,6 +48,9 @@ pub const AXIS_COUNT: u16 = 42;
 /// Grbl's status report mask: bit 0 MPos (else WPos), bit 1 `Bf:`.
 pub const STATUS_MASK: u16 = 10;
 pub const SPINDLE_PWM_HZ: u16 = 33; // grblHAL's number for the spindle PWM frequency
+/// Dual-edge step mode (each step toggles its pin): free in Grbl 1.1 and in grblHAL (between
+/// its panel settings, 540-579, and button actions, 590-599).
+pub const DUAL_EDGE: u16 = 580;
 
 /// Grbl settings we report but do not implement, with the only value they accept.
 /// (Their decimals for `$$` are in [`LOW`].)
@@ -91,7 +95,7 @@ const fn spec(id: u16, range: u8, decimals: u8, change: Change, at: usize, bit: 
 }
 
 /// Settings below 100 in `$$` order: Grbl's, ours and the [`FIXED`] ones.
-const LOW: [Spec; 33] = {
+const LOW: [Spec; 34] = {
     use Change::{None as Fixed, Pins, Profile, Shell};
     [
         spec(0, 1, 3, Profile, 4, 0),
@@ -128,6 +132,7 @@ const LOW: [Spec; 33] = {
         spec(encoder::THRESHOLD, 0, 0, Fixed, 0, 0),
         spec(encoder::ACTION, 0, 0, Fixed, 0, 0),
         spec(encoder::LAG, 0, 0, Fixed, 0, 0),
+        spec(DUAL_EDGE, 0, 0, Pins, FLAGS, 6),
     ]
 };
 
@@ -204,6 +209,9 @@ pub struct Settings {
     pub axes: u8,
     /// `$87`-`$89`, `$97`-`$99`: encoder feedback.
     pub encoder: EncoderSettings,
+    /// `$580` dual-edge step mode: each step toggles its pin (drivers stepping on both edges,
+    /// TMC22xx `dedge`); `$2` does not apply then.
+    pub dual_edge: bool,
 }
 
 impl Default for Settings {
@@ -233,13 +241,15 @@ pub struct Ramped {
     pub max_rate_hz: u32,
     /// The axis limits asked for a faster top than fits in the table.
     pub table_limited: bool,
+    /// The cap is dual-edge mode's (`$580`).
+    pub dual: bool,
 }
 
 impl Ramped {
     /// What `s` asks for on `axes` axes, before the table is built.
     pub fn wanted(s: &Settings, axes: usize) -> Ramped {
         let timing = s.timing();
-        Ramped { cfg: s.ramp_config(axes, &timing), max_rate_hz: timing.max_rate_hz(), table_limited: false }
+        Ramped { cfg: s.ramp_config(axes, &timing), max_rate_hz: timing.max_rate_hz(), table_limited: false, dual: timing.dual }
     }
 }
 
@@ -278,6 +288,7 @@ impl Settings {
         status_mask: 1,
         axes: 3,
         encoder: EncoderSettings::DEFAULT,
+        dual_edge: false,
     };
 
     /// The seed paper's bench (the settings before the safe defaults, which the demos and
@@ -359,6 +370,7 @@ impl Settings {
             30 => Real(&mut self.spindle_max),
             31 => Real(&mut self.spindle_min),
             32 => Flag(&mut self.laser_mode),
+            DUAL_EDGE => Flag(&mut self.dual_edge),
             SPINDLE_PWM_HZ => Whole(&mut self.spindle_pwm_hz),
             RAMP_START => Whole(&mut self.ramp_start_hz),
             RAMP_SHAPE => Shape(&mut self.shape),
@@ -468,7 +480,12 @@ impl Settings {
         // f64 like the rest of the settings math: f32 arithmetic would link a second soft-float set.
         let pulse = ns_to_ticks(round_u32(self.pulse_us as f64 * 1000.0));
         let dir = ns_to_ticks(round_u32(self.dir_setup_us as f64 * 1000.0));
-        Timing::new(pulse, dir, ISR_FLOOR_TICKS)
+        let t = Timing::new(pulse, dir, ISR_FLOOR_TICKS);
+        if self.dual_edge {
+            t.dual_edge(0)
+        } else {
+            t
+        }
     }
 
     /// Table rate per mm/s of path speed on the first `axes` axes: the largest `$100+i`, so a
@@ -538,7 +555,7 @@ impl Settings {
                 Ok(()) => break,
             }
         }
-        Ramped { cfg, max_rate_hz: timing.max_rate_hz(), table_limited }
+        Ramped { cfg, max_rate_hz: timing.max_rate_hz(), table_limited, dual: timing.dual }
     }
 
     /// The flash image: magic, version, fields (little-endian, where [`LOW`] and
@@ -638,7 +655,7 @@ mod tests {
     fn low_ids_are_ours_and_every_fixed_one() {
         let ours = [
             0, 1, 2, 3, 4, 5, 6, STATUS_MASK, 12, 20, 21, 22, 23, 24, 25, 26, 27, 30, 31, 32, SPINDLE_PWM_HZ, DIR_SETUP,
-            RAMP_START, RAMP_SHAPE, AXIS_COUNT, 87, 88, 89, 97, 98, 99,
+            RAMP_START, RAMP_SHAPE, AXIS_COUNT, 87, 88, 89, 97, 98, 99, DUAL_EDGE,
         ];
         assert_eq!(LOW.len(), ours.len() + FIXED.len());
         assert!(ours.iter().chain(FIXED.iter().map(|f| &f.0)).all(|id| LOW.iter().any(|s| s.id == *id)));

@@ -8,7 +8,8 @@
 //! [`Engine::tick`], which computes the word for the *next* update event and returns the ARR
 //! value to preload now (TIM2's ARR is buffered, so it takes effect at the next update and sets
 //! the gap after it). Falling edges come from a compare event `pulse_ticks` after each update,
-//! where the handler stores [`Engine::step_off`]. Periods longer than 65 536 ticks
+//! where the handler stores [`Engine::step_off`] (dual-edge mode: no compare event, each step
+//! word toggles its pins from a shadow of their level, `step_off` is 0). Periods longer than 65 536 ticks
 //! (< 1.1 kHz) are split into filler events whose word is 0 (period extension; the prescaler
 //! stays 0, so pulse width and resolution never change).
 //!
@@ -69,6 +70,10 @@ pub struct Engine<'a, const N: usize, const L: usize = RAMP_LEN> {
     ring: RingConsumer<'a, N>,
     ramp: &'a RampSlot<L>,
     step_off: u32,
+    /// Dual-edge mode: each step toggles its pin; `level` shadows the step pins' level (the
+    /// pins are low when the engine is built: boot drives them low, a mode change restarts).
+    dual: bool,
+    level: u32,
     // The edge about to happen.
     word: u32,
     extend: u32,
@@ -113,6 +118,8 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
             ring,
             ramp,
             step_off: pins.step_off,
+            dual: pins.dual,
+            level: 0,
             word: 0,
             extend: 0,
             frac: 0,
@@ -239,6 +246,12 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
         }
         'slaves: {
             slaves!('slaves; 0 1 2 3 4 5 6);
+        }
+        if self.dual {
+            // Toggle: set the pins that are low, reset those that are high.
+            let level = self.level;
+            self.level = level ^ word;
+            word = (word & !level) | (word & level) << 16;
         }
         self.left -= 1;
         self.shared.mv_done.store(total - self.left, Relaxed);

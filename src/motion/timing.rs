@@ -44,6 +44,9 @@ pub struct Timing {
     pub dir_setup_ticks: u32,
     /// Shortest step period allowed (pulse + low time + interrupt headroom).
     pub min_period_ticks: u32,
+    /// Dual-edge stepping (`$580`): each step toggles its pin, no falling-edge event; the
+    /// "pulse" is the shortest time between two toggles of one pin.
+    pub dual: bool,
 }
 
 impl Timing {
@@ -54,7 +57,7 @@ impl Timing {
     pub const DEFAULT: Timing = Timing::new(216, 360, 144);
 
     /// All zero: "not set yet"; the engine uses [`Timing::DEFAULT`] in its place.
-    pub const UNSET: Timing = Timing { pulse_ticks: 0, dir_setup_ticks: 0, min_period_ticks: 0 };
+    pub const UNSET: Timing = Timing { pulse_ticks: 0, dir_setup_ticks: 0, min_period_ticks: 0, dual: false };
 
     /// Timing from its parts (ticks); the shortest period is never below twice the pulse plus
     /// [`STORE_LATENCY_TICKS`] (the pulse is stretched by that much, see the firmware).
@@ -64,13 +67,29 @@ impl Timing {
             pulse_ticks,
             dir_setup_ticks,
             min_period_ticks: if min_period_ticks > floor { min_period_ticks } else { floor },
+            dual: false,
         }
+    }
+
+    /// The same pulse and setup in dual-edge mode: a step is one toggle at an update event, so
+    /// two toggles of a pin are at least one period minus the store jitter apart, and the
+    /// period's floor is the pulse plus [`STORE_JITTER_TICKS`] (and `min_period_ticks`).
+    pub const fn dual_edge(self, min_period_ticks: u32) -> Self {
+        let floor = self.pulse_ticks + STORE_JITTER_TICKS;
+        Timing { min_period_ticks: if min_period_ticks > floor { min_period_ticks } else { floor }, dual: true, ..self }
     }
 
     /// Shortest master period for a move with `slaves` slave axes: the pulse timing, the step
     /// handler's cost (so the CPU stays ≤ 95 % busy), and room for a low time of at least one
     /// pulse after a falling edge that a short pulse gets only at the end of the handler.
     pub const fn min_period_for(&self, slaves: u32) -> u32 {
+        if self.dual {
+            // One event per step: the handler's cost (CPU ≤ 95 %) and its longest run at speed.
+            let cpu = DUAL_BASE_TICKS + HANDLER_PER_SLAVE_TICKS * slaves;
+            let long = DUAL_LONG_TICKS + HANDLER_PER_SLAVE_TICKS * slaves;
+            let p = if cpu > self.min_period_ticks { cpu } else { self.min_period_ticks };
+            return if long > p { long } else { p };
+        }
         let cpu = HANDLER_BASE_TICKS + HANDLER_PER_SLAVE_TICKS * slaves;
         let low = HANDLER_FALL_TICKS + HANDLER_PER_SLAVE_TICKS * slaves + self.pulse_ticks;
         // A long tick (ramp work, a move change) must check for the compare event before the
@@ -120,6 +139,19 @@ pub const HANDLER_TAIL_TICKS: u32 = 10;
 /// already pending at the end of the update handler (measured high time ≈ 142 + 12 per slave
 /// modeled cycles), rounded up.
 pub const HANDLER_FALL_TICKS: u32 = 150;
+
+/// Step-handler cost per master step in dual-edge mode (one update event per step, no compare
+/// event), timer ticks, plus [`HANDLER_PER_SLAVE_TICKS`] per slave: the sweep in dual-edge mode
+/// (bench/RESULTS.md; 20 ms cruise, 0.5 µs pulses) measured 255, 288 and 345 modeled cycles per
+/// step on 1, 3 and 7 axes, and held the whole CPU (step ISR, other interrupts, `idle`) ≤ 95 %
+/// busy up to 250, 220 and 180 kHz; 290 + 17 per slave (248, 222, 184 kHz) stays within that.
+pub const DUAL_BASE_TICKS: u32 = 290;
+/// Dual-edge mode: the shortest period a long tick (ramp work, a move change) leaves without a
+/// missed update event, timer ticks (plus [`HANDLER_PER_SLAVE_TICKS`] per slave). A long tick
+/// may overrun one period (the next update then waits for it, its store comes late by at most
+/// the overrun); two updates inside one run would be an overrun. The bench's back-to-back
+/// moves at the cap (tests/firmware_dual_edge.rs) keep every step with the CPU rule alone.
+pub const DUAL_LONG_TICKS: u32 = 0;
 
 /// Timer ticks from an update event to the step handler's BSRR store: 57..71 modeled cycles
 /// on the virtual bench with its silicon-checked memory model (bench/golden/paper_532.json,

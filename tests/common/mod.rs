@@ -51,13 +51,15 @@ impl<const N: usize> Rig<N> {
     fn with_profile(build: impl FnOnce(&mut ddastep::ramp::Profile)) -> Self {
         let shared: &'static Shared<N> = Box::leak(Box::new(Shared::new()));
         let slot: &'static RampSlot = Box::leak(Box::new(RampSlot::new()));
-        {
+        let dual = {
             let mut p = slot.try_write().expect("fresh slot is parked");
             build(&mut p);
-        }
+            p.timing.dual
+        };
         let q: &'static mut MoveRing<N> = Box::leak(Box::new(MoveRing::new()));
         let (prod, cons) = q.split();
-        let pins = pin_map::<N>(0, 0);
+        // Dual-edge timing (`$580`) runs the engine on the dual-edge pin map, as the firmware.
+        let pins = if dual { pin_map::<N>(0, 0).dual_edge() } else { pin_map::<N>(0, 0) };
         let engine = Engine::new(shared, cons, slot, pins);
         let mut odr = 0u16;
         // Dir pins start low ("positive"), step pins low.
@@ -103,7 +105,9 @@ impl<const N: usize> Rig<N> {
             }
         }
         for a in 0..N {
-            if e.word & self.pins.step_on[a] != 0 {
+            // A step: the pin goes active (single-edge) or changes level (dual-edge).
+            let stepped = if self.pins.dual { (after ^ self.odr) as u32 & self.pins.step_on[a] != 0 } else { e.word & self.pins.step_on[a] != 0 };
+            if stepped {
                 let dbit = 1u16 << ddastep::board::DIR_PINS[a];
                 self.steps.push(StepEdge {
                     t: e.t,

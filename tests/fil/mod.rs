@@ -80,6 +80,15 @@ pub struct Step {
 
 /// Rising step edges of every axis, in order, with the direction pin's meaning (low = +).
 pub fn steps(b: &Board) -> Vec<Step> {
+    step_edges(b, false)
+}
+
+/// Dual-edge steps (`$580=1`): every edge of a step pin, with the direction pin's meaning.
+pub fn toggles(b: &Board) -> Vec<Step> {
+    step_edges(b, true)
+}
+
+fn step_edges(b: &Board, dual_edge: bool) -> Vec<Step> {
     let mut dir_high = [false; 7];
     let mut out = Vec::new();
     for e in b.edges() {
@@ -90,12 +99,20 @@ pub fn steps(b: &Board) -> Vec<Step> {
             dir_high[a] = e.level;
         }
         if let Some(a) = STEP_PINS.iter().position(|&p| p == e.pin) {
-            if e.level {
+            if e.level || dual_edge {
                 out.push(Step { cycle: e.cycle, axis: a, positive: !dir_high[a] });
             }
         }
     }
     out
+}
+
+/// A booted board in dual-edge mode (`$580=1` in flash with `base`): [`Board::report`] counts
+/// both edges.
+pub fn boot_dual(base: Settings) -> Board {
+    let mut b = boot_with(Some(Stored::from(Settings { dual_edge: true, ..base })));
+    b.dual_edge = true;
+    b
 }
 
 /// Net steps per axis.

@@ -44,6 +44,9 @@ pub struct Config {
     pub axes: Vec<AxisChannels>,
     /// Dir low means + instead of high.
     pub dir_invert: bool,
+    /// Dual-edge stepping: both edges of a step line are steps (TMC22xx `dedge`, ddastep's
+    /// `$580`); the high and low widths are then the spacing between two toggles.
+    pub dual_edge: bool,
     /// Pulses narrower than this are glitches (0: only zero-width ones).
     pub min_glitch_ps: u64,
     /// Expected step ratio, in axis order (compared after reducing by the gcd).
@@ -122,7 +125,7 @@ impl Analyzer {
         let n = config.axes.len();
         Ok(Self {
             filter: GlitchFilter::new(channels, config.min_glitch_ps),
-            axes: (0..n).map(|_| AxisState::new(config.dir_invert)).collect(),
+            axes: (0..n).map(|_| AxisState::new(config.dir_invert, config.dual_edge)).collect(),
             deviation: DeviationTracker::new(n),
             config,
             roles,

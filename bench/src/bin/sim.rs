@@ -71,6 +71,10 @@ struct Args {
     /// One sweep point, AXES@HZ (e.g. 7@200000), with the step-ISR profile of its cruise.
     #[arg(long)]
     point: Option<String>,
+    /// With --sweep or --point: dual-edge step mode (`$580=1`, each step toggles its pin).
+    /// With --results the sweep runs both modes and the file shows them side by side.
+    #[arg(long)]
+    dual_edge: bool,
 }
 
 // parse "PA0@0.25=0"
@@ -130,7 +134,7 @@ fn run(args: Args) -> Result<()> {
     }
     if let Some(spec) = &args.point {
         let (axes, hz) = spec.split_once('@').context("expected AXES@HZ")?;
-        let p = sweep::run_point(&elf, axes.parse()?, hz.parse()?, 20, 0.95, true);
+        let p = sweep::run_point(&elf, axes.parse()?, hz.parse()?, 20, 0.95, true, args.dual_edge);
         println!("{}", sweep::point_line(&p));
         let entries = p.isr_entries.max(1) as f64;
         println!("step ISR profile over the measured cruise ({} entries, {:.1} cycles per master step):", p.isr_entries, p.isr_cycles_per_step);
@@ -204,18 +208,22 @@ fn run(args: Args) -> Result<()> {
 
 // the step-rate sweep: table on stdout, progress on stderr, optionally the results file
 fn run_sweep(args: &Args, elf: &std::path::Path) -> Result<()> {
-    let mut opts = sweep::Options { jobs: args.jobs, ..Default::default() };
+    let mut opts = sweep::Options { jobs: args.jobs, dual_edge: args.dual_edge && args.results.is_none(), ..Default::default() };
     if !args.axes.is_empty() {
         opts.axes = args.axes.clone();
     }
     let s = sweep::sweep(elf, &opts)?;
-    println!("max step rate ($I with the sweep settings): {} Hz", s.cap_hz);
+    let mode = if opts.dual_edge { " (dual-edge)" } else { "" };
+    println!("max step rate ($I with the sweep settings{mode}): {} Hz", s.cap_hz);
     print!("{}", s.table());
     println!("{} points in {:.1} s wall", s.points, s.wall_s);
     if let Some(p) = &args.results {
+        let dual = sweep::sweep(elf, &sweep::Options { dual_edge: true, ..opts.clone() })?;
+        println!("dual-edge ($580=1): max step rate {} Hz", dual.cap_hz);
+        print!("{}", dual.table());
         let command = std::env::args().skip(1).collect::<Vec<_>>().join(" ");
         let label = args.firmware_label.clone().unwrap_or_else(sweep::firmware_commit);
-        std::fs::write(p, sweep::results_markdown(&s, &format!("cargo sim -- {command}"), &label, elf)?)?;
+        std::fs::write(p, sweep::results_markdown(&s, Some(&dual), &format!("cargo sim -- {command}"), &label, elf)?)?;
         eprintln!("wrote {}", p.display());
     }
     if let Some(p) = &args.readme {

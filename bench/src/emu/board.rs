@@ -61,6 +61,9 @@ pub struct Board {
     watchdogs: Vec<u64>,
     /// Cycles of the resets the firmware requested.
     soft_resets: Vec<u64>,
+    /// The firmware runs in dual-edge mode (`$580=1`): [`Board::report`] counts both edges of
+    /// a step pin as steps.
+    pub dual_edge: bool,
 }
 
 impl Board {
@@ -86,6 +89,7 @@ impl Board {
             fault: None,
             watchdogs: Vec::new(),
             soft_resets: Vec::new(),
+            dual_edge: false,
         })
     }
 

@@ -34,6 +34,7 @@ pub const DIR_LOW_IS_POSITIVE: bool = true;
 /// Per-axis numbers.
 #[derive(Clone, Debug, Serialize)]
 pub struct AxisReport {
+    /// Steps seen: rising edges (both edges with `Board::dual_edge`).
     pub rising_edges: u64,
     pub net_steps: i64,
     pub max_rate_hz: f64,
@@ -119,6 +120,7 @@ impl Board {
         }
         let mut config = Config::new(channels);
         config.dir_invert = DIR_LOW_IS_POSITIVE;
+        config.dual_edge = self.dual_edge;
         let mut la = Analyzer::new(config).expect("fixed channel map");
         for ch in 0..14 {
             la.edge(0, ch, false);

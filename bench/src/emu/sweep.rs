@@ -58,6 +58,8 @@ pub struct Options {
     pub jobs: usize,
     /// Print each point as it finishes.
     pub verbose: bool,
+    /// Dual-edge step mode (`$580=1`): every step toggles its pin.
+    pub dual_edge: bool,
 }
 
 impl Default for Options {
@@ -71,6 +73,7 @@ impl Default for Options {
             max_load: 0.95,
             jobs: 2,
             verbose: true,
+            dual_edge: false,
         }
     }
 }
@@ -207,6 +210,8 @@ impl Row {
 /// Everything the sweep found.
 #[derive(Clone, Debug, Serialize)]
 pub struct Sweep {
+    /// Dual-edge step mode (`$580=1`).
+    pub dual_edge: bool,
     /// `[MSG:max step rate N Hz]` with the sweep settings.
     pub cap_hz: u32,
     /// Settings lines sent to each board.
@@ -235,10 +240,24 @@ struct Prepared {
     accel_hz_s: u32,
 }
 
-// reset a board from `elf`, boot it, send the settings and `$I`
-fn prepare(elf: &Path) -> Result<Prepared> {
+/// A booted board, in dual-edge mode if asked (`$580=1` restarts the MCU: the second banner).
+pub fn boot(elf: &Path, dual_edge: bool) -> Result<Board> {
     let mut board = Board::load(elf)?;
     board.run_until(HZ / 2, |b| b.serial_output().contains("Grbl"))?;
+    if dual_edge {
+        board.send_line_wait_ok("$580=1")?;
+        let up = board.run_until(HZ / 2, |b| b.serial_output().matches("Grbl").count() >= 2)?;
+        if !up {
+            bail!("no banner after $580=1");
+        }
+        board.dual_edge = true;
+    }
+    Ok(board)
+}
+
+// reset a board from `elf`, boot it, send the settings and `$I`
+fn prepare(elf: &Path, dual_edge: bool) -> Result<Prepared> {
+    let mut board = boot(elf, dual_edge)?;
     for line in settings_lines() {
         board.send_line_wait_ok(&line)?;
     }
@@ -275,9 +294,9 @@ fn move_line(axes: usize, target_hz: u32, master_steps: u64) -> (Vec<u64>, Strin
 }
 
 // run one point: reset, settings, the move, measurements
-pub fn run_point(elf: &Path, axes: usize, target_hz: u32, cruise_ms: u64, max_load: f64, profile: bool) -> Point {
+pub fn run_point(elf: &Path, axes: usize, target_hz: u32, cruise_ms: u64, max_load: f64, profile: bool, dual_edge: bool) -> Point {
     let wall = std::time::Instant::now();
-    let mut p = match measure(elf, axes, target_hz, cruise_ms, max_load, profile) {
+    let mut p = match measure(elf, axes, target_hz, cruise_ms, max_load, profile, dual_edge) {
         Ok(p) => p,
         Err(e) => Point::failed(axes, target_hz, Verdict::Error(format!("{e:#}"))),
     };
@@ -285,8 +304,8 @@ pub fn run_point(elf: &Path, axes: usize, target_hz: u32, cruise_ms: u64, max_lo
     p
 }
 
-fn measure(elf: &Path, axes: usize, target_hz: u32, cruise_ms: u64, max_load: f64, profile: bool) -> Result<Point> {
-    let Prepared { mut board, accel_hz_s, .. } = prepare(elf)?;
+fn measure(elf: &Path, axes: usize, target_hz: u32, cruise_ms: u64, max_load: f64, profile: bool, dual_edge: bool) -> Result<Point> {
+    let Prepared { mut board, accel_hz_s, .. } = prepare(elf, dual_edge)?;
     // Ramp: whole table entries of 1 ms, from the 1 kHz start.
     let ramp_ms = ((target_hz as u64).saturating_sub(1000) * 1000).div_ceil(accel_hz_s.max(1) as u64) + 1;
     let cruise_total_ms = cruise_ms + ramp_ms + 6;
@@ -297,11 +316,11 @@ fn measure(elf: &Path, axes: usize, target_hz: u32, cruise_ms: u64, max_load: f6
     board.send_line_wait_ok(&line)?;
     // The first X step starts the clock.
     let x_pin = STEP_PINS[0];
-    let started = board.run_until(HZ / 20, |b| b.edges()[edges0..].iter().any(|e| e.port == 1 && e.pin == x_pin && e.level))?;
+    let started = board.run_until(HZ / 20, |b| b.edges()[edges0..].iter().any(|e| e.port == 1 && e.pin == x_pin && (e.level || dual_edge)))?;
     if !started {
         bail!("no X step within 50 ms of {line:?}");
     }
-    let x0 = board.edges()[edges0..].iter().find(|e| e.port == 1 && e.pin == x_pin && e.level).unwrap().cycle;
+    let x0 = board.edges()[edges0..].iter().find(|e| e.port == 1 && e.pin == x_pin && (e.level || dual_edge)).unwrap().cycle;
     let w0 = (x0 + (ramp_ms + 2) * WINDOW).div_ceil(WINDOW);
     let w1 = w0 + cruise_ms;
     board.run_until_cycle(w0 * WINDOW)?;
@@ -326,7 +345,7 @@ fn measure(elf: &Path, axes: usize, target_hz: u32, cruise_ms: u64, max_load: f6
     let mut per_window: Vec<Vec<u64>> = vec![Vec::new(); cruise_ms as usize];
     let mut x_steps = 0u64;
     for e in &board.edges()[edges0..] {
-        if e.port == 1 && e.pin == x_pin && e.level && e.cycle >= w0 * WINDOW && e.cycle < w1 * WINDOW {
+        if e.port == 1 && e.pin == x_pin && (e.level || dual_edge) && e.cycle >= w0 * WINDOW && e.cycle < w1 * WINDOW {
             per_window[(e.cycle / WINDOW - w0) as usize].push(e.cycle);
             x_steps += 1;
         }
@@ -404,7 +423,7 @@ fn sweep_axes(elf: &Path, axes: usize, cap_hz: u32, opts: &Options) -> Row {
         if let Some(p) = tried.iter().find(|p| p.target_hz == hz) {
             return p.clone();
         }
-        let p = run_point(elf, axes, hz, opts.cruise_ms, opts.max_load, false);
+        let p = run_point(elf, axes, hz, opts.cruise_ms, opts.max_load, false, opts.dual_edge);
         if opts.verbose {
             eprintln!("{}", point_line(&p));
         }
@@ -460,7 +479,7 @@ fn refine(run: &mut impl FnMut(u32) -> Point, grid: &[(u32, bool, bool)], opts: 
 // the whole sweep, `opts.jobs` axis counts at a time
 pub fn sweep(elf: &Path, opts: &Options) -> Result<Sweep> {
     let wall = std::time::Instant::now();
-    let cap_hz = prepare(elf)?.cap_hz;
+    let cap_hz = prepare(elf, opts.dual_edge)?.cap_hz;
     let queue = std::sync::Mutex::new(opts.axes.clone());
     let rows = std::sync::Mutex::new(Vec::new());
     std::thread::scope(|s| {
@@ -475,7 +494,7 @@ pub fn sweep(elf: &Path, opts: &Options) -> Result<Sweep> {
     let mut rows = rows.into_inner().unwrap();
     rows.sort_by_key(|r| r.axes);
     let points = rows.iter().map(|r| r.tried.len()).sum();
-    Ok(Sweep { cap_hz, settings: settings_lines(), rows, wall_s: wall.elapsed().as_secs_f64(), points })
+    Ok(Sweep { dual_edge: opts.dual_edge, cap_hz, settings: settings_lines(), rows, wall_s: wall.elapsed().as_secs_f64(), points })
 }
 
 // one line per point for progress output (with the simulated and wall time)
@@ -579,7 +598,7 @@ fn bracket_text(b: &Bracket) -> String {
 }
 
 // bench/RESULTS.md: command, date, model, table, ISR cost and profile, notes, every point
-pub fn results_markdown(s: &Sweep, command: &str, firmware: &str, elf: &Path) -> Result<String> {
+pub fn results_markdown(s: &Sweep, dual: Option<&Sweep>, command: &str, firmware: &str, elf: &Path) -> Result<String> {
     use std::fmt::Write as _;
     let mut m = String::new();
     let (date, commit, flash) = (utc_date(), firmware, flash_bytes(elf));
@@ -639,6 +658,21 @@ pub fn results_markdown(s: &Sweep, command: &str, firmware: &str, elf: &Path) ->
         writeln!(m, "monotone in the rate (how often `idle` completes its loop and reaches WFI between steps).")?;
     }
     writeln!(m, "BSRR offset: update event to the handler's first GPIOB store, over the points the ISR sustained.\n")?;
+    if let Some(d) = dual {
+        writeln!(m, "## Dual-edge mode (`$580=1`)\n")?;
+        writeln!(m, "The same sweep with `$580=1` first (the MCU restarts): every step toggles its pin, one update")?;
+        writeln!(m, "event per step and no compare event. Steps are counted on both edges; the X high time column")?;
+        writeln!(m, "is then the shortest time between two toggles of X. `$I` reports {} Hz with these settings", d.cap_hz)?;
+        writeln!(m, "(`Timing::min_period_for`, dual-edge rule: the handler's measured cost per step and its longest")?;
+        writeln!(m, "run at speed, above the pulse plus the store jitter).\n")?;
+        m += &d.table();
+        writeln!(m, "\n| axes | max kHz, single-edge | max kHz, dual-edge | `$I` cap, single / dual |\n|---:|---:|---:|---:|")?;
+        for (a, b) in s.rows.iter().zip(&d.rows) {
+            writeln!(m, "| {} | {} | {} | {:.1} / {:.1} kHz |", a.axes, bracket_text(&a.cpu), bracket_text(&b.cpu), s.cap_hz as f64 / 1000.0, d.cap_hz as f64 / 1000.0)?;
+        }
+        writeln!(m, "\nReference lines (silicon, from issue 15): Klipper on an STM32F103 1.18 M toggles/s (590 kHz with")?;
+        writeln!(m, "full pulses, one stepper); grbl32 222 kHz (one axis).\n")?;
+    }
     if let Some((a, b)) = isr_cost_fit(s) {
         writeln!(m, "## Step ISR cost\n")?;
         writeln!(m, "Modeled step-ISR cycles per master step at 50 kHz cruise: ≈ {a:.0} + {b:.1} × slaves")?;
@@ -651,7 +685,7 @@ pub fn results_markdown(s: &Sweep, command: &str, firmware: &str, elf: &Path) ->
     }
     let mut thread_per_entry = 0.0f64;
     for (axes, hz) in [(7usize, 50_000u32), (1, 50_000)] {
-        let p = run_point(elf, axes, hz, cruise_ms, 0.95, true);
+        let p = run_point(elf, axes, hz, cruise_ms, 0.95, true, false);
         let e = p.isr_entries.max(1) as f64;
         writeln!(m, "### Where the cycles go: {axes} {} at {} kHz ({:.0} cycles per step)\n", if axes == 1 { "axis" } else { "axes" }, hz / 1000, p.isr_cycles_per_step)?;
         writeln!(m, "| step ISR, by function | cycles per entry | share |\n|---|---:|---:|")?;
@@ -675,6 +709,11 @@ pub fn results_markdown(s: &Sweep, command: &str, firmware: &str, elf: &Path) ->
     for r in &s.rows {
         for p in &r.tried {
             writeln!(m, "{}", point_text(p))?;
+        }
+    }
+    for r in dual.iter().flat_map(|d| &d.rows) {
+        for p in &r.tried {
+            writeln!(m, "dual-edge {}", point_text(p))?;
         }
     }
     writeln!(m, "```\n</details>")?;

@@ -105,7 +105,7 @@ impl<const N: usize> Controller<'_, N> {
                 }
                 i += 1;
                 let value = gcode::parse_number(cmd, &mut i)?;
-                if i != cmd.len() || id > 255.0 || id != libm::trunc(id) {
+                if i != cmd.len() || id > u16::MAX as f64 || id != libm::trunc(id) {
                     return Err(Error::InvalidStatement);
                 }
                 need_idle(idle)?;

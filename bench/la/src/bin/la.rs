@@ -29,6 +29,10 @@ struct Args {
     /// Dir low means + (default: dir high means +).
     #[arg(long)]
     dir_invert: bool,
+    /// Dual-edge stepping (TMC22xx `dedge`, ddastep `$580=1`): every edge of a step line is a
+    /// step; high and low widths are then the spacing between two toggles.
+    #[arg(long)]
+    dual_edge: bool,
     /// Expected step ratio in axis order, e.g. `5:3:2` (compared after dividing by the gcd).
     #[arg(long, value_name = "A:B:C")]
     expect: Option<String>,
@@ -105,6 +109,7 @@ fn run(args: &Args) -> Result<bool> {
     let config = Config {
         axes: axes.clone(),
         dir_invert: args.dir_invert,
+        dual_edge: args.dual_edge,
         min_glitch_ps: (args.min_glitch_ns * 1e3).round() as u64,
         expect,
     };
