@@ -95,7 +95,11 @@ pub fn set_enable(high: bool) {
 }
 
 /// New step pulse width: CCR1 is preloaded, so it takes effect at the next update event.
+/// Nothing in dual-edge mode ([`no_falling_edge`]: the compare interrupt is off).
 pub fn set_pulse_ticks(ticks: u32) {
+    if tim2().dier().read().bits() & SR_CC1IF == 0 {
+        return;
+    }
     tim2().ccr1().write(|w| unsafe { w.bits((ticks + ddastep::timing::STORE_LATENCY_TICKS).min(0xFFFF)) });
 }
 

@@ -225,9 +225,8 @@ mod app {
             limits::arm(ctl.settings().hard_limits, invert, ddastep::limits::active_pins(idr, invert), ctl.homing_watch());
             hw::ENABLE_OFF_HIGH.store(!ctl.settings().enable_invert, Relaxed);
             hw::set_enable(act.enable_pin_high);
-            match act.pulse_ticks {
-                Some(ticks) if !ctl.settings().dual_edge => hw::set_pulse_ticks(ticks),
-                _ => {}
+            if let Some(ticks) = act.pulse_ticks {
+                hw::set_pulse_ticks(ticks);
             }
             if let Some(t) = act.pwm {
                 hw::set_pwm_timing(t);
