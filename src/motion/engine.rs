@@ -26,7 +26,8 @@
 //! setup. The ticks of a direction change and of the first step after it run no ramp work.
 //!
 //! Invariants: every move emits exactly its step counts (the ramp only sets periods); each
-//! axis's position equals the step words handed out; a direction change is written alone and
+//! axis's position equals the step words handed out (in dual-edge mode one toggle per step, the
+//! pins' level the parity of the steps made since boot); a direction change is written alone and
 //! followed by at least `dir_setup_ticks` before the next step. No floats, no division, no
 //! loop over the queue: the only loop is the unrolled one over the move's slaves (≤ 6).
 //!
