@@ -210,6 +210,7 @@ mod app {
             // (contact made between the controller's check and its arming).
             let low = hw::probe_low();
             ctl.set_probe_input(low);
+            ctl.set_door_input(hw::gpioc_idr() & 1 << ddastep::board::DOOR_PIN == 0);
             limits::PROBE_INVERT.store(ctl.settings().probe_invert, Relaxed);
             SHARED.probe_input(low != ctl.settings().probe_invert);
             let invert = ctl.settings().limit_invert;
