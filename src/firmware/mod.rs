@@ -84,6 +84,12 @@ mod app {
         let (rx_in, rx_out) = cx.local.rxq.split();
         let (tx_in, tx_out) = cx.local.txq.split();
         let pins = board::pin_map::<AXES>(settings.step_invert, settings.dir_invert);
+        // After a hard limit's restart: the position the engine had (the feeder and the
+        // controller start from it).
+        let lost = limits::take_lost_marker();
+        if let Some(p) = lost {
+            SHARED.set_positions(p);
+        }
         let engine = Engine::new(&SHARED, mv_out, &PROFILE, pins);
         let controller = Controller::init(
             cx.local.ctl,
@@ -98,7 +104,7 @@ mod app {
         if by_watchdog {
             controller.watchdog_reset();
         }
-        if limits::take_lost_marker() {
+        if lost.is_some() {
             controller.position_lost();
         }
         limits::setup();
@@ -198,7 +204,7 @@ mod app {
             let now = MILLIS.load(Relaxed);
             let halted = limits::HALTED.load(Relaxed);
             if halted && REQUESTS.reset_pending() {
-                limits::restart_lost();
+                limits::restart_lost(SHARED.positions());
             }
             if halted && !hard_reported {
                 hard_reported = true;
