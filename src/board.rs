@@ -38,6 +38,10 @@ pub const ENCODER_INPUTS: u32 = 1 << ENCODER_PINS[0] | 1 << ENCODER_PINS[1];
 /// header and free when no 32 kHz crystal runs.
 pub const PROBE_PIN: u8 = 14;
 
+/// GPIOC pin of the safety door input (pull-up, switch to ground when the door opens; Grbl's
+/// door: `Pn:D`). Read by the idle loop.
+pub const DOOR_PIN: u8 = 15;
+
 /// GPIOC pin of the on-board LED (active low).
 pub const LED_PIN: u8 = 13;
 

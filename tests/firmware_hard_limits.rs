@@ -1,7 +1,8 @@
 //! Hard limits (`$21`) on the release firmware with the virtual gantry: a carriage reaching its
 //! switch mid-move stops all step output within one step period (measured: switch to the
 //! last step edge and to the step pins forced low), ALARM:1 follows and nothing moves until
-//! Ctrl-X, which restarts the MCU into the alarm state (position lost).
+//! Ctrl-X, which restarts the MCU into the alarm state, keeping the position (as Grbl keeps
+//! its position across a soft reset, but asks for `$H`/`$X`).
 
 mod fil;
 
@@ -53,13 +54,18 @@ fn a_switch_mid_move_stops_the_steps_within_a_period_then_alarm_1() {
     b.run_seconds(0.5).unwrap();
     assert_eq!(x_steps(&b).len(), n);
     assert!(b.watchdog_resets().is_empty());
-    // Ctrl-X restarts the MCU: banner, alarm (position lost), `$X`, and off the switch.
+    // Ctrl-X restarts the MCU: banner, alarm, the same position, `$X`, and off the switch.
+    let mpos = |s: &str| s.split("MPos:").nth(1).and_then(|r| r.split('|').next()).unwrap_or("").to_string();
+    let before = mpos(&status(&mut b));
+    assert!(!before.starts_with("0.000"), "{before}");
     let mark = b.serial_output().len();
     b.serial_send(&[0x18]);
     let up = b.run_until(HZ / 2, |b| b.serial_output()[mark..].contains("to unlock]")).unwrap();
     assert!(up, "{:?}", &b.serial_output()[mark..]);
     assert_eq!(b.system_resets().len(), 1);
-    assert!(status(&mut b).contains("<Alarm|"));
+    let s = status(&mut b);
+    assert!(s.contains("<Alarm|"));
+    assert_eq!(mpos(&s), before, "the position survives the restart");
     assert!(reply(&mut b, "$X").contains("ok"));
     ok(&mut b, "G91 G1 X-5 F3000");
     wait_idle(&mut b, 2.0);

@@ -44,7 +44,7 @@ fn ugs_like_session_on_the_safe_defaults() {
     let s = status(&mut b);
     assert!(s.starts_with("<Idle|MPos:0.000,0.000,0.000|FS:0,0"), "{s}");
     let info = reply(&mut b, "$I");
-    assert!(info.contains("[VER:1.1h.ddastep:]\r\n[OPT:,24,128]\r\n"), "{info}");
+    assert!(info.contains("[VER:1.1h.ddastep:]\r\n[OPT:VMH+,24,128]\r\n"), "{info}");
     let list = reply(&mut b, "$$");
     assert!(list.contains("$10=1\r\n") && list.contains("$100=250.000\r\n") && list.contains("$110=500.000\r\n"));
     assert!(!list.contains("$103="), "three axes by default");

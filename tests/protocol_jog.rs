@@ -89,11 +89,10 @@ fn feed_hold_cancels_a_jog_like_0x85() {
 }
 
 #[test]
-fn jog_cancel_when_idle_and_door_byte_do_nothing() {
+fn jog_cancel_when_idle_does_nothing() {
     let mut b = Bench::<3>::with_defaults();
     b.take();
     b.byte(0x85);
-    b.byte(0x84);
     b.run_ms(5);
     assert!(b.status().starts_with("<Idle|"));
     assert_eq!(b.line("G0 X1"), "ok\r\n");

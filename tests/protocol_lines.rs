@@ -195,7 +195,7 @@ fn build_info_names_us_and_the_rate_limit() {
     assert_eq!(
         b.line("$I"),
         format!(
-            "[VER:1.1h.ddastep:]\r\n[OPT:,{},128]\r\n[MSG:max step rate {limit} Hz]\r\n\
+            "[VER:1.1h.ddastep:]\r\n[OPT:VMH+,{},128]\r\n[MSG:max step rate {limit} Hz]\r\n\
              [MSG:ramp 1000-103923 Hz 2000000 Hz/s trapezoid]\r\nok\r\n",
             protocol_rig::BLOCKS
         )

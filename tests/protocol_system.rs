@@ -67,7 +67,7 @@ fn startup_lines_are_checked_stored_listed_and_run_after_reset() {
     assert_eq!(b.line("$G"), "[GC:G0 G54 G17 G20 G91 G94 M5 M9 T0 F2540 S0]\r\nok\r\n");
     assert_eq!(b.line("$I=MY MILL"), "ok\r\n");
     let info = b.line("$I");
-    assert!(info.starts_with(&format!("[VER:1.1h.ddastep:MYMILL]\r\n[OPT:,{},128]\r\n", protocol_rig::BLOCKS)), "{info}");
+    assert!(info.starts_with(&format!("[VER:1.1h.ddastep:MYMILL]\r\n[OPT:VMH+,{},128]\r\n", protocol_rig::BLOCKS)), "{info}");
     // $RST=* clears them all (and resets); $RST=# only the coordinates.
     b.line("G10 L2 P1 X3");
     assert_eq!(b.line("$RST=#"), format!("[MSG:Restoring defaults]\r\nok\r\n{BANNER}>G20G91:ok\r\n>G54F100:ok\r\n"));

@@ -26,6 +26,10 @@
 //! in contact while that carriage is at or below `at_mm`, wired NO to ground on the probe input
 //! (PC14, pulled up: contact = low), with no bounce, its level changing at the step edge that
 //! crosses `at_mm`.
+//!
+//! Optional `[[door]]` entries open and close the safety door at given times (`at_s = 1.0`,
+//! `open = true`): the door input (PC15, pulled up) goes low while the door is open, as a
+//! switch closing to ground would drive it.
 
 use std::any::Any;
 use std::path::Path;
@@ -128,6 +132,17 @@ pub struct ProbeSpec {
     pub at_mm: f64,
 }
 
+/// GPIOC pin of the safety door input (README pin map; `ddastep::board::DOOR_PIN`).
+pub const DOOR_PIN: u8 = 15;
+
+/// The safety door opens or closes at a simulated time.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct DoorEvent {
+    pub at_s: f64,
+    pub open: bool,
+}
+
 /// A machine file.
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -142,6 +157,8 @@ pub struct MachineSpec {
     pub fault: Vec<Fault>,
     #[serde(default)]
     pub probe: Option<ProbeSpec>,
+    #[serde(default)]
+    pub door: Vec<DoorEvent>,
 }
 
 fn default_bounce() -> f64 {
@@ -167,6 +184,9 @@ impl MachineSpec {
             }
         } else if !spec.fault.is_empty() {
             bail!("faults act on the encoder's motor: add an [encoder]");
+        }
+        if spec.door.iter().any(|d| !(d.at_s.is_finite() && d.at_s >= 0.0)) {
+            bail!("door: at_s must be a time >= 0");
         }
         for f in &spec.fault {
             if f.at_s.is_some() == f.at_mm.is_some() {
@@ -278,6 +298,8 @@ pub struct VirtualMachine {
     probe: Option<(usize, f64, bool)>,
     /// Probe input changes: (cycle, in contact).
     probe_events: Vec<(u64, bool)>,
+    /// The door's openings and closings.
+    door: Vec<DoorEvent>,
 }
 
 impl VirtualMachine {
@@ -302,6 +324,7 @@ impl VirtualMachine {
             motor,
             probe,
             probe_events: Vec::new(),
+            door: spec.door.clone(),
         }
     }
 
@@ -433,6 +456,9 @@ impl Plant for VirtualMachine {
             flips.push(InputFlip { cycle: 0, port: Port::A, pin, level: c.level });
         }
         self.probe_check(0, flips);
+        for d in &self.door {
+            flips.push(InputFlip { cycle: (d.at_s * HZ as f64) as u64, port: Port::C, pin: DOOR_PIN, level: !d.open });
+        }
         if self.motor.is_some() {
             for pin in ENCODER_PINS {
                 flips.push(InputFlip { cycle: 0, port: Port::A, pin, level: false });

@@ -148,10 +148,15 @@ pub fn gpioa_idr() -> u32 {
     unsafe { &*pac::GPIOA::ptr() }.idr().read().bits()
 }
 
+/// GPIOC's input register (the probe and door inputs).
+pub fn gpioc_idr() -> u32 {
+    // SAFETY: a read of the input data register, no side effects.
+    unsafe { &*pac::GPIOC::ptr() }.idr().read().bits()
+}
+
 /// The probe input (PC14) is low: in contact, unless `$6` inverts.
 pub fn probe_low() -> bool {
-    // SAFETY: a read of the input data register, no side effects.
-    unsafe { &*pac::GPIOC::ptr() }.idr().read().bits() & 1 << board::PROBE_PIN == 0
+    gpioc_idr() & 1 << board::PROBE_PIN == 0
 }
 
 /// PC13 LED (active low): on for 100 ms of every second.
@@ -221,9 +226,9 @@ fn setup_pins() {
     a.bsrr().write(|w| unsafe { w.bits(board::LIMIT_INPUTS | board::ENCODER_INPUTS | tool << 16) });
     a.crl().write(|w| unsafe { w.bits(0x8822_2888) });
     a.crh().modify(|r, w| unsafe { w.bits((r.bits() & !0xF000_000F) | 0x2000_000B) });
-    // PC13 LED (active low): off. PC14 probe input, pulled up.
-    c.bsrr().write(|w| unsafe { w.bits(1 << board::LED_PIN | 1 << board::PROBE_PIN) });
-    c.crh().modify(|r, w| unsafe { w.bits((r.bits() & !(0xFF << 20)) | 0x82 << 20) });
+    // PC13 LED (active low): off. PC14 probe and PC15 door inputs, pulled up.
+    c.bsrr().write(|w| unsafe { w.bits(1 << board::LED_PIN | 1 << board::PROBE_PIN | 1 << board::DOOR_PIN) });
+    c.crh().modify(|r, w| unsafe { w.bits((r.bits() & !(0xFFF << 20)) | 0x882 << 20) });
 }
 
 /// TIM2 as the step timer: 72 MHz, no prescaler, buffered ARR, update and compare-1 interrupts.

@@ -89,6 +89,12 @@ mod app {
             pins = pins.dual_edge();
             hw::no_falling_edge();
         }
+        // After a hard limit's restart: the position the engine had (the feeder and the
+        // controller start from it).
+        let lost = limits::take_lost_marker();
+        if let Some(p) = lost {
+            SHARED.set_positions(p);
+        }
         let engine = Engine::new(&SHARED, mv_out, &PROFILE, pins);
         let controller = Controller::init(
             cx.local.ctl,
@@ -103,7 +109,7 @@ mod app {
         if by_watchdog {
             controller.watchdog_reset();
         }
-        if limits::take_lost_marker() {
+        if lost.is_some() {
             controller.position_lost();
         }
         limits::setup();
@@ -203,7 +209,7 @@ mod app {
             let now = MILLIS.load(Relaxed);
             let halted = limits::HALTED.load(Relaxed);
             if halted && REQUESTS.reset_pending() {
-                limits::restart_lost();
+                limits::restart_lost(SHARED.positions());
             }
             if halted && !hard_reported {
                 hard_reported = true;
@@ -215,6 +221,7 @@ mod app {
             // (contact made between the controller's check and its arming).
             let low = hw::probe_low();
             ctl.set_probe_input(low);
+            ctl.set_door_input(hw::gpioc_idr() & 1 << ddastep::board::DOOR_PIN == 0);
             limits::PROBE_INVERT.store(ctl.settings().probe_invert, Relaxed);
             SHARED.probe_input(low != ctl.settings().probe_invert);
             let invert = ctl.settings().limit_invert;

@@ -17,6 +17,7 @@
 //! Positions: the planner works in machine millimetres; work offsets ([`Offsets`]) turn
 //! program coordinates into machine ones in the interpreter, and reports subtract them again.
 
+mod door;
 mod homing;
 mod encoder;
 mod jogging;
@@ -213,6 +214,10 @@ pub struct Controller<'a, const N: usize> {
     probe_pin: bool,
     /// A `$H` cycle in progress (see `homing.rs`).
     homing: Option<homing::Homing>,
+    /// The safety door cycle (see `door.rs`), its input now, and a 0x84 waiting.
+    door: door::Door,
+    door_pin: bool,
+    door_event: bool,
 }
 
 impl<'a, const N: usize> Controller<'a, N> {
@@ -288,6 +293,9 @@ impl<'a, const N: usize> Controller<'a, N> {
             probe_pin: false,
             enc: crate::encoder::loss::Monitor::OFF,
             homing: None,
+            door: door::Door::Off,
+            door_pin: false,
+            door_event: false,
         });
         c.startup_next = c.next_startup(0);
         c.enc_configure();
@@ -448,6 +456,8 @@ impl<'a, const N: usize> Controller<'a, N> {
         self.jog = Jogging::Off;
         self.check = false;
         self.soft_limit = SoftLimit::Off;
+        self.door = door::Door::Off;
+        self.door_event = false;
         self.pushed = self.shared.moves_done();
         // The engine stops at its next tick; its position is final only then (see `poll`).
         self.resync = true;
@@ -481,6 +491,7 @@ impl<'a, const N: usize> Controller<'a, N> {
         self.jog_poll(out);
         self.homing_poll(out);
         self.soft_limit_poll(out);
+        self.door_poll(out);
         self.drive_enable();
         if self.job.is_some() && out.room() >= POLL_REPLY_ROOM && self.advance(true, out) {
             self.ok(out);

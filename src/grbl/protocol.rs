@@ -27,9 +27,10 @@ pub enum Realtime {
     /// 0x85: cancel the running and queued jogs
     /// ([`crate::controller::Controller::jog_cancel`]).
     JogCancel,
+    /// 0x84: the safety door opened ([`crate::controller::Controller::door_command`]).
+    Door,
     /// Grbl's other extended realtime bytes (0x80..=0xFF): overrides 0x90–0x9D act
-    /// ([`crate::queue::Overrides::apply`]); 0x84 safety door does nothing without a door
-    /// input, as in Grbl built without one.
+    /// ([`crate::queue::Overrides::apply`]), the others are ignored.
     Extended(u8),
 }
 
@@ -41,6 +42,7 @@ pub const fn realtime(b: u8) -> Option<Realtime> {
         b'~' => Some(Realtime::Resume),
         0x18 => Some(Realtime::Reset),
         0x85 => Some(Realtime::JogCancel),
+        0x84 => Some(Realtime::Door),
         0x80..=0xFF => Some(Realtime::Extended(b)),
         _ => None,
     }
@@ -72,6 +74,8 @@ pub enum Error {
     SoftLimitNeedsHoming = 10,
     /// Line longer than [`LINE_LEN`].
     LineOverflow = 11,
+    /// `$X`/`$H` with the safety door open.
+    CheckDoor = 13,
     /// A `$N`/`$I=` line longer than the store keeps.
     LineLengthExceeded = 14,
     /// A jog target beyond the soft limits.

@@ -45,15 +45,17 @@ pub const SLEEPING: &[u8] = b"[MSG:Sleeping]\r\n";
 /// Longest status report for `n` axes: `<Hold:1|WPos:` + 13 per axis + `|Bf:15,128` +
 /// `Pn:` bit of the probe input (bits 0–2: the X, Y, Z limits).
 pub const PIN_PROBE: u8 = 0x80;
+/// `Pn:` bit of the safety door input (`D`, after the limits as in Grbl).
+pub const PIN_DOOR: u8 = 0x08;
 /// Probe fail: already in the state the cycle looks for (Grbl's ALARM:4).
 pub const ALARM_PROBE_INITIAL: &[u8] = b"ALARM:4\r\n";
 /// Probe fail: G38.2/G38.4 ended without contact (Grbl's ALARM:5).
 pub const ALARM_PROBE_CONTACT: &[u8] = b"ALARM:5\r\n";
 
-/// `|FS:1000000,1000000` + `|Pn:PXYZ` + `|WCO:` + 13 per axis + `|Ov:100,100,100|A:SFM` +
+/// `|FS:1000000,1000000` + `|Pn:PXYZD` + `|WCO:` + 13 per axis + `|Ov:100,100,100|A:SFM` +
 /// `|Enc:` + two numbers of at most 17 and 16 characters (`put_fixed`'s 10^15 cap) + `>\r\n`.
 pub const fn status_len(n: usize) -> usize {
-    123 + 26 * n
+    124 + 26 * n
 }
 /// Longest `$#` line for `n` axes.
 pub const fn param_len(n: usize) -> usize {
@@ -109,7 +111,7 @@ pub fn status(out: &mut impl Out, s: &Status) {
         if s.pins & PIN_PROBE != 0 {
             out.put(b"P");
         }
-        for (i, &letter) in b"XYZ".iter().enumerate() {
+        for (i, &letter) in b"XYZD".iter().enumerate() {
             if s.pins & 1 << i != 0 {
                 out.put(&[letter]);
             }
@@ -239,8 +241,9 @@ pub fn modes(out: &mut impl Out, m: &Modal) {
 pub fn build_info(out: &mut impl Out, info: &[u8], queue_moves: usize, r: &Ramped) {
     out.put(b"[VER:1.1h.ddastep:");
     out.put(info);
-    // No compile-time option letters apply: no spindle, coolant, homing, door or line numbers.
-    out.put(b"]\r\n[OPT:,");
+    // Grbl's build-option letters for what we have, in its order: variable spindle, M7 mist,
+    // single-axis homing (`$HX`), the safety door input. No line numbers (`N`).
+    out.put(b"]\r\n[OPT:VMH+,");
     put_u32(out, queue_moves as u32);
     out.put(b",");
     put_u32(out, RX_BUFFER_LEN as u32);
@@ -357,7 +360,7 @@ mod tests {
         let info = text(|o| build_info(o, b"", 15, &r));
         assert_eq!(
             info,
-            "[VER:1.1h.ddastep:]\r\n[OPT:,15,128]\r\n[MSG:max step rate 166666 Hz]\r\n\
+            "[VER:1.1h.ddastep:]\r\n[OPT:VMH+,15,128]\r\n[MSG:max step rate 166666 Hz]\r\n\
              [MSG:ramp 1000-60000 Hz 1000000 Hz/s trapezoid]\r\n"
         );
         assert!(info.len() <= crate::protocol::REPLY_ROOM);

@@ -16,6 +16,12 @@ pub struct Requests {
     status: AtomicBool,
     reset: AtomicBool,
     jog_cancel: AtomicBool,
+    /// 0x84 arrived.
+    door: AtomicBool,
+    /// A door cycle is on: `~` goes to the controller, not straight to the hold.
+    door_lock: AtomicBool,
+    /// `~` during a door cycle.
+    resume: AtomicBool,
 }
 
 impl Default for Requests {
@@ -26,7 +32,14 @@ impl Default for Requests {
 
 impl Requests {
     pub const fn new() -> Self {
-        Requests { status: AtomicBool::new(false), reset: AtomicBool::new(false), jog_cancel: AtomicBool::new(false) }
+        Requests {
+            status: AtomicBool::new(false),
+            reset: AtomicBool::new(false),
+            jog_cancel: AtomicBool::new(false),
+            door: AtomicBool::new(false),
+            door_lock: AtomicBool::new(false),
+            resume: AtomicBool::new(false),
+        }
     }
 
     /// A Ctrl-X is waiting for the idle loop (the firmware restarts after a hard limit on it).
@@ -36,12 +49,16 @@ impl Requests {
 }
 
 /// One received byte in the RX interrupt: realtime bytes act at once (feed hold, resume,
-/// overrides) or leave a request (`?`, Ctrl-X, 0x85 jog cancel); a line byte comes back for
+/// overrides) or leave a request (`?`, Ctrl-X, 0x85 jog cancel, 0x84 door, `~` in a door
+/// cycle); a line byte comes back for
 /// the RX ring.
 pub fn dispatch<const N: usize>(b: u8, shared: &Shared<N>, req: &Requests) -> Option<u8> {
     match realtime(b) {
         Some(Realtime::Hold) => shared.set_hold(true),
+        // During a door cycle the controller decides (the door must be closed first).
+        Some(Realtime::Resume) if req.door_lock.load(Relaxed) => req.resume.store(true, Relaxed),
         Some(Realtime::Resume) => shared.set_hold(false),
+        Some(Realtime::Door) => req.door.store(true, Relaxed),
         Some(Realtime::Status) => req.status.store(true, Relaxed),
         Some(Realtime::Reset) => req.reset.store(true, Relaxed),
         Some(Realtime::JogCancel) => req.jog_cancel.store(true, Relaxed),
@@ -72,6 +89,12 @@ pub fn idle_step<const N: usize>(
     if req.jog_cancel.swap(false, Relaxed) {
         ctl.jog_cancel();
     }
+    if req.door.swap(false, Relaxed) {
+        ctl.door_command();
+    }
+    if req.resume.swap(false, Relaxed) {
+        ctl.cycle_start();
+    }
     while let Some(&b) = rx.peek() {
         if !ctl.byte(b, out) {
             break;
@@ -79,5 +102,7 @@ pub fn idle_step<const N: usize>(
         rx.dequeue();
     }
     ctl.set_rx_free(rx.capacity() - rx.len());
-    ctl.poll(now_ms, out)
+    let act = ctl.poll(now_ms, out);
+    req.door_lock.store(ctl.door_active(), Relaxed);
+    act
 }

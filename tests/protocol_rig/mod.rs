@@ -59,6 +59,8 @@ pub struct Bench<const N: usize> {
     /// offered to the engine's probe check after every timer event (the firmware's EXTI
     /// handler at the step interrupt's priority) and to the controller before every poll.
     pub probe: Option<(usize, i32)>,
+    /// The safety door input is active (door open), read by every idle pass.
+    pub door_open: bool,
     /// Step positions at the timer events where the probe input changed (contact made/lost).
     pub probe_edges: Vec<[i32; N]>,
     probe_was: bool,
@@ -109,6 +111,7 @@ impl<const N: usize> Bench<N> {
         let mut b = Bench {
             encoder: None,
             probe: None,
+            door_open: false,
             probe_edges: Vec::new(),
             probe_was: false,
             shared,
@@ -216,6 +219,7 @@ impl<const N: usize> Bench<N> {
     fn idle_step(&mut self) {
         // GPIOA as the shell reads it: pulled up, a pressed (NO) switch pulls its pin low.
         self.ctl.set_limit_inputs(!(self.limit_mask() as u32) & 0xFFFF);
+        self.ctl.set_door_input(self.door_open);
         if let Some(e) = &self.encoder {
             self.ctl.encoder(e.last.0, e.last.1, &mut self.tx);
         }

@@ -666,15 +666,11 @@ pub fn results_markdown(s: &Sweep, dual: Option<&Sweep>, command: &str, firmware
         writeln!(m, "(`Timing::min_period_for`, dual-edge rule: the handler's measured cost per step and its longest")?;
         writeln!(m, "run at speed, above the pulse plus the store jitter).\n")?;
         m += &d.table();
-        writeln!(m, "\n| axes | max kHz, single-edge | max kHz, dual-edge | firmware cap for the move (`Timing::max_rate_for`), single / dual |\n|---:|---:|---:|---:|")?;
-        let mut set = ddastep::settings::Settings::BENCH;
-        set.set(0, PULSE_US, 7).ok();
-        let single = set.timing();
-        set.dual_edge = true;
-        let dual = set.timing();
+        writeln!(m, "\nSide by side (CPU ≤ 95 %; `$I`, one axis: {:.1} kHz single-edge, {:.1} kHz dual-edge):\n", s.cap_hz as f64 / 1000.0, d.cap_hz as f64 / 1000.0)?;
+        writeln!(m, "| axes | max kHz, single-edge | max kHz, dual-edge | dual / single |\n|---:|---:|---:|---:|")?;
         for (a, b) in s.rows.iter().zip(&d.rows) {
-            let slaves = a.axes as u32 - 1;
-            writeln!(m, "| {} | {} | {} | {:.1} / {:.1} kHz |", a.axes, bracket_text(&a.cpu), bracket_text(&b.cpu), single.max_rate_for(slaves) as f64 / 1000.0, dual.max_rate_for(slaves) as f64 / 1000.0)?;
+            let gain = if a.cpu.max_hz > 0 { format!("{:.2}", b.cpu.max_hz as f64 / a.cpu.max_hz as f64) } else { "-".into() };
+            writeln!(m, "| {} | {} | {} | {gain} |", a.axes, bracket_text(&a.cpu), bracket_text(&b.cpu))?;
         }
         writeln!(m, "\nReference lines (silicon, from issue 15): Klipper on an STM32F103 1.18 M toggles/s (590 kHz with")?;
         writeln!(m, "full pulses, one stepper); grbl32 222 kHz (one axis).\n")?;

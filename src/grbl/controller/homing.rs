@@ -237,7 +237,7 @@ impl<const N: usize> Controller<'_, N> {
     }
 
     /// A failed cycle: stop, the alarm, then (after the line's `ok`) a reset into alarm.
-    fn homing_fail(&mut self, alarm: &[u8], out: &mut impl Out) {
+    pub(super) fn homing_fail(&mut self, alarm: &[u8], out: &mut impl Out) {
         self.feeder.abort();
         self.homing = None;
         self.alarm = true;

@@ -20,6 +20,8 @@ impl<const N: usize> Controller<'_, N> {
         match cmd {
             b"" => out.put(report::HELP),
             b"G" => report::modes(out, &self.modal),
+            // Grbl's error:13: `$X` and `$H` wait for the safety door to close.
+            b"X" | [b'H', ..] if self.door_pin => return Err(Error::CheckDoor),
             b"X" if self.alarm => {
                 self.alarm = false;
                 out.put(report::UNLOCKED);

@@ -36,10 +36,20 @@ impl<const N: usize> Controller<'_, N> {
         (stage, power)
     }
 
+    /// Spindle and coolant as driven now: the modal ones, or all off while the safety door
+    /// holds them (see `door.rs`).
+    fn tool_now(&self) -> (SpindleDir, f64, u8) {
+        if self.door_tool_off() {
+            (SpindleDir::Off, 0.0, 0)
+        } else {
+            self.tool
+        }
+    }
+
     /// For status reports: the spindle speed in force (S with the override, within `$31..=$30`
     /// as Grbl reports it; 0 when off) and the `A:` letters (S/C spindle, F flood, M mist).
     pub(super) fn accessories(&self) -> (f64, [u8; 3], usize) {
-        let (dir, speed, coolant) = self.tool;
+        let (dir, speed, coolant) = self.tool_now();
         let mut acc = [0u8; 3];
         let mut n = 0;
         let mut push = |c: u8| {
@@ -67,7 +77,7 @@ impl<const N: usize> Controller<'_, N> {
     /// The spindle PWM and pins now (spindle override applied).
     pub(super) fn spindle_out(&self) -> SpindleOut {
         let s = &self.settings;
-        let (dir, speed, coolant) = self.tool;
+        let (dir, speed, coolant) = self.tool_now();
         if dir == SpindleDir::Off {
             // Nothing to compute (the common case, once per poll).
             return SpindleOut { mist: coolant & MIST != 0, flood: coolant & FLOOD != 0, ..SpindleOut::default() };
