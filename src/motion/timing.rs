@@ -142,10 +142,10 @@ pub const HANDLER_FALL_TICKS: u32 = 150;
 
 /// Step-handler cost per master step in dual-edge mode (one update event per step, no compare
 /// event), timer ticks, plus [`HANDLER_PER_SLAVE_TICKS`] per slave: the sweep in dual-edge mode
-/// (bench/RESULTS.md; 20 ms cruise, 0.5 µs pulses) measured 255–257, 288–290 and 345–347 modeled
-/// cycles per step on 1, 3 and 7 axes, and held the whole CPU (step ISR, other interrupts,
-/// `idle`) ≤ 95 % busy up to 250, 224 and 185 kHz (6 axes: 191 kHz); 292 + 17 per slave
-/// (246.6, 220.7, 191.0 and 182.7 kHz) stays within that.
+/// (bench/RESULTS.md; 20 ms cruise, 0.5 µs pulses) measured 247–257, 281–290 and 341–347
+/// modeled cycles per step on 1, 3 and 7 axes over this branch's builds; at 290 + 17 per slave
+/// the 6-axis cap (192 kHz) ran the whole CPU (step ISR, other interrupts, `idle`) at 95.0 %,
+/// so 292: 246.6, 220.7, 191.0 and 182.7 kHz on 1, 3, 6 and 7 axes, each sustained ≤ 95 % busy.
 pub const DUAL_BASE_TICKS: u32 = 292;
 /// Dual-edge mode: the shortest period a long tick (ramp work, a move change) leaves without a
 /// missed update event, timer ticks (plus [`HANDLER_PER_SLAVE_TICKS`] per slave). A long tick

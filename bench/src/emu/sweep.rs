@@ -664,7 +664,8 @@ pub fn results_markdown(s: &Sweep, dual: Option<&Sweep>, command: &str, firmware
         writeln!(m, "event per step and no compare event. Steps are counted on both edges; the X high time column")?;
         writeln!(m, "is then the shortest time between two toggles of X. `$I` reports {} Hz with these settings", d.cap_hz)?;
         writeln!(m, "(`Timing::min_period_for`, dual-edge rule: the handler's measured cost per step and its longest")?;
-        writeln!(m, "run at speed, above the pulse plus the store jitter).\n")?;
+        writeln!(m, "run at speed, above the pulse plus the store jitter). A \"fails\" just above a row's cap is the")?;
+        writeln!(m, "planner's clamp (the move cruises at the cap, not at the target: \"no cruise\" in the point list).\n")?;
         m += &d.table();
         writeln!(m, "\nSide by side (CPU ≤ 95 %; `$I`, one axis: {:.1} kHz single-edge, {:.1} kHz dual-edge):\n", s.cap_hz as f64 / 1000.0, d.cap_hz as f64 / 1000.0)?;
         writeln!(m, "| axes | max kHz, single-edge | max kHz, dual-edge | dual / single |\n|---:|---:|---:|---:|")?;
