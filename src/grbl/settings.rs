@@ -132,6 +132,7 @@ const LOW: [Spec; 34] = {
         spec(encoder::THRESHOLD, 0, 0, Fixed, 0, 0),
         spec(encoder::ACTION, 0, 0, Fixed, 0, 0),
         spec(encoder::LAG, 0, 0, Fixed, 0, 0),
+        // Listed after the axis settings (`Settings::id`).
         spec(DUAL_EDGE, 0, 0, Pins, FLAGS, 6),
     ]
 };
@@ -311,9 +312,11 @@ impl Settings {
     /// Setting number `i` of the `$$` listing for `axes` axes (`None` past the end).
     pub fn id(i: usize, axes: usize) -> Option<u16> {
         let axes = axes.min(MAX_AXES);
-        match i.checked_sub(LOW.len()) {
+        // [`LOW`]'s last entry, `$580`, comes after the axis settings: numeric order.
+        match i.checked_sub(LOW.len() - 1) {
             None => LOW.get(i).map(|s| s.id),
             Some(j) if j < 4 * axes => Some(100 + 10 * (j / axes) as u16 + (j % axes) as u16),
+            Some(j) if j == 4 * axes => Some(DUAL_EDGE),
             Some(_) => None,
         }
     }
