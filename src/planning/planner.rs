@@ -145,14 +145,16 @@ impl<const N: usize> Planner<N> {
         // Path length from the rounded steps; per-axis unit vector.
         let d: [f64; N] = core::array::from_fn(|i| delta[i] as f64 / lim.steps_per_mm[i]);
         let len = sqrt(d.iter().map(|v| v * v).sum());
-        let unit: [f64; N] = core::array::from_fn(|i| d[i] / len);
+        // (One division: soft-float divisions cost ~3 multiplies each on the M3.)
+        let inv_len = 1.0 / len;
+        let unit: [f64; N] = core::array::from_fn(|i| d[i] * inv_len);
         // The path speed and acceleration every moving axis allows (Grbl's limit by axis).
         let mut vmax = f64::MAX;
         let mut accel = f64::MAX;
         for i in 0..N {
             let u = libm::fabs(unit[i]);
             if delta[i] != 0 && u > 0.0 {
-                vmax = vmax.min(lim.max_rate[i] / 60.0 / u);
+                vmax = vmax.min(lim.max_rate[i] / (60.0 * u));
                 accel = accel.min(lim.accel[i] / u);
             }
         }
@@ -210,10 +212,10 @@ pub fn junction_speed<const N: usize>(a: &[f64; N], b: &[f64; N], axis_accel: &[
     if cos < -0.999_999 {
         return f64::MAX;
     }
-    let n = sqrt(ju.iter().map(|v| v * v).sum::<f64>());
+    let inv_n = 1.0 / sqrt(ju.iter().map(|v| v * v).sum::<f64>());
     let mut acc = f64::MAX;
     for i in 0..N {
-        let u = libm::fabs(ju[i]) / n;
+        let u = libm::fabs(ju[i]) * inv_n;
         if u > 1e-9 {
             acc = acc.min(axis_accel[i] / u);
         }
