@@ -791,8 +791,10 @@ impl<'a, const N: usize> Controller<'a, N> {
         }
         // Commit: nothing below can fail. (The offsets change in place: a copy of them
         // costs every line ~800 bytes of moves.)
-        let wco = self.offsets.wco(self.modal.coord);
+        // (The work offset is compared only when something it depends on may change.)
         let store = fx.coord_write.is_some();
+        let wco_may_change = store || fx.g92.is_some() || fx.tlo.is_some() || modal.coord != self.modal.coord;
+        let wco = wco_may_change.then(|| self.offsets.wco(self.modal.coord));
         if let Some((slot, v)) = &fx.coord_write {
             self.offsets.stored.set(*slot, v);
         }
@@ -804,7 +806,7 @@ impl<'a, const N: usize> Controller<'a, N> {
         }
         let moves = mv.is_some() || mv2.is_some() || arc.is_some();
         let (tool, power) = self.tool_sync(&modal, moves, fx.motion.is_some_and(|m| m.1));
-        if self.offsets.wco(modal.coord) != wco {
+        if wco.is_some_and(|w| self.offsets.wco(modal.coord) != w) {
             self.wco_count = 0;
         }
         self.modal = modal;
