@@ -20,6 +20,17 @@ fn main() -> anyhow::Result<()> {
         r.thread_cycles_per_line,
         r.thread_cycles_per_line / 72_000.0
     );
+    let p = &r.plan;
+    println!(
+        "parse + plan per line, look-ahead full ({} lines): mean {:.0} modeled cycles = {:.3} ms; longest parse {} ({:.3} ms), longest push {} ({:.3} ms)",
+        p.lines,
+        p.mean,
+        p.mean / 72_000.0,
+        p.max_parse,
+        p.max_parse as f64 / 72_000.0,
+        p.max_push,
+        p.max_push as f64 / 72_000.0
+    );
     println!(
         "step ISR at speed: mean {:.1}, max {} modeled cycles (max/mean {:.2}), {} entries",
         r.isr.mean_cycles,

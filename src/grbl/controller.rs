@@ -130,6 +130,17 @@ struct Job<const N: usize> {
 }
 
 impl<const N: usize> Job<N> {
+    /// Only a planned move is left before anything else can happen: it waits for queue room.
+    fn waits_for_room(&self) -> bool {
+        (self.mv.is_some() || self.mv2.is_some())
+            && !self.home
+            && self.listing.is_none()
+            && self.tool.is_none()
+            && self.dwell_ms.is_none()
+            && !self.save
+            && self.probe == 0
+    }
+
     /// Nothing to do. (A function, not a constant: a constant of this size would be copied
     /// from flash whole, payloads of its `None`s included.)
     fn none() -> Self {
@@ -621,6 +632,11 @@ impl<'a, const N: usize> Controller<'a, N> {
 
     /// Carries the job on as far as it can; true when it just finished.
     fn advance(&mut self, in_poll: bool, out: &mut impl Out) -> bool {
+        // The common wait, a move held for queue room, decided without copying the job out
+        // (a job is ~400 bytes; streaming polls this many times per line).
+        if self.job.as_ref().is_some_and(|j| j.waits_for_room()) && self.feeder.full() {
+            return false;
+        }
         let Some(mut job) = self.job else { return false };
         let done = 'run: {
             if job.home && self.homing.is_some() {
@@ -740,7 +756,6 @@ impl<'a, const N: usize> Controller<'a, N> {
         let mut fx = gcode::Effects::none();
         let modal = self.modal.interpret_into(&block, self.planner.position_mm(), &self.offsets, &mut fx)?;
         let mut planner = self.planner;
-        let mut offsets = self.offsets;
         // G93: F is 1/minutes (checked positive where a motion needs it).
         let rate = if modal.inverse_time { Rate::Minutes(1.0 / modal.feed) } else { Rate::Feed(modal.feed) };
         let cfg = self.ramped.cfg;
@@ -774,26 +789,28 @@ impl<'a, const N: usize> Controller<'a, N> {
             self.soft_limit_trip();
             return Ok(());
         }
-        let mut store = false;
+        // Commit: nothing below can fail. (The offsets change in place: a copy of them
+        // costs every line ~800 bytes of moves.)
+        // (The work offset is compared only when something it depends on may change.)
+        let store = fx.coord_write.is_some();
+        let wco_may_change = store || fx.g92.is_some() || fx.tlo.is_some() || modal.coord != self.modal.coord;
+        let wco = wco_may_change.then(|| self.offsets.wco(self.modal.coord));
         if let Some((slot, v)) = &fx.coord_write {
-            offsets.stored.set(*slot, v);
-            store = true;
+            self.offsets.stored.set(*slot, v);
         }
         if let Some(g) = &fx.g92 {
-            offsets.g92 = *g;
+            self.offsets.g92 = *g;
         }
         if let Some(t) = fx.tlo {
-            offsets.tlo = t;
+            self.offsets.tlo = t;
         }
-        // Commit: nothing below can fail.
         let moves = mv.is_some() || mv2.is_some() || arc.is_some();
         let (tool, power) = self.tool_sync(&modal, moves, fx.motion.is_some_and(|m| m.1));
-        if offsets.wco(modal.coord) != self.offsets.wco(self.modal.coord) {
+        if wco.is_some_and(|w| self.offsets.wco(modal.coord) != w) {
             self.wco_count = 0;
         }
         self.modal = modal;
         self.planner = planner;
-        self.offsets = offsets;
         if self.check {
             if let Some(a) = &fx.arc {
                 // Check mode: only the position follows the arc.
@@ -806,14 +823,15 @@ impl<'a, const N: usize> Controller<'a, N> {
             return Ok(());
         }
         if store {
-            self.stored.coords = offsets.stored;
+            self.stored.coords = self.offsets.stored;
         }
         if fx.drivers == Some(true) {
             self.drivers_on = true;
             self.m17 = true;
         }
-        // (Set field by field on `Job::none()`: struct-update syntax copies every field.)
-        let mut job = Job::none();
+        // (Set field by field on `Job::none()` in its slot: struct-update syntax, or a job
+        // built on the stack and moved in, copies every field.)
+        let job = self.job.insert(Job::none());
         job.dwell_ms = fx.dwell_ms;
         job.mv = mv;
         job.mv2 = mv2;
@@ -826,7 +844,7 @@ impl<'a, const N: usize> Controller<'a, N> {
         job.end = fx.stop == Some(Stop::End);
         job.save = store;
         job.probe = fx.probe;
-        self.start(job, out);
+        self.advance(false, out);
         Ok(())
     }
 }

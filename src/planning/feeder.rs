@@ -75,6 +75,11 @@ impl<'a, const N: usize> Feeder<'a, N> {
 
     /// Takes a move into the look-ahead; gives it back when the buffer is full (or the engine
     /// is still stopping after an abort).
+    /// The look-ahead buffer is full: [`Self::push`] would fail until the engine takes a move.
+    pub fn full(&self) -> bool {
+        self.blocks.is_full()
+    }
+
     pub fn push(&mut self, mv: Move<N>) -> Result<(), Move<N>> {
         if !self.synced() {
             return Err(mv);

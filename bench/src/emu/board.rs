@@ -404,6 +404,25 @@ impl Board {
         self.cpu.get_data().profile.as_ref().map_or_else(Vec::new, |h| profile::by_block(h, &self.image.symbols, exc))
     }
 
+    // start timing every call of the functions named in `names` (demangled, generics as
+    // `<_>`): inclusive thread-mode cycles per call, read with `timed_calls`
+    pub fn time_functions(&mut self, names: &[&str]) -> Result<()> {
+        let mut targets = Vec::new();
+        for (k, n) in names.iter().enumerate() {
+            let a = self.image.symbols.addresses(n);
+            anyhow::ensure!(!a.is_empty(), "no function {n} in the firmware (inlined?)");
+            targets.extend(a.into_iter().map(|a| (a, k)));
+        }
+        self.cpu.get_data_mut().fn_timer = Some(profile::FnTimer { targets, ..Default::default() });
+        Ok(())
+    }
+
+    // the timed calls so far: (index into the names, inclusive thread-mode cycles, machine
+    // cycle at return); timing stops
+    pub fn timed_calls(&mut self) -> Vec<(usize, u64, u64)> {
+        self.cpu.get_data_mut().fn_timer.take().map(|t| t.done).unwrap_or_default()
+    }
+
     // the function symbol containing `addr` and the offset into it
     pub fn symbol(&self, addr: u32) -> Option<(&str, u32)> {
         self.image.symbols.lookup(addr)

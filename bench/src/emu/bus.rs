@@ -132,6 +132,10 @@ pub struct Machine {
     pub mmio_stop: Option<u32>,
     /// Per-block cycle histogram while profiling is on.
     pub profile: Option<Histogram>,
+    /// Cycles of blocks run in thread mode so far.
+    pub thread_cycles: u64,
+    /// Inclusive timing of chosen functions, while on.
+    pub fn_timer: Option<super::profile::FnTimer>,
     /// Block starts of the running TIM2 handler, while the per-entry log is on.
     pub isr_blocks: Option<Vec<u32>>,
     /// Bridge stall cycles of the current block so far (added to the clock with the block).
@@ -184,6 +188,8 @@ impl Machine {
             flash_erase: None,
             mmio_stop: None,
             profile: None,
+            thread_cycles: 0,
+            fn_timer: None,
             isr_blocks: None,
             stall: 0,
             bridge_free: 0,
@@ -241,6 +247,9 @@ impl Machine {
         self.insns += insns;
         if let Some(h) = &mut self.profile {
             h.add(self.nvic.ipsr(), start, cycles, insns);
+        }
+        if self.nvic.ipsr() == 0 {
+            self.thread_cycles += cycles;
         }
         if let Some(b) = &mut self.isr_blocks {
             if self.nvic.ipsr() == super::nvic::IRQ0 + TIM2_IRQ {

@@ -185,6 +185,9 @@ fn on_block(uc: &mut Unicorn<Machine>, addr: u64, size: u32) {
         m.account(prev, cycles, n);
     }
     m.apply_flash_config();
+    if m.fn_timer.is_some() && m.nvic.ipsr() == 0 {
+        time_calls(uc, addr);
+    }
     if !uc.get_data().blocks.contains(addr, size) {
         let mut code = vec![0u8; size as usize];
         let _ = uc.mem_read(addr as u64, &mut code);
@@ -208,5 +211,25 @@ fn on_block(uc: &mut Unicorn<Machine>, addr: u64, size: u32) {
     if preempt || m.now >= m.deadline || (k > 0 && k < n) {
         m.stop = if preempt || m.now >= m.deadline { Stop::Event } else { Stop::Split(k) };
         let _ = uc.emu_stop();
+    }
+}
+
+// the function timer (`profile::FnTimer`): a thread-mode block starting at `addr` opens a call
+// of a timed function or closes the innermost open one
+fn time_calls(uc: &mut Unicorn<Machine>, addr: u32) {
+    let sp = uc.reg_read(RegisterARM::SP).unwrap_or(0) as u32;
+    let lr = uc.reg_read(RegisterARM::LR).unwrap_or(0) as u32;
+    let m = uc.get_data_mut();
+    let (now, thread) = (m.now, m.thread_cycles);
+    let Some(t) = m.fn_timer.as_mut() else { return };
+    if let Some(&(ret, at_sp, k, start)) = t.open.last() {
+        if ret == addr && sp >= at_sp {
+            t.open.pop();
+            t.done.push((k, thread - start, now));
+            return;
+        }
+    }
+    if let Some(&(_, k)) = t.targets.iter().find(|(a, _)| *a == addr) {
+        t.open.push((lr & !1, sp, k, thread));
     }
 }

@@ -55,6 +55,12 @@ impl Symbols {
         Self(v)
     }
 
+    // start addresses of the functions whose demangled name (generics stripped, e.g.
+    // `ddastep::grbl::controller::Controller<_>::gcode`) equals `name`
+    pub fn addresses(&self, name: &str) -> Vec<u32> {
+        self.0.iter().filter(|s| s.2 == name).map(|s| s.0).collect()
+    }
+
     // the function containing `addr` and the offset into it
     pub fn lookup(&self, addr: u32) -> Option<(&str, u32)> {
         match addr {
@@ -158,4 +164,18 @@ mod tests {
         assert_eq!(demangle("TIM2"), "TIM2");
         assert_eq!(demangle("_ZN4core3ptr13drop_in_place17h0123456789abcdefE"), "core::ptr::drop_in_place");
     }
+}
+
+/// Inclusive thread-mode cycles of calls to chosen functions: a call opens when a block starts
+/// at one of the entry addresses (in thread mode) and closes when a block starts at its return
+/// address (the LR at entry) with the stack pointer back where it was. Cycles of interrupts
+/// taken meanwhile are not counted (only thread-mode blocks advance `Machine::thread_cycles`).
+#[derive(Clone, Debug, Default)]
+pub struct FnTimer {
+    /// Entry addresses of the timed functions, with an index naming each.
+    pub targets: Vec<(u32, usize)>,
+    /// Open calls: (return address, stack pointer at entry, target index, thread cycles then).
+    pub open: Vec<(u32, u32, usize, u64)>,
+    /// Finished calls: (target index, inclusive thread-mode cycles, machine cycle at return).
+    pub done: Vec<(usize, u64, u64)>,
 }

@@ -15,6 +15,10 @@ pub struct StreamResult {
     /// Thread-mode cycles (everything but interrupts: line parsing, planning, look-ahead,
     /// feeder, polls, replies) per streamed line.
     pub thread_cycles_per_line: f64,
+    /// Parsing and planning alone, with the look-ahead full (lines after the 40th): inclusive
+    /// thread-mode cycles of `Controller::gcode` (parse, interpret, plan) and `Controller::push`
+    /// (into the look-ahead, its re-plan and the feeder) per line, interrupts not counted.
+    pub plan: PlanCost,
     /// The step interrupt while the segments ran at speed (after the first 40 lines, until
     /// the last was sent).
     pub isr: StepIsr,
@@ -22,6 +26,18 @@ pub struct StreamResult {
     pub starved_windows: usize,
     /// Motion time of the segments, s.
     pub seconds: f64,
+}
+
+/// Modeled cost of parsing and planning a line (see [`StreamResult::plan`]).
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct PlanCost {
+    /// Lines measured.
+    pub lines: usize,
+    /// Mean cycles per line: its `gcode` call plus its pushes.
+    pub mean: f64,
+    /// Longest single `gcode` call and longest single push, cycles.
+    pub max_parse: u64,
+    pub max_push: u64,
 }
 
 /// `n` segments of 0.1–0.5 mm at `feed` mm/min, turning by up to ±30° each (xorshift from
@@ -55,6 +71,7 @@ pub fn stream_segments(board: &mut Board, n: usize, seed: u64) -> Result<StreamR
     for (i, l) in lines.iter().enumerate() {
         if i == 40 {
             board.reset_step_isr_stats();
+            board.time_functions(&["ddastep::grbl::controller::Controller<_>::gcode", "ddastep::grbl::controller::Controller<_>::push"])?;
         }
         let r = board.send_line_wait_ok(l)?;
         ensure!(r.contains("ok"), "{l}: {r}");
@@ -64,6 +81,15 @@ pub fn stream_segments(board: &mut Board, n: usize, seed: u64) -> Result<StreamR
         last_ok = board.cycles();
     }
     let isr = board.step_isr();
+    let calls = board.timed_calls();
+    let measured = lines.len() - 40;
+    let max_of = |k: usize| calls.iter().filter(|c| c.0 == k).map(|c| c.1).max().unwrap_or(0);
+    let plan = PlanCost {
+        lines: measured,
+        mean: calls.iter().map(|c| c.1).sum::<u64>() as f64 / measured as f64,
+        max_parse: max_of(0),
+        max_push: max_of(1),
+    };
     let prof = board.profile(0);
     if std::env::var_os("STREAM_PROFILE").is_some() {
         for f in prof.iter().take(25) {
@@ -89,6 +115,7 @@ pub fn stream_segments(board: &mut Board, n: usize, seed: u64) -> Result<StreamR
     Ok(StreamResult {
         lines: n,
         thread_cycles_per_line: thread as f64 / lines.len() as f64,
+        plan,
         isr,
         starved_windows: starved,
         seconds: (last_step - first) as f64 / HZ as f64,

@@ -641,6 +641,16 @@ pub fn results_markdown(s: &Sweep, dual: Option<&Sweep>, command: &str, firmware
         writeln!(m, "| what | figure (modeled) |")?;
         writeln!(m, "|---|---|")?;
         writeln!(m, "| thread-mode cycles per streamed line (parse, plan, look-ahead, feeder, polls, replies) | {:.0} ({:.3} ms) |", r.thread_cycles_per_line, r.thread_cycles_per_line / 72_000.0)?;
+        let p = &r.plan;
+        writeln!(
+            m,
+            "| parse + plan per line with the look-ahead full (`Controller::gcode` + `Controller::push`, inclusive, interrupts excluded; {} lines): mean / longest parse / longest push | {:.0} ({:.3} ms) / {} / {} |",
+            p.lines,
+            p.mean,
+            p.mean / 72_000.0,
+            p.max_parse,
+            p.max_push
+        )?;
         writeln!(m, "| step ISR during the back-to-back moves: mean / max cycles | {:.1} / {} (max/mean {:.2}) |", r.isr.mean_cycles, r.isr.max_cycles, r.isr.max_cycles as f64 / r.isr.mean_cycles.max(1.0))?;
         writeln!(m, "| 10 ms windows without a step while streaming | {} |", r.starved_windows)?;
         writeln!(m, "| motion time | {:.3} s |\n", r.seconds)?;
