@@ -17,13 +17,29 @@ fn rate(b: &Bracket) -> String {
     }
 }
 
+/// First cell of the size row: only its leading figures are rewritten (see [`rewrite_rows`]).
+const SIZE_ROW: &str = "release flash / static RAM";
+
+// 63280 -> "63 280", as README writes numbers
+fn grouped(n: u64) -> String {
+    let d = n.to_string();
+    let mut out = String::new();
+    for (i, c) in d.chars().enumerate() {
+        if i > 0 && (d.len() - i) % 3 == 0 {
+            out.push(' ');
+        }
+        out.push(c);
+    }
+    out
+}
+
 // the README rows (first cell, whole row) this sweep measures
 pub fn readme_rows(s: &Sweep, flash_bytes: u64, ram_bytes: u64) -> Vec<(String, String)> {
     let mut rows = Vec::new();
     let mut push = |key: &str, value: String, how: &str| rows.push((key.to_string(), format!("| {key} | {value} | {how} |")));
     push(
-        "release flash / static RAM",
-        format!("{flash_bytes} B / {ram_bytes} B (budgets 62 KiB / 16 KiB)"),
+        SIZE_ROW,
+        format!("{} B of 63 488 / {} B of 16 384", grouped(flash_bytes), grouped(ram_bytes)),
         "`cargo build --release && arm-none-eabi-size target/thumbv7m-none-eabi/release/ddastep`; checked in CI by `tests/firmware_size.rs`",
     );
     let row = |axes: usize| s.rows.iter().find(|r| r.axes == axes);
@@ -54,17 +70,33 @@ pub fn readme_rows(s: &Sweep, flash_bytes: u64, ram_bytes: u64) -> Vec<(String, 
     rows
 }
 
-// replace the rows of `readme` whose first cell matches; every row must be found
+// replace the rows of `readme` whose first cell matches; every row must be found. The size
+// row keeps what its figure cell says after the two sizes (what takes the RAM, the stack
+// figure, which the sweep does not measure) and its last cell.
 pub fn rewrite_rows(readme: &str, rows: &[(String, String)]) -> Result<String> {
     let mut out: Vec<String> = readme.lines().map(str::to_string).collect();
     for (key, row) in rows {
         let prefix = format!("| {key} |");
         match out.iter_mut().find(|l| l.starts_with(&prefix)) {
+            Some(l) if key == SIZE_ROW => *l = keep_size_details(l, row),
             Some(l) => *l = row.clone(),
             None => bail!("README has no figures row starting with {prefix:?}"),
         }
     }
     Ok(out.join("\n") + "\n")
+}
+
+// the new size row's two sizes in the old row: the old figure cell from its first ` (` or `;`
+// on, and the old last cell, are kept
+fn keep_size_details(old: &str, new: &str) -> String {
+    let cells = |r: &str| r.trim().trim_matches('|').split(" | ").map(|c| c.trim().to_string()).collect::<Vec<_>>();
+    let (o, n) = (cells(old), cells(new));
+    if o.len() != 3 || n.len() != 3 {
+        return new.to_string();
+    }
+    let tail = o[1].find([';', '(']).map_or("", |i| &o[1][i..]);
+    let sep = if tail.starts_with('(') { " " } else { "" };
+    format!("| {} | {}{sep}{tail} | {} |", n[0], n[1].trim_end(), o[2].trim())
 }
 
 // rewrite the figures rows of the README at `path`
@@ -108,5 +140,15 @@ mod tests {
         let out = rewrite_rows(readme, &[("b".into(), "| b | 3 | n |".into())]).unwrap();
         assert_eq!(out, "# x\n| what | figure | how |\n|---|---|---|\n| a | 1 | m |\n| b | 3 | n |\n");
         assert!(rewrite_rows(readme, &[("c".into(), "| c | 0 | - |".into())]).is_err());
+    }
+
+    #[test]
+    fn the_size_row_keeps_its_details() {
+        let readme = "| release flash / static RAM | 61 784 B of 63 488 / 12 440 B of 16 384 (ramp table 4 KiB); deepest stack 6 296 B | `size`; CI |\n";
+        let new = format!("| {SIZE_ROW} | {} B of 63 488 / {} B of 16 384 | how |", grouped(63280), grouped(12496));
+        let out = rewrite_rows(readme, &[(SIZE_ROW.into(), new)]).unwrap();
+        assert_eq!(out, "| release flash / static RAM | 63 280 B of 63 488 / 12 496 B of 16 384 (ramp table 4 KiB); deepest stack 6 296 B | `size`; CI |\n");
+        assert_eq!(grouped(999), "999");
+        assert_eq!(grouped(1000), "1 000");
     }
 }
