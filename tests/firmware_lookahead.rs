@@ -98,8 +98,12 @@ fn back_to_back_moves_at_the_rate_cap_keep_every_step() {
         let mut want = [0i64; 7];
         let mut rising = 0i64;
         b.set_isr_log(true);
+        b.set_profile(true);
         for k in 0..12 {
-            let mut steps: Vec<i64> = RATIO[..axes].iter().map(|&r| 200 * r as i64).collect();
+            // A long first move, so the short ones after it are all queued before it ends
+            // (each is shorter than its line takes on the serial line).
+            let len = if k == 0 { 8000 } else { 200 };
+            let mut steps: Vec<i64> = RATIO[..axes].iter().map(|&r| len * r as i64).collect();
             if axes > 1 {
                 steps[1] = if k % 2 == 0 { 200 } else { -200 };
             }
@@ -126,6 +130,28 @@ fn back_to_back_moves_at_the_rate_cap_keep_every_step() {
             .collect();
         let mean = fast.iter().sum::<u64>() as f64 / fast.len() as f64;
         let max = fast.iter().max().unwrap();
+        {
+            let thr = (mean * 1.3) as u64;
+            let mut h: std::collections::BTreeMap<String, (u64, u64)> = Default::default();
+            for r in log.iter().filter(|r| r.update.is_some() && r.cycles > thr) {
+                let mut fns: Vec<String> = r.blocks.iter().filter_map(|&a| b.symbol(a).map(|(n, _)| n.rsplit("::").next().unwrap().to_string())).collect();
+                fns.dedup();
+                let idle = r.blocks.iter().any(|&a| b.symbol(a).is_some_and(|(n, o)| n.ends_with("finish") && o == 236));
+                let e = h.entry(format!("{}{}", fns.join(">"), if idle { " (idle)" } else { "" })).or_default();
+                e.0 += 1;
+                e.1 = e.1.max(r.cycles);
+            }
+            for (k, v) in &h { eprintln!("  long {} max {}: {}", v.0, v.1, k); }
+            let prof: std::collections::HashMap<String, (u64,u64,u64)> = b.profile_blocks(16 + 28).into_iter().map(|(n, c)| (n.split_whitespace().next().unwrap().to_string(), (c.runs, c.cycles, c.insns))).collect();
+            if let Some(r) = log.iter().filter(|r| r.update.is_some() && !r.blocks.iter().any(|&a| b.symbol(a).is_some_and(|(n, o)| n.ends_with("finish") && o == 236))).max_by_key(|r| r.cycles) {
+                eprintln!("  longest run {} cycles:", r.cycles);
+                for a in &r.blocks {
+                    let k = format!("0x{a:08x}");
+                    let (runs, cyc, ins) = prof.get(&k).copied().unwrap_or((1,0,0));
+                    eprintln!("    {k} {:?} ~{} cyc {} insn", b.symbol(*a), cyc / runs.max(1), ins / runs.max(1));
+                }
+            }
+        }
         eprintln!("{axes} axes at {hz:.0} Hz (cap {cap}): step ISR at speed mean {mean:.1} / max {max} modeled cycles ({} runs), overruns {}", fast.len(), b.report().overruns);
         assert_eq!(net(&steps(&b)), want, "{axes} axes");
         assert_eq!(steps(&b).len() as i64, rising, "{axes} axes: rising edges");

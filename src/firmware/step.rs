@@ -1,50 +1,67 @@
-//! The step interrupt, bound to TIM2 outside RTIC: no framework code on the step path (no
-//! BASEPRI save and restore, no ISB), at RTIC's priority 3 like the limit interrupts, so it
-//! preempts every RTIC task (their locks go no higher than priority 2) and never preempts a
-//! limit interrupt or is preempted by one. It shares nothing with RTIC's resources: the engine
-//! is moved in once by `init` (before interrupts are on) and used only here afterwards.
+//! The step interrupt and the ramp interrupt, bound outside RTIC: no framework code on the step
+//! path (no BASEPRI save and restore, no ISB). TIM2 (the engine's step half) sits one level
+//! above everything RTIC runs, so nothing delays an edge; the ramp half runs in the TIM4
+//! vector (TIM4 itself stays off: the step interrupt pends the vector when it has ramp work) at
+//! RTIC's priority 3, like the limit interrupts, above every RTIC task's lock (their locks go
+//! no higher than priority 2). Neither shares anything with RTIC's resources: `init` moves
+//! each half in once (before interrupts are on) and only its handler touches it afterwards.
 
 use core::cell::UnsafeCell;
 use core::mem::MaybeUninit;
 
-use ddastep::engine::Engine;
+use ddastep::engine::{Engine, Ramper, Stepper};
 use ddastep::steptime::STEP_TIME;
 use stm32f1xx_hal::pac::{self, interrupt};
 
 use super::app::AXES;
 use super::hw;
 
-/// The engine, owned by the step interrupt.
-struct Slot(UnsafeCell<MaybeUninit<Engine<'static, AXES>>>);
+/// One half of the engine, owned by its interrupt.
+struct Slot<T>(UnsafeCell<MaybeUninit<T>>);
 
-// SAFETY: written once by `init` with interrupts off, then touched only by the TIM2 handler
-// (one context, never re-entered).
-unsafe impl Sync for Slot {}
+// SAFETY: written once by `init` with interrupts off, then touched only by its handler (one
+// context, never re-entered).
+unsafe impl<T> Sync for Slot<T> {}
 
-static ENGINE: Slot = Slot(UnsafeCell::new(MaybeUninit::uninit()));
+static STEPPER: Slot<Stepper<'static, AXES>> = Slot(UnsafeCell::new(MaybeUninit::uninit()));
+static RAMPER: Slot<Ramper<'static, AXES>> = Slot(UnsafeCell::new(MaybeUninit::uninit()));
 
-/// RTIC's logical priority 3 in the NVIC's terms (4 priority bits, higher logical = lower
-/// number): `((1 << 4) - 3) << 4`.
-const PRIORITY: u8 = ((1 << pac::NVIC_PRIO_BITS) - 3) << (8 - pac::NVIC_PRIO_BITS);
+/// NVIC priority of RTIC's logical priority `p` (4 priority bits, higher logical = lower
+/// number): `((1 << 4) - p) << 4`.
+const fn nvic_priority(p: u8) -> u8 {
+    ((1 << pac::NVIC_PRIO_BITS) - p) << (8 - pac::NVIC_PRIO_BITS)
+}
 
-/// Hands the engine to the step interrupt and enables it (in `init`, interrupts still off).
+/// The vector the ramp half runs in.
+const RAMP_IRQ: pac::Interrupt = pac::Interrupt::TIM4;
+
+/// Hands the two halves to their interrupts and enables them (in `init`, interrupts still off).
 pub fn install(engine: Engine<'static, AXES>, nvic: &mut cortex_m::peripheral::NVIC) {
-    // SAFETY: interrupts are off and TIM2's handler has not run yet: no other access.
-    unsafe { (*ENGINE.0.get()).write(engine) };
-    // SAFETY: the priority is the limit interrupts'; unmasking is what `init` is for.
+    let (mut stepper, ramper) = engine.split();
+    stepper.set_pend(|| cortex_m::peripheral::NVIC::pend(RAMP_IRQ));
+    // SAFETY: interrupts are off and neither handler has run yet: no other access.
     unsafe {
-        nvic.set_priority(pac::Interrupt::TIM2, PRIORITY);
+        (*STEPPER.0.get()).write(stepper);
+        (*RAMPER.0.get()).write(ramper);
+    }
+    // SAFETY: the priorities are above RTIC's tasks (TIM2) and at its top one (the ramp);
+    // unmasking is what `init` is for.
+    unsafe {
+        nvic.set_priority(pac::Interrupt::TIM2, nvic_priority(4));
+        nvic.set_priority(RAMP_IRQ, nvic_priority(3));
+        cortex_m::peripheral::NVIC::unmask(RAMP_IRQ);
         cortex_m::peripheral::NVIC::unmask(pac::Interrupt::TIM2);
     }
 }
 
-/// The step interrupt: store the precomputed word first, then compute the next one. The body
-/// times itself with the DWT cycle counter (`$I` reports it, see `ddastep::steptime`).
+/// The step interrupt: store the precomputed word first, then compute the next one (a tick
+/// that leaves the ramp half work pends its interrupt). The body times itself with the DWT cycle
+/// counter (`$I` reports it, see `ddastep::steptime`).
 #[interrupt]
 fn TIM2() {
     let t0 = hw::cycles();
     // SAFETY: installed before TIM2 was unmasked; this handler is its only user.
-    let engine = unsafe { (*ENGINE.0.get()).assume_init_mut() };
+    let engine = unsafe { (*STEPPER.0.get()).assume_init_mut() };
     let sr = hw::tim2().sr().read().bits();
     if sr & hw::SR_UIF != 0 {
         hw::gpiob().bsrr().write(|w| unsafe { w.bits(engine.word()) });
@@ -58,4 +75,11 @@ fn TIM2() {
         hw::tim2().sr().write(|w| unsafe { w.bits(!hw::SR_CC1IF) });
     }
     STEP_TIME.record(hw::cycles().wrapping_sub(t0));
+}
+
+/// The ramp interrupt: the engine's ramp half, preempted by every step.
+#[interrupt]
+fn TIM4() {
+    // SAFETY: installed before the vector was unmasked; this handler is its only user.
+    unsafe { (*RAMPER.0.get()).assume_init_mut() }.run();
 }

@@ -76,6 +76,11 @@ pub struct Prepared<const N: usize> {
     pub(crate) cruise_q: AtomicU32,
     pub(crate) cruise_bits: AtomicU32,
     pub(crate) min_period: Period,
+    /// The engine's ramp half: the master period at the walk's index (bits; 0 until primed,
+    /// and while a hold rests), and the deceleration trigger (master steps left; 0: cannot
+    /// fire, not computed yet or fired).
+    pub(crate) period: AtomicU32,
+    pub(crate) decel_at: AtomicU32,
     /// The feeder's: how overrides scale the cruise.
     pub(crate) rates: Rates,
     // Edges.
@@ -152,6 +157,8 @@ impl<const N: usize> Prepared<N> {
             cruise_q: AtomicU32::new(ramp.cruise_q),
             cruise_bits: AtomicU32::new(ramp.cruise.to_bits()),
             min_period: Period::from_bits(t.min_period_for(n as u32).saturating_mul(16)),
+            period: AtomicU32::new(0),
+            decel_at: AtomicU32::new(0),
             rates,
             dir_word,
             // Both gaps hold a step tick of this move (its handler cost, as its periods do).

@@ -244,6 +244,8 @@ pub struct Shared<const N: usize> {
     pub(crate) starved: AtomicU32,
     /// Override percentages: feed | rapid << 8 | spindle << 16.
     ovr: AtomicU32,
+    /// The engine's step half to its ramp half.
+    pub(crate) link: crate::engine::Link,
     /// Probe cycle: [`PROBE_ARMED`], [`PROBE_AWAY`], [`PROBE_TRIPPED`] bits.
     probe: AtomicU8,
 }
@@ -275,6 +277,7 @@ impl<const N: usize> Shared<N> {
             starved: AtomicU32::new(0),
             ovr: AtomicU32::new(100 | 100 << 8 | 100 << 16),
             probe: AtomicU8::new(0),
+            link: crate::engine::Link::new(),
         }
     }
 
@@ -414,6 +417,17 @@ impl<const N: usize> Shared<N> {
         self.cur.store(p as usize, Relaxed);
         self.mv_done.store(0, Relaxed);
         self.end_write();
+    }
+
+    /// The position record's sequence: it moves whenever a move is entered or ended (and on a
+    /// G92 while idle); the engine's ramp half watches it.
+    pub(crate) fn record_seq(&self) -> u32 {
+        self.seq.load(Acquire)
+    }
+
+    /// The move the engine's step half runs (null: none).
+    pub(crate) fn running(&self) -> *const Prepared<N> {
+        self.cur.load(Relaxed) as *const Prepared<N>
     }
 
     /// Engine (or a G92 while idle): no move runs, axis `i` is at `pos(i)`.

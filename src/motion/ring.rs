@@ -115,7 +115,12 @@ pub struct RingConsumer<'a, const N: usize> {
     ring: &'a MoveRing<N>,
 }
 
-impl<const N: usize> RingConsumer<'_, N> {
+impl<'a, const N: usize> RingConsumer<'a, N> {
+    /// A second, read-only view of the consumer's end (the engine's ramp half).
+    pub fn peek(&self) -> RingPeek<'a, N> {
+        RingPeek { ring: self.ring }
+    }
+
     /// The oldest published move, if any; it stays in the ring until [`Self::pop`].
     #[inline(always)]
     pub fn front(&self) -> Option<*mut Prepared<N>> {
@@ -138,5 +143,30 @@ impl<const N: usize> RingConsumer<'_, N> {
     pub fn pop(&mut self) {
         let h = self.ring.head.load(Relaxed);
         self.ring.head.store(h.wrapping_add(1), Release);
+    }
+}
+
+/// A read-only view of the consumer's end for the engine's ramp half, which runs in a lower-priority
+/// interrupt than the consumer: the slots it reads stay as they are until the producer, which
+/// runs below both, pushes again.
+pub struct RingPeek<'a, const N: usize> {
+    ring: &'a MoveRing<N>,
+}
+
+impl<const N: usize> RingPeek<'_, N> {
+    /// The oldest published move, if any.
+    pub fn front(&self) -> Option<*const Prepared<N>> {
+        self.nth(0)
+    }
+
+    /// The `k`-th published move after the oldest, if any.
+    pub fn nth(&self, k: u32) -> Option<*const Prepared<N>> {
+        let h = self.ring.head.load(Acquire);
+        (self.ring.tail.load(Acquire).wrapping_sub(h) > k).then(|| self.ring.slot(h.wrapping_add(k)) as *const Prepared<N>)
+    }
+
+    /// True when a move is published after the oldest one.
+    pub fn has_next(&self) -> bool {
+        self.nth(1).is_some()
     }
 }

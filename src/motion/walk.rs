@@ -17,10 +17,10 @@
 //! that rises while walking down (a successor queued late, a higher cruise) ends the
 //! deceleration.
 //!
-//! Cost: a ramp millisecond only moves the index and sets the period; the distances it needs
-//! next (the trigger here, the one from a walk up) are computed one per tick on the ticks that
-//! follow ([`Walk::settle`]), and a move change computes none, so no tick pays for two
-//! distances (below one step per ms the walk does it all at once; time is not short there).
+//! Who runs it: the engine's ramp half, in its own interrupt below the step interrupt: a ramp
+//! millisecond moves the index, and the distances it needs next (the trigger here, the one from
+//! a walk up) are left pending ([`Walk::pending`]) until the ramp half settles them before it
+//! publishes the trigger.
 
 use crate::prepared::RampPlan;
 use crate::ramp::{Period, RampTable};
@@ -40,22 +40,13 @@ pub enum Step {
     AtRest,
 }
 
-/// Work left for the ticks after a ramp millisecond or a move change, one piece per tick so no
-/// tick pays for two: the period at a new index ([`PERIOD`], the engine's), then the trigger
-/// distance for the current index and target, then the one from a walk up.
+/// Work left after a ramp millisecond or a move change (the ramp half does it before it
+/// publishes): the trigger distance for the current index and target, then the one from a walk
+/// up.
 const SETTLED: u8 = 0;
-/// The engine's period for the walk's index is still to be computed (bit; done first).
-pub const PERIOD: u8 = 1;
 /// The trigger distance for the current index and target is due (bit).
 pub const TRIGGER: u8 = 2;
 const UP: u8 = 4;
-/// The engine's look-up of the period one walk on is due (bit; after [`PERIOD`]).
-pub const PREDICT: u8 = 32;
-/// Ticks that run no ramp work (a count in bits 3–4, one unit each): the work was set by this
-/// tick's own step (a trigger, a move change), or a direction change's short gaps come next.
-pub const FRESH: u8 = 8;
-/// The bits of the [`FRESH`] count.
-pub const FRESH_MASK: u8 = 3 * FRESH;
 
 /// The walk's state.
 #[derive(Clone, Copy, Debug, Default)]
@@ -71,7 +62,7 @@ pub struct Walk {
     /// The deceleration distance from one walk up: going up needs at least this many steps
     /// left (and it becomes `decel_at` there).
     pub up_at: u32,
-    /// Work for the next ticks ([`Walk::settle`], [`PERIOD`]).
+    /// Distances still to compute ([`TRIGGER`], the one from a walk up).
     pub pending: u8,
     /// `decel_for`'s distance sum and slope on the table (so the distance from one walk up
     /// costs only its own end).
@@ -84,14 +75,14 @@ impl Walk {
     pub const REST: Walk =
         Walk { idx: 0, decel: false, decel_at: 0, decel_for: u32::MAX, up_at: u32::MAX, pending: SETTLED, t_sum: 0, t_slope: 0 };
 
-    /// True when ramp work is pending ([`PERIOD`], [`TRIGGER`], the distance from a walk up).
+    /// True when a distance is pending ([`TRIGGER`], the one from a walk up).
     #[inline(always)]
     pub fn unsettled(&self) -> bool {
         self.pending != SETTLED
     }
 
     /// One millisecond has passed: move the index. Returns what changed. The distances it
-    /// needs were computed on earlier ticks; the new ones are left to [`Self::settle`].
+    /// needs were computed before; the new ones are left pending ([`Self::pending`]).
     #[inline(always)]
     pub fn per_ms(&mut self, plan: &RampPlan, target: u32, left: u32) -> Step {
         if self.decel {
@@ -129,15 +120,6 @@ impl Walk {
         Step::Same
     }
 
-    /// The trigger for the current index and target, at once (a move start, a resume).
-    #[inline(always)]
-    pub fn plan_decel<const L: usize>(&mut self, plan: &RampPlan, target: u32, table: &RampTable<L>) {
-        self.aim(target, table);
-        self.decel_at = self.decel_from(self.idx, plan, table);
-        self.up_at = u32::MAX;
-        self.pending = (self.pending & PERIOD) | UP;
-    }
-
     /// Sets the target the distances are computed for (its sum and slope on the table).
     #[inline(always)]
     fn aim<const L: usize>(&mut self, target: u32, table: &RampTable<L>) {
@@ -171,20 +153,16 @@ impl Walk {
         self.decel_at = 0;
         self.decel_for = u32::MAX;
         self.up_at = u32::MAX;
-        self.pending = (self.pending & (PERIOD | FRESH_MASK)) | TRIGGER;
-        if self.pending & FRESH_MASK == 0 {
-            self.pending |= FRESH;
-        }
+        self.pending = TRIGGER;
     }
 
-    /// Pending trigger work: the trigger for the current index and `target` (a tick without a
-    /// ramp millisecond; the engine does [`PERIOD`] before it, and this only when
+    /// Pending trigger work: the trigger for the current index and `target` (only when
     /// [`TRIGGER`] is pending).
     #[inline(always)]
     pub fn settle_trigger<const L: usize>(&mut self, plan: &RampPlan, target: u32, table: &RampTable<L>) {
         self.aim(target, table);
         self.decel_at = self.decel_from(self.idx, plan, table);
-        self.pending = (self.pending & PERIOD) | UP;
+        self.pending = UP;
     }
 
     /// Pending trigger work: the distance from one walk up (the last piece).
@@ -195,7 +173,7 @@ impl Walk {
         } else {
             u32::MAX
         };
-        self.pending &= PERIOD;
+        self.pending = SETTLED;
     }
 }
 
@@ -213,27 +191,10 @@ impl Walk {
     pub fn start_decel(&mut self, plan: &RampPlan, target: u32) {
         self.decel = true;
         self.decel_at = 0;
-        self.pending &= PERIOD;
+        self.pending = SETTLED;
         if self.idx > target {
             self.idx = self.idx.saturating_sub(plan.walk_q).max(target);
         }
-    }
-
-    /// Where the next ramp millisecond takes the index if it moves: one walk down towards
-    /// `target` when decelerating, else one walk up towards the cruise.
-    #[inline(always)]
-    pub fn next_idx(&self, plan: &RampPlan, target: u32) -> u32 {
-        if self.decel {
-            self.idx.saturating_sub(plan.walk_q).max(target)
-        } else {
-            (self.idx + plan.walk_q).min(plan.cruise_q)
-        }
-    }
-
-    /// The table's period at the current index (0 for an empty table: moves cruise).
-    #[inline(always)]
-    pub fn base<const L: usize>(&self, table: &RampTable<L>) -> u32 {
-        base_at(self.idx, table)
     }
 }
 

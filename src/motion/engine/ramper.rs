@@ -1,0 +1,282 @@
+//! The ramp half of the engine: the ramp walk and everything it computes, in a lower-priority
+//! interrupt the step interrupt pends (see the parent module for the split).
+//!
+//! Who uses it: the firmware's ramp handler ([`Ramper::run`]), and [`super::Engine`] on the
+//! host after each tick.
+//!
+//! Each run compares the step half's counters ([`super::Link`]) with its own copies and does
+//! what they say, in this order: a move entered or ended, a start from rest to prime, a trigger
+//! fired (the walk starts down, if the trigger was the running move's), a hold on or off, the
+//! ramp milliseconds passed; then every distance the walk needs next (the trigger, the one from a
+//! walk up) at once, and it publishes the running move's period and trigger in its slot and
+//! primes its successor's period at the walk's index. The step interrupt preempts it at every
+//! edge; it loops until the counters stand still.
+
+use core::sync::atomic::Ordering::Relaxed;
+
+use crate::prepared::{Prepared, RampPlan};
+use crate::queue::Shared;
+use crate::ramp::{Period, RampSlot, RAMP_LEN};
+use crate::ring::RingPeek;
+use crate::walk::{base_at, scaled, Step as WalkStep, Walk, TRIGGER};
+
+/// The ramp half for `N` axes.
+pub struct Ramper<'a, const N: usize, const L: usize = RAMP_LEN> {
+    shared: &'a Shared<N>,
+    ring: RingPeek<'a, N>,
+    ramp: &'a RampSlot<L>,
+    /// The move the walk is on (null: at rest, no move).
+    cur: *const Prepared<N>,
+    plan: RampPlan,
+    min_period: Period,
+    /// The running move's period at the walk's index (bits).
+    period: u32,
+    walk: Walk,
+    hold: bool,
+    /// A hold brought the walk to rest (the running move's period is 0 until the resume).
+    resting: bool,
+    /// The move was primed for a start from rest (entering it changes nothing).
+    primed: bool,
+    /// The trigger last published in the running move's slot.
+    published_at: u32,
+    // The step half's counters as last seen.
+    seen_ms: u32,
+    seen_decel: u32,
+    /// (The position record's sequence: it moves when a move is entered or ended.)
+    seen_moves: u32,
+    seen_primes: u32,
+}
+
+// SAFETY: `cur` points into the ring the engine consumes; the ramp half is moved into its
+// interrupt once and used only there.
+unsafe impl<const N: usize, const L: usize> Send for Ramper<'_, N, L> {}
+
+impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
+    pub(super) fn new(shared: &'a Shared<N>, ring: RingPeek<'a, N>, ramp: &'a RampSlot<L>) -> Self {
+        let link = &shared.link;
+        Ramper {
+            shared,
+            ring,
+            ramp,
+            cur: core::ptr::null(),
+            plan: RampPlan::lone(0, Period::ZERO),
+            min_period: Period::ZERO,
+            period: 0,
+            walk: Walk::REST,
+            hold: link.hold.load(Relaxed),
+            resting: false,
+            primed: false,
+            published_at: 0,
+            seen_ms: link.ms.load(Relaxed),
+            seen_decel: link.decel.load(Relaxed),
+            seen_moves: shared.record_seq(),
+            seen_primes: link.primes.load(Relaxed),
+        }
+    }
+
+    /// (index Q20, decelerating, trigger) for tests.
+    pub(super) fn walk_state(&self) -> (u32, bool, u32) {
+        (self.walk.idx, self.walk.decel, self.walk.decel_at)
+    }
+
+    /// Does what the step half asked for since the last run (see the module).
+    pub fn run(&mut self) {
+        loop {
+            let link = &self.shared.link;
+            let (ms, decel, moves, primes, hold) =
+                (link.ms.load(Relaxed), link.decel.load(Relaxed), self.shared.record_seq(), link.primes.load(Relaxed), link.hold.load(Relaxed));
+            if (ms, decel, moves, primes, hold) == (self.seen_ms, self.seen_decel, self.seen_moves, self.seen_primes, self.hold) {
+                return;
+            }
+            if moves != self.seen_moves {
+                self.seen_moves = moves;
+                let p = self.shared.running();
+                if p.is_null() {
+                    self.cur = p;
+                    self.walk = Walk::REST;
+                    self.resting = false;
+                } else if !(self.primed && p == self.cur) {
+                    self.enter(p);
+                }
+                self.primed = false;
+            }
+            if primes != self.seen_primes {
+                self.seen_primes = primes;
+                if let Some(p) = self.ring.front() {
+                    self.walk = Walk::REST;
+                    self.resting = false;
+                    self.enter(p);
+                    self.primed = true;
+                }
+            }
+            if decel != self.seen_decel {
+                self.seen_decel = decel;
+                // (A trigger of a move that has ended since is void: its successor's trigger
+                // is computed from where the walk is.)
+                if self.running() && !self.walk.decel && link.decel_in.load(Relaxed) == self.cur as usize {
+                    self.start_decel();
+                }
+            }
+            if hold != self.hold {
+                self.hold = hold;
+                self.hold_changed();
+            }
+            let n = ms.wrapping_sub(self.seen_ms);
+            self.seen_ms = ms;
+            for _ in 0..n {
+                self.walk_ms();
+            }
+            self.publish();
+        }
+    }
+
+    /// A move the walk is on, not resting under a hold.
+    fn running(&self) -> bool {
+        !self.cur.is_null() && !self.resting
+    }
+
+    /// The walk goes on with move `p` (a switch at speed: the index carries over; a start
+    /// from rest after the walk was reset).
+    fn enter(&mut self, p: *const Prepared<N>) {
+        self.cur = p;
+        // SAFETY: a published slot the step half runs (or is about to); plain fields.
+        unsafe {
+            self.plan = (*p).ramp;
+            self.min_period = (*p).min_period;
+        }
+        // SAFETY: an atomic field (the trigger primed while it was the successor, or 0).
+        self.published_at = unsafe { (*p).decel_at.load(Relaxed) };
+        self.walk.decel = self.hold;
+        self.walk.defer_decel();
+        self.set_period();
+    }
+
+    /// The hold changed: walk down to rest, or go on (from rest: up from the bottom of the
+    /// table).
+    fn hold_changed(&mut self) {
+        if self.cur.is_null() {
+            return;
+        }
+        if self.hold {
+            if !self.resting && !self.walk.decel {
+                self.start_decel();
+            }
+        } else if self.resting {
+            self.resting = false;
+            self.walk = Walk::REST;
+            self.walk.defer_decel();
+            self.set_period();
+        } else {
+            self.walk.decel = false;
+            self.walk.replan();
+        }
+    }
+
+    /// Starts walking down: one walk down now (the step half restarted the millisecond).
+    fn start_decel(&mut self) {
+        let target = self.target();
+        self.walk.start_decel(&self.plan, target);
+        self.set_period();
+    }
+
+    /// The exit target: 0 under a hold or when no successor is queued yet; never above the
+    /// cruise (an override may have lowered it below the planned exit).
+    fn target(&self) -> u32 {
+        if self.hold || !self.ring.has_next() {
+            0
+        } else {
+            // SAFETY: an atomic field of the running slot.
+            unsafe { (*self.cur).exit_q.load(Relaxed) }.min(self.plan.cruise_q)
+        }
+    }
+
+    /// One millisecond has passed: move along the ramp.
+    fn walk_ms(&mut self) {
+        if !self.running() {
+            return;
+        }
+        self.settle();
+        self.cruise_update();
+        let target = self.target();
+        // SAFETY: a plain field of the running slot.
+        let left = unsafe { (*self.cur).total }.wrapping_sub(self.shared.mv_done.load(Relaxed));
+        match self.walk.per_ms(&self.plan, target, left) {
+            WalkStep::Same => {}
+            WalkStep::AtRest if self.hold => self.resting = true,
+            _ => self.set_period(),
+        }
+    }
+
+    /// The running move's cruise as the feeder last priced it (an override changed); a new
+    /// index re-plans the trigger. (The feeder stores the index, then the floor, and cannot run
+    /// between these two loads.)
+    fn cruise_update(&mut self) {
+        // SAFETY: atomic fields of the running slot.
+        let (bits, q) = unsafe { ((*self.cur).cruise_bits.load(Relaxed), (*self.cur).cruise_q.load(Relaxed)) };
+        self.plan.cruise = Period::from_bits(bits);
+        if q != self.plan.cruise_q {
+            self.plan.cruise_q = q;
+            self.walk.replan();
+        }
+    }
+
+    /// Every distance the walk needs next: the trigger for the index and target, then the one
+    /// from a walk up.
+    fn settle(&mut self) {
+        let table = &self.ramp.profile().ramp;
+        if self.walk.pending & TRIGGER != 0 {
+            let target = self.target();
+            self.walk.settle_trigger(&self.plan, target, table);
+        }
+        if self.walk.unsettled() {
+            self.walk.settle_up(&self.plan, table);
+        }
+    }
+
+    /// The running move's period for the walk's index.
+    fn set_period(&mut self) {
+        let base = base_at(self.walk.idx, &self.ramp.profile().ramp);
+        self.period = scaled(base, self.walk.idx, &self.plan, self.min_period).to_bits();
+        self.shared.period_bits.store(self.period, Relaxed);
+    }
+
+    /// Publishes the results in the slots: the running move's period and trigger (0 while
+    /// decelerating, and the period 0 at rest under a hold), the walk's index, and the
+    /// successor's period at this index.
+    fn publish(&mut self) {
+        if self.cur.is_null() {
+            self.shared.link.idx.store(0, Relaxed);
+            return;
+        }
+        self.settle();
+        // SAFETY: atomic fields of the running slot.
+        let p = unsafe { &*self.cur };
+        p.period.store(if self.resting { 0 } else { self.period }, Relaxed);
+        let at = if self.walk.decel || self.resting { 0 } else { self.walk.decel_at };
+        // Only over the value this half left: a trigger the step half fired (0) stays fired
+        // until this half has seen it.
+        if at != self.published_at {
+            self.published_at = match p.decel_at.compare_exchange(self.published_at, at, Relaxed, Relaxed) {
+                Ok(_) => at,
+                Err(now) => now,
+            };
+        }
+        self.shared.link.idx.store(self.walk.idx, Relaxed);
+        if let Some(n) = self.ring.nth(1) {
+            // SAFETY: a published slot after the running one; plain fields and atomics.
+            let n = unsafe { &*n };
+            let table = &self.ramp.profile().ramp;
+            n.period.store(scaled(base_at(self.walk.idx, table), self.walk.idx, &n.ramp, n.min_period).to_bits(), Relaxed);
+            // Its trigger from here, for its own target (as `target` will find it).
+            let mut w = self.walk;
+            let at = if self.hold {
+                0
+            } else {
+                let target = if self.ring.nth(2).is_some() { n.exit_q.load(Relaxed).min(n.ramp.cruise_q) } else { 0 };
+                w.settle_trigger(&n.ramp, target, table);
+                w.decel_at
+            };
+            n.decel_at.store(at, Relaxed);
+        }
+    }
+}

@@ -1,0 +1,447 @@
+//! The step half of the engine: what the TIM2 interrupt does, one tick at a time (see the
+//! parent module for the contract and the split).
+//!
+//! Who uses it: the firmware's TIM2 handler, and [`super::Engine`] on the host.
+
+use core::sync::atomic::Ordering::Relaxed;
+
+use super::{Link, IDLE_TICKS, MAX_TICK, PRIME_TICKS};
+use crate::board::PinMap;
+use crate::control::Ctl;
+use crate::prepared::Prepared;
+use crate::queue::{Shared, State};
+use crate::ramp::{RampSlot, RAMP_LEN};
+use crate::ring::RingConsumer;
+use crate::TICKS_PER_MS;
+
+/// A tick whose own period (the gap from its update event to the next) is at least this (2048
+/// ticks: below 35 kHz) leaves room before a direction change for the change itself: the
+/// finishing step's gap is shortened by the setup.
+const SHORT_GAP: u32 = 2048;
+
+/// What the step half is doing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Phase {
+    /// No move loaded.
+    Idle,
+    /// A direction change is the next edge, then the move's first step.
+    Dir,
+    /// Stepping.
+    Run,
+    /// Stopped by feed hold, move not finished.
+    Held,
+}
+
+/// The step half for `N` axes.
+pub struct Stepper<'a, const N: usize, const L: usize = RAMP_LEN> {
+    shared: &'a Shared<N>,
+    ring: RingConsumer<'a, N>,
+    ramp: &'a RampSlot<L>,
+    step_off: u32,
+    /// Dual-edge mode: each step toggles its pin; `level` shadows the step pins' level (the
+    /// pins are low when the engine is built: boot drives them low, a mode change restarts).
+    dual: bool,
+    level: u32,
+    // The edge about to happen.
+    word: u32,
+    extend: u32,
+    frac: u32,
+    ms_left: i32,
+    // The running move (a slot of the ring; valid while `phase != Idle`).
+    phase: Phase,
+    cur: *mut Prepared<N>,
+    total: u32,
+    left: u32,
+    master_on: u32,
+    n_slaves: u8,
+    /// This tick's own period: from its update event to the next (the previous tick's ARR).
+    gap_in: u32,
+    hold: bool,
+    /// The running move's direction change is still to be written (kept across a hold).
+    dir_pending: bool,
+    ctl_seen: Ctl,
+    /// Asks for the ramp half's interrupt (a counter in [`Link`] moved): the firmware pends
+    /// its vector; the host's [`super::Engine`] runs the ramp half after every tick anyway.
+    pend: fn(),
+}
+
+// SAFETY: `cur` points into the ring the engine consumes; the step half is moved into the
+// interrupt once and used only there.
+unsafe impl<const N: usize, const L: usize> Send for Stepper<'_, N, L> {}
+
+impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
+    pub(super) fn new(shared: &'a Shared<N>, ring: RingConsumer<'a, N>, ramp: &'a RampSlot<L>, pins: PinMap<N>) -> Self {
+        Stepper {
+            shared,
+            ring,
+            ramp,
+            step_off: pins.step_off,
+            dual: pins.dual,
+            level: 0,
+            word: 0,
+            extend: 0,
+            frac: 0,
+            ms_left: TICKS_PER_MS as i32,
+            phase: Phase::Idle,
+            cur: core::ptr::null_mut(),
+            total: 0,
+            left: 0,
+            master_on: 0,
+            n_slaves: 0,
+            gap_in: 0,
+            hold: false,
+            dir_pending: false,
+            ctl_seen: shared.ctl.load(),
+            pend: || {},
+        }
+    }
+
+    /// Master steps left in the running move.
+    pub(super) fn left(&self) -> u32 {
+        self.left
+    }
+
+    /// The BSRR word to store at this update event (precomputed by the previous tick).
+    #[inline(always)]
+    pub fn word(&self) -> u32 {
+        self.word
+    }
+
+    /// The BSRR word for the compare event (falling step edges).
+    #[inline(always)]
+    pub fn step_off(&self) -> u32 {
+        self.step_off
+    }
+
+    /// How to ask for the ramp half's interrupt (the firmware pends its vector).
+    pub fn set_pend(&mut self, pend: fn()) {
+        self.pend = pend;
+    }
+
+    /// Computes the next edge's word; returns the ARR value to preload now.
+    /// Not inlined, so the handler's own prologue stays small and the BSRR store comes first.
+    #[inline(never)]
+    pub fn tick(&mut self) -> u16 {
+        if self.extend == 0 {
+            let (word, ticks) = self.next_event();
+            self.word = word;
+            self.extend = ticks;
+        } else {
+            self.word = 0;
+        }
+        self.emit_chunk()
+    }
+
+    /// Takes the next ≤ 65 536-tick piece of the current period and keeps time for the ramp.
+    #[inline(always)]
+    fn emit_chunk(&mut self) -> u16 {
+        let rem = self.extend;
+        // Pieces are ≥ 32 768 ticks, so a filler never gets shorter than a real period.
+        let chunk = if rem <= MAX_TICK {
+            rem
+        } else if rem >= MAX_TICK + MAX_TICK / 2 {
+            MAX_TICK
+        } else {
+            MAX_TICK / 2
+        };
+        self.extend = rem - chunk;
+        self.ms_left -= chunk as i32;
+        if self.ms_left <= 0 {
+            self.ms_left += TICKS_PER_MS as i32;
+            if matches!(self.phase, Phase::Run | Phase::Dir) {
+                bump(&self.link().ms);
+                (self.pend)();
+            }
+        }
+        self.gap_in = chunk;
+        (chunk - 1) as u16
+    }
+
+    #[inline(always)]
+    fn link(&self) -> &'a Link {
+        &self.shared.link
+    }
+
+    /// The next edge: a step, a direction change or an idle gap, with the gap after it.
+    #[inline(always)]
+    fn next_event(&mut self) -> (u32, u32) {
+        let ctl = self.shared.ctl.load();
+        if ctl != self.ctl_seen {
+            self.control(ctl);
+        }
+        match self.phase {
+            Phase::Run => self.step(),
+            Phase::Dir => self.dir_change(),
+            Phase::Held => self.held(),
+            Phase::Idle => self.refill(),
+        }
+    }
+
+    /// One master step (and the slaves' share): the hot path.
+    #[inline(always)]
+    fn step(&mut self) -> (u32, u32) {
+        // SAFETY: `cur` is the front slot of the ring, owned by the engine until it pops it;
+        // only its slaves are borrowed (the feeder and the ramp half store its atomics).
+        let p = unsafe { &mut *self.cur };
+        let period = p.period.load(Relaxed);
+        if period == 0 {
+            // The ramp half brought a hold to rest.
+            return self.halt();
+        }
+        let mut word = self.master_on;
+        let total = self.total;
+        // Unrolled over the slots (N is a constant), stopping after the move's last slave: no
+        // loop counter, no bounds checks, no branch inside a slot.
+        let n = self.n_slaves as usize;
+        let slaves = &mut p.slaves;
+        macro_rules! slaves {
+            ($out:lifetime; $($i:literal)*) => {$(
+                if $i + 1 >= N || $i >= n {
+                    break $out;
+                }
+                let s = &mut slaves[$i];
+                word |= s.on & s.dda.step_mask(total);
+            )*};
+        }
+        'slaves: {
+            slaves!('slaves; 0 1 2 3 4 5 6);
+        }
+        if self.dual {
+            // Toggle: set the pins that are low, reset those that are high.
+            let level = self.level;
+            self.level = level ^ word;
+            word = (word & !level) | (word & level) << 16;
+        }
+        self.left -= 1;
+        self.shared.mv_done.store(total - self.left, Relaxed);
+        // The trigger is 0 (cannot fire) until the ramp half has computed it for this move and
+        // once it fired. (Not at the last step: a successor takes over the walk there, and with
+        // none the move has reached its exit.)
+        if self.left <= p.decel_at.load(Relaxed) && self.left != 0 {
+            self.trigger();
+        }
+        let acc = self.frac + period;
+        self.frac = acc & 15;
+        let mut gap = acc >> 4;
+        if self.left == 0 {
+            gap = self.finish(gap, period);
+        }
+        (word, gap)
+    }
+
+    /// The deceleration trigger fired: the ramp half walks down, on a fresh millisecond.
+    #[inline(never)]
+    fn trigger(&mut self) {
+        // SAFETY: as in `step`; an atomic field.
+        unsafe { (*self.cur).decel_at.store(0, Relaxed) };
+        self.ms_left = TICKS_PER_MS as i32;
+        self.link().decel_in.store(self.cur as usize, Relaxed);
+        bump(&self.link().decel);
+        (self.pend)();
+    }
+
+    /// A hold came to rest: no more steps until it is released.
+    #[inline(never)]
+    fn halt(&mut self) -> (u32, u32) {
+        self.phase = Phase::Held;
+        self.publish(State::Held);
+        (0, IDLE_TICKS)
+    }
+
+    /// Held: waits for the release and the ramp half's resume period.
+    #[inline(never)]
+    fn held(&mut self) -> (u32, u32) {
+        // SAFETY: as in `step`; an atomic field.
+        if self.hold || unsafe { (*self.cur).period.load(Relaxed) } == 0 {
+            return (0, if self.hold { IDLE_TICKS } else { PRIME_TICKS });
+        }
+        // Resume: the ramp half restarted the walk from the bottom of the table.
+        self.ms_left = TICKS_PER_MS as i32;
+        self.publish(State::Run);
+        if self.dir_pending {
+            self.dir_change()
+        } else {
+            self.phase = Phase::Run;
+            self.step()
+        }
+    }
+
+    /// The direction change before a move's first step, then the setup gap.
+    #[inline(never)]
+    fn dir_change(&mut self) -> (u32, u32) {
+        self.phase = Phase::Run;
+        self.dir_pending = false;
+        // SAFETY: as in `step`; plain fields the feeder never writes after publishing.
+        unsafe { ((*self.cur).dir_word, (*self.cur).dir_setup) }
+    }
+
+    /// The control word changed: an immediate stop, or a feed hold on or off.
+    #[inline(never)]
+    fn control(&mut self, ctl: Ctl) {
+        let old = core::mem::replace(&mut self.ctl_seen, ctl);
+        if ctl.stopped_since(old) && self.phase != Phase::Idle {
+            self.stop_move();
+        }
+        let hold = ctl.hold();
+        if hold == self.hold {
+            return;
+        }
+        self.hold = hold;
+        self.link().hold.store(hold, Relaxed);
+        (self.pend)();
+        match self.phase {
+            Phase::Run | Phase::Dir if hold => {
+                // The ramp half walks down from here, on a fresh millisecond.
+                self.ms_left = TICKS_PER_MS as i32;
+                self.publish(State::Holding);
+            }
+            Phase::Run | Phase::Dir => self.publish(State::Run),
+            // A resume from rest waits in `held` for the ramp half's period.
+            Phase::Held | Phase::Idle => {}
+        }
+    }
+
+    /// Makes `p` the running move (its steps, slaves and position record); its period is in
+    /// its slot (primed by the ramp half).
+    #[inline(always)]
+    fn enter(&mut self, p: *mut Prepared<N>) {
+        self.cur = p;
+        // SAFETY: a published slot, now owned by the engine; plain fields only.
+        unsafe {
+            self.total = (*p).total;
+            self.master_on = (*p).master_on;
+            self.n_slaves = (*p).n_slaves;
+        }
+        self.left = self.total;
+        // (The position record's sequence tells the ramp half, at its next run: until then the
+        // move runs on the period and trigger it primed.)
+        self.shared.start_move(p as *const Prepared<N>);
+    }
+
+    /// The running move made its last step (at `period`): switch to the next one at speed, or
+    /// go idle. Returns the gap after the last step: shortened when a direction change comes
+    /// first and steps are slow; at speed the change comes one whole period after the last
+    /// step, since this tick's late ARR store would otherwise shorten the setup gap instead.
+    #[inline(never)]
+    fn finish(&mut self, gap: u32, period: u32) -> u32 {
+        bump(&self.shared.moves_done);
+        self.ring.pop();
+        if let Some(p) = self.ring.front() {
+            // SAFETY: a published slot; plain fields and its atomics.
+            let (epoch, dir, setup, min_gap) = unsafe { ((*p).epoch, (*p).dir_word, (*p).dir_setup, (*p).min_gap) };
+            if epoch == self.ctl_seen.epoch() {
+                // SAFETY: as above.
+                let primed = unsafe { &(*p).period };
+                if primed.load(Relaxed) == 0 {
+                    // Queued too late for the ramp half to prime it: the last period, never
+                    // faster than this move allows, until the ramp half has seen the change
+                    // (now: it computes the trigger too).
+                    // SAFETY: as above.
+                    primed.store(period.max(unsafe { (*p).min_period }.to_bits()), Relaxed);
+                    (self.pend)();
+                }
+                let slow = self.gap_in >= SHORT_GAP;
+                self.enter(p);
+                if dir != 0 {
+                    self.phase = Phase::Dir;
+                    self.dir_pending = true;
+                    if slow {
+                        return gap.saturating_sub(setup).max(min_gap);
+                    }
+                }
+                return gap;
+            }
+        }
+        // Nothing queued: at rest unless the feeder was late at speed (counted).
+        if self.link().idx.load(Relaxed) != 0 && !self.hold {
+            self.shared.starved.fetch_add(1, Relaxed);
+        }
+        self.go_idle(|p, i| p.steps[i]);
+        gap
+    }
+
+    /// An immediate stop: the running move ends where it is, each axis at the steps it made.
+    #[inline(never)]
+    fn stop_move(&mut self) {
+        let done = self.total - self.left;
+        let total = self.total;
+        self.ring.pop();
+        self.go_idle(|p, i| {
+            let made = if i == p.master as usize {
+                done
+            } else {
+                p.slaves[..p.n_slaves as usize].iter().find(|s| s.axis as usize == i).map_or(0, |s| s.dda.made(done, total))
+            };
+            if p.steps[i] < 0 {
+                -(made as i32)
+            } else {
+                made as i32
+            }
+        });
+    }
+
+    /// Publishes the positions after the running move (`made(move, axis)`) and goes idle.
+    fn go_idle(&mut self, made: impl Fn(&Prepared<N>, usize) -> i32) {
+        // SAFETY: the slot was just popped but is not reused before the producer sees the pop
+        // and pushes again, which cannot happen inside this interrupt.
+        let p = unsafe { &*self.cur };
+        self.shared.idle_at(|i| p.start[i].wrapping_add(made(p, i)));
+        self.cur = core::ptr::null_mut();
+        self.left = 0;
+        self.phase = Phase::Idle;
+        self.dir_pending = false;
+        self.shared.period_bits.store(0, Relaxed);
+        self.publish(State::Idle);
+    }
+
+    /// Loads the next move from rest, if any, once the ramp half has primed it (queue refill;
+    /// never in the step path).
+    #[inline(never)]
+    fn refill(&mut self) -> (u32, u32) {
+        if self.hold {
+            self.publish(State::Held);
+            return (0, IDLE_TICKS);
+        }
+        if !self.ramp.enter() {
+            return (0, IDLE_TICKS);
+        }
+        let Some(p) = self.ring.front() else {
+            self.publish(State::Idle);
+            return (0, IDLE_TICKS);
+        };
+        // SAFETY: a published slot; plain fields and an atomic.
+        let (epoch, dir, setup, primed) = unsafe { ((*p).epoch, (*p).dir_word, (*p).dir_setup, (*p).period.load(Relaxed)) };
+        if epoch != self.ctl_seen.epoch() {
+            self.ring.pop(); // dropped by an immediate stop
+            return (0, IDLE_TICKS);
+        }
+        if primed == 0 {
+            bump(&self.link().primes);
+            (self.pend)();
+            return (0, PRIME_TICKS);
+        }
+        self.enter(p);
+        self.phase = Phase::Run;
+        self.publish(State::Run);
+        // The ramp's milliseconds start at the move's first step.
+        self.ms_left = TICKS_PER_MS as i32;
+        if dir != 0 {
+            self.ms_left += setup as i32;
+            (dir, setup)
+        } else {
+            self.step()
+        }
+    }
+
+    #[inline(always)]
+    fn publish(&self, s: State) {
+        self.shared.state.store(s as u8, Relaxed);
+    }
+}
+
+/// One more on a counter only the step half writes (no read-modify-write race: every other
+/// context only reads it).
+#[inline(always)]
+fn bump(c: &core::sync::atomic::AtomicU32) {
+    c.store(c.load(Relaxed).wrapping_add(1), Relaxed);
+}
