@@ -133,17 +133,18 @@ fn back_to_back_moves_at_the_rate_cap_keep_every_step() {
         {
             let thr = (mean * 1.3) as u64;
             let mut h: std::collections::BTreeMap<String, (u64, u64)> = Default::default();
+            let last_fin = log.iter().filter(|r| r.blocks.iter().any(|&a| b.symbol(a).is_some_and(|(n, _)| n.ends_with("finish")))).map(|r| r.start).max().unwrap_or(0);
             for r in log.iter().filter(|r| r.update.is_some() && r.cycles > thr) {
                 let mut fns: Vec<String> = r.blocks.iter().filter_map(|&a| b.symbol(a).map(|(n, _)| n.rsplit("::").next().unwrap().to_string())).collect();
                 fns.dedup();
-                let idle = r.blocks.iter().any(|&a| b.symbol(a).is_some_and(|(n, o)| n.ends_with("finish") && o == 236));
+                let idle = r.start == last_fin;
                 let e = h.entry(format!("{}{}", fns.join(">"), if idle { " (idle)" } else { "" })).or_default();
                 e.0 += 1;
                 e.1 = e.1.max(r.cycles);
             }
             for (k, v) in &h { eprintln!("  long {} max {}: {}", v.0, v.1, k); }
             let prof: std::collections::HashMap<String, (u64,u64,u64)> = b.profile_blocks(16 + 28).into_iter().map(|(n, c)| (n.split_whitespace().next().unwrap().to_string(), (c.runs, c.cycles, c.insns))).collect();
-            if let Some(r) = log.iter().filter(|r| r.update.is_some() && !r.blocks.iter().any(|&a| b.symbol(a).is_some_and(|(n, o)| n.ends_with("finish") && o == 236))).max_by_key(|r| r.cycles) {
+            if let Some(r) = log.iter().filter(|r| r.update.is_some() && r.start != last_fin).max_by_key(|r| r.cycles) {
                 eprintln!("  longest run {} cycles:", r.cycles);
                 for a in &r.blocks {
                     let k = format!("0x{a:08x}");

@@ -132,10 +132,15 @@ impl<'a, const N: usize> RingConsumer<'a, N> {
         }
     }
 
-    /// True when a move is published after the front one.
+    /// The move published after the front one, if any.
     #[inline(always)]
-    pub fn has_next(&self) -> bool {
-        self.ring.tail.load(Acquire).wrapping_sub(self.ring.head.load(Relaxed)) >= 2
+    pub fn second(&self) -> Option<*mut Prepared<N>> {
+        let h = self.ring.head.load(Relaxed);
+        if self.ring.tail.load(Acquire).wrapping_sub(h) >= 2 {
+            Some(self.ring.slot(h.wrapping_add(1)))
+        } else {
+            None
+        }
     }
 
     /// Frees the front slot (its move is finished or dropped).

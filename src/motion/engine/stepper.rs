@@ -24,7 +24,10 @@ const SHORT_GAP: u32 = 2048;
 enum Phase {
     /// No move loaded.
     Idle,
-    /// A direction change is the next edge, then the move's first step.
+    /// The move after the running one starts at the next edge with its first step.
+    Enter,
+    /// The move after the running one starts at the next edge with its direction change,
+    /// then its first step.
     Dir,
     /// Stepping.
     Run,
@@ -50,15 +53,12 @@ pub struct Stepper<'a, const N: usize, const L: usize = RAMP_LEN> {
     // The running move (a slot of the ring; valid while `phase != Idle`).
     phase: Phase,
     cur: *mut Prepared<N>,
-    total: u32,
     left: u32,
-    master_on: u32,
-    n_slaves: u8,
     /// This tick's own period: from its update event to the next (the previous tick's ARR).
     gap_in: u32,
     hold: bool,
-    /// The running move's direction change is still to be written (kept across a hold).
-    dir_pending: bool,
+    /// The move to start at the next edge (phases `Enter` and `Dir`).
+    next: *mut Prepared<N>,
     ctl_seen: Ctl,
     /// Asks for the ramp half's interrupt (a counter in [`Link`] moved): the firmware pends
     /// its vector; the host's [`super::Engine`] runs the ramp half after every tick anyway.
@@ -84,13 +84,10 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
             ms_left: TICKS_PER_MS as i32,
             phase: Phase::Idle,
             cur: core::ptr::null_mut(),
-            total: 0,
             left: 0,
-            master_on: 0,
-            n_slaves: 0,
             gap_in: 0,
             hold: false,
-            dir_pending: false,
+            next: core::ptr::null_mut(),
             ctl_seen: shared.ctl.load(),
             pend: || {},
         }
@@ -148,7 +145,7 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
         self.ms_left -= chunk as i32;
         if self.ms_left <= 0 {
             self.ms_left += TICKS_PER_MS as i32;
-            if matches!(self.phase, Phase::Run | Phase::Dir) {
+            if self.phase != Phase::Idle && self.phase != Phase::Held {
                 bump(&self.link().ms);
                 (self.pend)();
             }
@@ -169,9 +166,27 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
         if ctl != self.ctl_seen {
             self.control(ctl);
         }
+        if self.phase != Phase::Run {
+            if self.phase == Phase::Enter {
+                self.enter_next();
+            } else if let Some(event) = self.other_event() {
+                return event;
+            }
+        }
+        self.step()
+    }
+
+    /// The next edge when not simply stepping: a move change's second half, a direction
+    /// change, a hold, idle; `None` when it is a step after all (the phase is `Run` now).
+    #[inline(never)]
+    fn other_event(&mut self) -> Option<(u32, u32)> {
         match self.phase {
-            Phase::Run => self.step(),
-            Phase::Dir => self.dir_change(),
+            Phase::Run => None,
+            Phase::Enter => {
+                self.enter_next();
+                None
+            }
+            Phase::Dir => Some(self.dir_change()),
             Phase::Held => self.held(),
             Phase::Idle => self.refill(),
         }
@@ -188,11 +203,11 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
             // The ramp half brought a hold to rest.
             return self.halt();
         }
-        let mut word = self.master_on;
-        let total = self.total;
+        let mut word = p.master_on;
+        let total = p.total;
         // Unrolled over the slots (N is a constant), stopping after the move's last slave: no
         // loop counter, no bounds checks, no branch inside a slot.
-        let n = self.n_slaves as usize;
+        let n = p.n_slaves as usize;
         let slaves = &mut p.slaves;
         macro_rules! slaves {
             ($out:lifetime; $($i:literal)*) => {$(
@@ -248,31 +263,35 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
         (0, IDLE_TICKS)
     }
 
-    /// Held: waits for the release and the ramp half's resume period.
-    #[inline(never)]
-    fn held(&mut self) -> (u32, u32) {
+    /// Held: waits for the release and the ramp half's resume period; `None` once it resumes
+    /// (the next edge is a step).
+    fn held(&mut self) -> Option<(u32, u32)> {
         // SAFETY: as in `step`; an atomic field.
         if self.hold || unsafe { (*self.cur).period.load(Relaxed) } == 0 {
-            return (0, if self.hold { IDLE_TICKS } else { PRIME_TICKS });
+            return Some((0, if self.hold { IDLE_TICKS } else { PRIME_TICKS }));
         }
         // Resume: the ramp half restarted the walk from the bottom of the table.
         self.ms_left = TICKS_PER_MS as i32;
         self.publish(State::Run);
-        if self.dir_pending {
-            self.dir_change()
-        } else {
-            self.phase = Phase::Run;
-            self.step()
-        }
+        self.phase = Phase::Run;
+        None
     }
 
-    /// The direction change before a move's first step, then the setup gap.
+    /// The next move starts with its direction change, then the setup gap.
     #[inline(never)]
     fn dir_change(&mut self) -> (u32, u32) {
-        self.phase = Phase::Run;
-        self.dir_pending = false;
+        self.enter_next();
         // SAFETY: as in `step`; plain fields the feeder never writes after publishing.
         unsafe { ((*self.cur).dir_word, (*self.cur).dir_setup) }
+    }
+
+    /// The move after the running one becomes the running one (the second half of a move
+    /// change, on the tick after the last step: the first half found it).
+    #[inline(always)]
+    fn enter_next(&mut self) {
+        self.ring.pop();
+        self.enter(self.next);
+        self.phase = Phase::Run;
     }
 
     /// The control word changed: an immediate stop, or a feed hold on or off.
@@ -290,69 +309,75 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
         self.link().hold.store(hold, Relaxed);
         (self.pend)();
         match self.phase {
-            Phase::Run | Phase::Dir if hold => {
+            Phase::Run | Phase::Enter | Phase::Dir if hold => {
                 // The ramp half walks down from here, on a fresh millisecond.
                 self.ms_left = TICKS_PER_MS as i32;
                 self.publish(State::Holding);
             }
-            Phase::Run | Phase::Dir => self.publish(State::Run),
+            Phase::Run | Phase::Enter | Phase::Dir => self.publish(State::Run),
             // A resume from rest waits in `held` for the ramp half's period.
             Phase::Held | Phase::Idle => {}
         }
     }
 
-    /// Makes `p` the running move (its steps, slaves and position record); its period is in
-    /// its slot (primed by the ramp half).
+    /// Makes `p` the running move (its steps and position record; the step path reads the
+    /// rest from its slot, where the ramp half primed its period).
     #[inline(always)]
     fn enter(&mut self, p: *mut Prepared<N>) {
         self.cur = p;
-        // SAFETY: a published slot, now owned by the engine; plain fields only.
-        unsafe {
-            self.total = (*p).total;
-            self.master_on = (*p).master_on;
-            self.n_slaves = (*p).n_slaves;
-        }
-        self.left = self.total;
+        // SAFETY: a published slot, now owned by the engine; a plain field.
+        self.left = unsafe { (*p).total };
         // (The position record's sequence tells the ramp half, at its next run: until then the
         // move runs on the period and trigger it primed.)
         self.shared.start_move(p as *const Prepared<N>);
     }
 
-    /// The running move made its last step (at `period`): switch to the next one at speed, or
-    /// go idle. Returns the gap after the last step: shortened when a direction change comes
-    /// first and steps are slow; at speed the change comes one whole period after the last
-    /// step, since this tick's late ARR store would otherwise shorten the setup gap instead.
+    /// The running move made its last step (at `period`): the next one starts at the next
+    /// edge (that tick frees this move's slot and enters it), or go idle now. Returns the gap
+    /// after the last step: shortened when a direction change comes first and steps are slow;
+    /// at speed the change comes one whole period after the last step, since this tick's late
+    /// ARR store would otherwise shorten the setup gap instead.
     #[inline(never)]
     fn finish(&mut self, gap: u32, period: u32) -> u32 {
         bump(&self.shared.moves_done);
-        self.ring.pop();
-        if let Some(p) = self.ring.front() {
-            // SAFETY: a published slot; plain fields and its atomics.
-            let (epoch, dir, setup, min_gap) = unsafe { ((*p).epoch, (*p).dir_word, (*p).dir_setup, (*p).min_gap) };
-            if epoch == self.ctl_seen.epoch() {
+        if let Some(p) = self.ring.second() {
+            // SAFETY: a published slot; plain fields and its atomics (read where needed, so
+            // the common path keeps few registers).
+            if unsafe { (*p).epoch } == self.ctl_seen.epoch() {
                 // SAFETY: as above.
-                let primed = unsafe { &(*p).period };
-                if primed.load(Relaxed) == 0 {
-                    // Queued too late for the ramp half to prime it: the last period, never
-                    // faster than this move allows, until the ramp half has seen the change
-                    // (now: it computes the trigger too).
-                    // SAFETY: as above.
-                    primed.store(period.max(unsafe { (*p).min_period }.to_bits()), Relaxed);
-                    (self.pend)();
+                if unsafe { (*p).period.load(Relaxed) } == 0 {
+                    self.unprimed(p, period);
                 }
-                let slow = self.gap_in >= SHORT_GAP;
-                self.enter(p);
-                if dir != 0 {
-                    self.phase = Phase::Dir;
-                    self.dir_pending = true;
-                    if slow {
-                        return gap.saturating_sub(setup).max(min_gap);
-                    }
+                self.next = p;
+                // SAFETY: as above.
+                if unsafe { (*p).dir_word } == 0 {
+                    self.phase = Phase::Enter;
+                    return gap;
+                }
+                self.phase = Phase::Dir;
+                if self.gap_in >= SHORT_GAP {
+                    return self.room_for_dir(p, gap);
                 }
                 return gap;
             }
         }
-        // Nothing queued: at rest unless the feeder was late at speed (counted).
+        self.end_of_queue(gap)
+    }
+
+    /// Slow steps before a direction change: the change comes `dir_setup` before the next
+    /// step would have (never sooner than the move's shortest gap after the last step).
+    #[inline(never)]
+    fn room_for_dir(&self, p: *mut Prepared<N>, gap: u32) -> u32 {
+        // SAFETY: a published slot; plain fields.
+        let (setup, min_gap) = unsafe { ((*p).dir_setup, (*p).min_gap) };
+        gap.saturating_sub(setup).max(min_gap)
+    }
+
+    /// The running move ended with nothing queued after it: idle (at rest unless the feeder
+    /// was late at speed, counted).
+    #[inline(never)]
+    fn end_of_queue(&mut self, gap: u32) -> u32 {
+        self.ring.pop();
         if self.link().idx.load(Relaxed) != 0 && !self.hold {
             self.shared.starved.fetch_add(1, Relaxed);
         }
@@ -360,11 +385,23 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
         gap
     }
 
+    /// The next move was queued too late for the ramp half to prime it: the last period, never
+    /// faster than that move allows, until the ramp half has seen the change (now: it computes
+    /// the trigger too).
+    #[cold]
+    #[inline(never)]
+    fn unprimed(&mut self, p: *mut Prepared<N>, period: u32) {
+        // SAFETY: a published slot; a plain field and an atomic.
+        unsafe { (*p).period.store(period.max((*p).min_period.to_bits()), Relaxed) };
+        (self.pend)();
+    }
+
     /// An immediate stop: the running move ends where it is, each axis at the steps it made.
     #[inline(never)]
     fn stop_move(&mut self) {
-        let done = self.total - self.left;
-        let total = self.total;
+        // SAFETY: the running slot; a plain field.
+        let total = unsafe { (*self.cur).total };
+        let done = total - self.left;
         self.ring.pop();
         self.go_idle(|p, i| {
             let made = if i == p.master as usize {
@@ -389,36 +426,35 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
         self.cur = core::ptr::null_mut();
         self.left = 0;
         self.phase = Phase::Idle;
-        self.dir_pending = false;
         self.shared.period_bits.store(0, Relaxed);
         self.publish(State::Idle);
     }
 
     /// Loads the next move from rest, if any, once the ramp half has primed it (queue refill;
-    /// never in the step path).
-    #[inline(never)]
-    fn refill(&mut self) -> (u32, u32) {
+    /// never in the step path); `None` when the next edge is its first step.
+    fn refill(&mut self) -> Option<(u32, u32)> {
+        const WAIT: Option<(u32, u32)> = Some((0, IDLE_TICKS));
         if self.hold {
             self.publish(State::Held);
-            return (0, IDLE_TICKS);
+            return WAIT;
         }
         if !self.ramp.enter() {
-            return (0, IDLE_TICKS);
+            return WAIT;
         }
         let Some(p) = self.ring.front() else {
             self.publish(State::Idle);
-            return (0, IDLE_TICKS);
+            return WAIT;
         };
         // SAFETY: a published slot; plain fields and an atomic.
         let (epoch, dir, setup, primed) = unsafe { ((*p).epoch, (*p).dir_word, (*p).dir_setup, (*p).period.load(Relaxed)) };
         if epoch != self.ctl_seen.epoch() {
             self.ring.pop(); // dropped by an immediate stop
-            return (0, IDLE_TICKS);
+            return WAIT;
         }
         if primed == 0 {
             bump(&self.link().primes);
             (self.pend)();
-            return (0, PRIME_TICKS);
+            return Some((0, PRIME_TICKS));
         }
         self.enter(p);
         self.phase = Phase::Run;
@@ -427,9 +463,9 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
         self.ms_left = TICKS_PER_MS as i32;
         if dir != 0 {
             self.ms_left += setup as i32;
-            (dir, setup)
+            Some((dir, setup))
         } else {
-            self.step()
+            None
         }
     }
 
