@@ -77,6 +77,12 @@ pub struct Link {
     /// Deceleration triggers fired, and the move the last one fired in.
     pub(crate) decel: AtomicU32,
     pub(crate) decel_in: AtomicUsize,
+    /// The move a move change enters (from the last step of the one before until it is the
+    /// running move; 0 otherwise): the walk is on it from then on.
+    pub(crate) next: AtomicUsize,
+    /// The running move's successor once the ramp half has primed it (0 or 1: none; the step
+    /// half stores 1 when it enters the successor or goes idle).
+    pub(crate) succ: AtomicUsize,
     /// Requests to prime the front move for a start from rest.
     pub(crate) primes: AtomicU32,
     /// The step half's feed hold.
@@ -91,6 +97,8 @@ impl Link {
             ms: AtomicU32::new(0),
             decel: AtomicU32::new(0),
             decel_in: AtomicUsize::new(0),
+            next: AtomicUsize::new(0),
+            succ: AtomicUsize::new(0),
             primes: AtomicU32::new(0),
             hold: AtomicBool::new(false),
             idx: AtomicU32::new(0),

@@ -169,9 +169,4 @@ impl<const N: usize> RingPeek<'_, N> {
         let h = self.ring.head.load(Acquire);
         (self.ring.tail.load(Acquire).wrapping_sub(h) > k).then(|| self.ring.slot(h.wrapping_add(k)) as *const Prepared<N>)
     }
-
-    /// True when a move is published after the oldest one.
-    pub fn has_next(&self) -> bool {
-        self.nth(1).is_some()
-    }
 }

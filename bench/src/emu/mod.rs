@@ -16,6 +16,7 @@
 pub mod asm;
 mod board;
 mod bus;
+pub mod changes;
 pub mod cost;
 mod cpu;
 mod exception;

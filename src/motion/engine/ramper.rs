@@ -35,15 +35,16 @@ pub struct Ramper<'a, const N: usize, const L: usize = RAMP_LEN> {
     hold: bool,
     /// A hold brought the walk to rest (the running move's period is 0 until the resume).
     resting: bool,
-    /// The move was primed for a start from rest (entering it changes nothing).
-    primed: bool,
-    /// The trigger last published in the running move's slot.
+    /// The trigger last published in the running move's slot, and the successor last
+    /// published in the link.
     published_at: u32,
+    published_succ: usize,
     // The step half's counters as last seen.
     seen_ms: u32,
     seen_decel: u32,
     /// (The position record's sequence: it moves when a move is entered or ended.)
     seen_moves: u32,
+    seen_next: usize,
     seen_primes: u32,
 }
 
@@ -65,11 +66,12 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
             walk: Walk::REST,
             hold: link.hold.load(Relaxed),
             resting: false,
-            primed: false,
             published_at: 0,
+            published_succ: 0,
             seen_ms: link.ms.load(Relaxed),
             seen_decel: link.decel.load(Relaxed),
             seen_moves: shared.record_seq(),
+            seen_next: link.next.load(Relaxed),
             seen_primes: link.primes.load(Relaxed),
         }
     }
@@ -83,22 +85,29 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
     pub fn run(&mut self) {
         loop {
             let link = &self.shared.link;
-            let (ms, decel, moves, primes, hold) =
-                (link.ms.load(Relaxed), link.decel.load(Relaxed), self.shared.record_seq(), link.primes.load(Relaxed), link.hold.load(Relaxed));
-            if (ms, decel, moves, primes, hold) == (self.seen_ms, self.seen_decel, self.seen_moves, self.seen_primes, self.hold) {
+            let (ms, decel, moves, next, primes, hold) = (
+                link.ms.load(Relaxed),
+                link.decel.load(Relaxed),
+                self.shared.record_seq(),
+                link.next.load(Relaxed),
+                link.primes.load(Relaxed),
+                link.hold.load(Relaxed),
+            );
+            if (ms, decel, moves, next, primes, hold) == (self.seen_ms, self.seen_decel, self.seen_moves, self.seen_next, self.seen_primes, self.hold) {
                 return;
             }
-            if moves != self.seen_moves {
-                self.seen_moves = moves;
-                let p = self.shared.running();
+            if (moves, next) != (self.seen_moves, self.seen_next) {
+                (self.seen_moves, self.seen_next) = (moves, next);
+                // The move being entered, else the running one (the same move when its change
+                // completes: the walk is on it already).
+                let p = if next != 0 { next as *const Prepared<N> } else { self.shared.running() };
                 if p.is_null() {
                     self.cur = p;
                     self.walk = Walk::REST;
                     self.resting = false;
-                } else if !(self.primed && p == self.cur) {
+                } else if p != self.cur {
                     self.enter(p);
                 }
-                self.primed = false;
             }
             if primes != self.seen_primes {
                 self.seen_primes = primes;
@@ -106,7 +115,6 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
                     self.walk = Walk::REST;
                     self.resting = false;
                     self.enter(p);
-                    self.primed = true;
                 }
             }
             if decel != self.seen_decel {
@@ -128,6 +136,17 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
             }
             self.publish();
         }
+    }
+
+    /// Where the walk's move is in the ring: the front, or the one after it during a move
+    /// change (the step half frees the front's slot on the tick after its last step).
+    fn cur_at(&self) -> u32 {
+        (self.ring.front() != Some(self.cur)) as u32
+    }
+
+    /// The move after the walk's, if queued.
+    fn successor(&self) -> Option<*const Prepared<N>> {
+        self.ring.nth(self.cur_at() + 1)
     }
 
     /// A move the walk is on, not resting under a hold.
@@ -182,7 +201,7 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
     /// The exit target: 0 under a hold or when no successor is queued yet; never above the
     /// cruise (an override may have lowered it below the planned exit).
     fn target(&self) -> u32 {
-        if self.hold || !self.ring.has_next() {
+        if self.hold || self.successor().is_none() {
             0
         } else {
             // SAFETY: an atomic field of the running slot.
@@ -246,6 +265,7 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
     fn publish(&mut self) {
         if self.cur.is_null() {
             self.shared.link.idx.store(0, Relaxed);
+            self.published_succ = self.shared.link.succ.load(Relaxed);
             return;
         }
         self.settle();
@@ -262,7 +282,8 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
             };
         }
         self.shared.link.idx.store(self.walk.idx, Relaxed);
-        if let Some(n) = self.ring.nth(1) {
+        let next = self.successor();
+        if let Some(n) = next {
             // SAFETY: a published slot after the running one; plain fields and atomics.
             let n = unsafe { &*n };
             let table = &self.ramp.profile().ramp;
@@ -272,11 +293,20 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
             let at = if self.hold {
                 0
             } else {
-                let target = if self.ring.nth(2).is_some() { n.exit_q.load(Relaxed).min(n.ramp.cruise_q) } else { 0 };
+                let target = if self.ring.nth(self.cur_at() + 2).is_some() { n.exit_q.load(Relaxed).min(n.ramp.cruise_q) } else { 0 };
                 w.settle_trigger(&n.ramp, target, table);
                 w.decel_at
             };
             n.decel_at.store(at, Relaxed);
+        }
+        // Only over the value this half left: if the step half entered the successor since
+        // (and cleared it), the next pass primes the new one's.
+        let succ = next.map_or(0, |n| n as usize);
+        if succ != self.published_succ {
+            self.published_succ = match self.shared.link.succ.compare_exchange(self.published_succ, succ, Relaxed, Relaxed) {
+                Ok(_) => succ,
+                Err(now) => now,
+            };
         }
     }
 }

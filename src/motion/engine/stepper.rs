@@ -14,6 +14,11 @@ use crate::ramp::{RampSlot, RAMP_LEN};
 use crate::ring::RingConsumer;
 use crate::TICKS_PER_MS;
 
+/// [`Link::succ`] as the step half leaves it when it enters a move or goes idle: no successor
+/// primed, and never a value the ramp half last stored (so its compare-and-swap over a stale
+/// view fails).
+const CLEARED: usize = 1;
+
 /// A tick whose own period (the gap from its update event to the next) is at least this (2048
 /// ticks: below 35 kHz) leaves room before a direction change for the change itself: the
 /// finishing step's gap is shortened by the setup.
@@ -57,8 +62,6 @@ pub struct Stepper<'a, const N: usize, const L: usize = RAMP_LEN> {
     /// This tick's own period: from its update event to the next (the previous tick's ARR).
     gap_in: u32,
     hold: bool,
-    /// The move to start at the next edge (phases `Enter` and `Dir`).
-    next: *mut Prepared<N>,
     ctl_seen: Ctl,
     /// Asks for the ramp half's interrupt (a counter in [`Link`] moved): the firmware pends
     /// its vector; the host's [`super::Engine`] runs the ramp half after every tick anyway.
@@ -87,7 +90,6 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
             left: 0,
             gap_in: 0,
             hold: false,
-            next: core::ptr::null_mut(),
             ctl_seen: shared.ctl.load(),
             pend: || {},
         }
@@ -290,7 +292,11 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
     #[inline(always)]
     fn enter_next(&mut self) {
         self.ring.pop();
-        self.enter(self.next);
+        let link = self.link();
+        self.enter(link.next.load(Relaxed) as *mut Prepared<N>);
+        link.next.store(0, Relaxed);
+        // Primed for the move before: the ramp half primes this one's successor next.
+        link.succ.store(CLEARED, Relaxed);
         self.phase = Phase::Run;
     }
 
@@ -340,28 +346,32 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
     #[inline(never)]
     fn finish(&mut self, gap: u32, period: u32) -> u32 {
         bump(&self.shared.moves_done);
-        if let Some(p) = self.ring.second() {
-            // SAFETY: a published slot; plain fields and its atomics (read where needed, so
-            // the common path keeps few registers).
-            if unsafe { (*p).epoch } == self.ctl_seen.epoch() {
-                // SAFETY: as above.
-                if unsafe { (*p).period.load(Relaxed) } == 0 {
-                    self.unprimed(p, period);
-                }
-                self.next = p;
-                // SAFETY: as above.
-                if unsafe { (*p).dir_word } == 0 {
-                    self.phase = Phase::Enter;
-                    return gap;
-                }
-                self.phase = Phase::Dir;
-                if self.gap_in >= SHORT_GAP {
-                    return self.room_for_dir(p, gap);
-                }
+        // The successor the ramp half primed (its period and trigger), else one queued since
+        // it last ran.
+        let mut p = self.link().succ.load(Relaxed) as *mut Prepared<N>;
+        if (p as usize) <= CLEARED {
+            p = self.unprimed(period);
+            if p.is_null() {
+                return self.end_of_queue(gap);
+            }
+        }
+        // SAFETY: a published slot; plain fields and its atomics (read where needed, so the
+        // common path keeps few registers).
+        unsafe {
+            // The rate in force from the next step on (reports, and the ramp half's own once
+            // it sees the change, right after this tick).
+            self.shared.period_bits.store((*p).period.load(Relaxed), Relaxed);
+            self.link().next.store(p as usize, Relaxed);
+            if (*p).dir_word == 0 {
+                self.phase = Phase::Enter;
                 return gap;
             }
         }
-        self.end_of_queue(gap)
+        self.phase = Phase::Dir;
+        if self.gap_in >= SHORT_GAP {
+            return self.room_for_dir(p, gap);
+        }
+        gap
     }
 
     /// Slow steps before a direction change: the change comes `dir_setup` before the next
@@ -385,15 +395,25 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
         gap
     }
 
-    /// The next move was queued too late for the ramp half to prime it: the last period, never
-    /// faster than that move allows, until the ramp half has seen the change (now: it computes
-    /// the trigger too).
+    /// No successor primed: the move after the running one in the ring, if any, of this
+    /// epoch, queued too late for the ramp half to prime it: the last period, never faster than
+    /// that move allows, until the ramp half has seen the change (now: it computes the trigger
+    /// too). Null when none.
     #[cold]
     #[inline(never)]
-    fn unprimed(&mut self, p: *mut Prepared<N>, period: u32) {
-        // SAFETY: a published slot; a plain field and an atomic.
-        unsafe { (*p).period.store(period.max((*p).min_period.to_bits()), Relaxed) };
+    fn unprimed(&mut self, period: u32) -> *mut Prepared<N> {
+        let Some(p) = self.ring.second() else { return core::ptr::null_mut() };
+        // SAFETY: a published slot; plain fields and an atomic.
+        unsafe {
+            if (*p).epoch != self.ctl_seen.epoch() {
+                return core::ptr::null_mut();
+            }
+            if (*p).period.load(Relaxed) == 0 {
+                (*p).period.store(period.max((*p).min_period.to_bits()), Relaxed);
+            }
+        }
         (self.pend)();
+        p
     }
 
     /// An immediate stop: the running move ends where it is, each axis at the steps it made.
@@ -427,6 +447,8 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
         self.left = 0;
         self.phase = Phase::Idle;
         self.shared.period_bits.store(0, Relaxed);
+        self.link().next.store(0, Relaxed);
+        self.link().succ.store(CLEARED, Relaxed);
         self.publish(State::Idle);
     }
 

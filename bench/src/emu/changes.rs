@@ -1,0 +1,117 @@
+//! Moves changing at speed: back-to-back short moves at the firmware's own rate cap, and the
+//! step interrupt's mean and longest run while they run (issue 10's measure: a move change
+//! must cost a tick no more than 1.3× the mean).
+//!
+//! Every figure is *modeled* (cycles of the emulated Cortex-M3, see bench/README.md).
+
+use anyhow::{ensure, Result};
+
+use super::sweep::{settings_lines, RATIO};
+use super::{Board, HZ};
+
+/// Short moves after the long first one.
+pub const MOVES: usize = 12;
+
+/// What one run measured.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct ChangeResult {
+    pub axes: usize,
+    /// The master rate asked for (Hz; above the cap the planner runs the moves at the cap).
+    pub hz: f64,
+    /// The shortest step period seen (cycles).
+    pub period: u64,
+    /// Step-interrupt runs at speed (their update event followed by the next within 1.5
+    /// shortest periods): count, mean and longest, modeled cycles.
+    pub runs: usize,
+    pub mean: f64,
+    pub max: u64,
+    /// The longest of them that made a move change: the tick of a move's last step (it finds
+    /// the next move) and the next move's first (it enters it).
+    pub max_change: u64,
+    pub max_last: u64,
+    pub max_first: u64,
+    /// Net steps asked for per axis, and rising step edges asked for in all.
+    pub want: [i64; 7],
+    pub rising: i64,
+}
+
+impl ChangeResult {
+    /// Longest run at speed over the mean.
+    pub fn ratio(&self) -> f64 {
+        self.max as f64 / self.mean.max(1.0)
+    }
+}
+
+/// On a booted `board` (the sweep's settings are sent first: 0.5 µs pulses, the shortest
+/// leave a long tick the least room): one long move, then [`MOVES`] short ones of 200 master
+/// steps, queued while the long one runs so that each starts at speed, at master rate `hz` on
+/// `axes` axes (steps in the sweep's ratio; on 2 and more axes Y reverses at every junction:
+/// a direction change at speed). Runs until idle.
+pub fn back_to_back(b: &mut Board, axes: usize, hz: f64) -> Result<ChangeResult> {
+    for l in settings_lines() {
+        let r = b.send_line_wait_ok(&l)?;
+        ensure!(r.contains("ok"), "{l}: {r}");
+    }
+    ensure!(b.send_line_wait_ok("G91")?.contains("ok"));
+    let mut want = [0i64; 7];
+    let mut rising = 0i64;
+    b.set_isr_log(true);
+    for k in 0..=MOVES {
+        // A long first move, so the short ones after it are all queued before it ends (each
+        // is shorter than its line takes on the serial line).
+        let len = if k == 0 { 8000 } else { 200 };
+        let mut steps: Vec<i64> = RATIO[..axes].iter().map(|&r| len * r as i64).collect();
+        if axes > 1 {
+            steps[1] = if k % 2 == 0 { len } else { -len };
+        }
+        for (w, s) in want.iter_mut().zip(&steps) {
+            *w += s;
+            rising += s.abs();
+        }
+        let mm: Vec<f64> = steps.iter().map(|&s| s as f64 / 100.0).collect();
+        let path = mm.iter().map(|m| m * m).sum::<f64>().sqrt();
+        let feed = path / (steps[0] as f64 / hz) * 60.0;
+        let words: String = "XYZABCU".chars().zip(&mm).map(|(a, m)| format!(" {a}{m}")).collect();
+        let r = b.send_line_wait_ok(&format!("G1{words} F{feed:.3}"))?;
+        ensure!(r.contains("ok"), "{r}");
+    }
+    b.run_until_quiet(HZ / 10, 5 * HZ)?;
+    let log = b.isr_log();
+    let ups: Vec<u64> = log.iter().filter_map(|r| r.update).collect();
+    let period = ups.windows(2).map(|w| w[1] - w[0]).min().unwrap_or(0);
+    let near = period * 3 / 2;
+    let finish = |r: &super::IsrRun| r.blocks.iter().any(|&a| b.symbol(a).is_some_and(|(n, _)| n.ends_with("::finish")));
+    let (mut fast, mut max_last, mut max_first, mut after_finish) = (Vec::new(), 0, 0, false);
+    for r in log {
+        let Some(u) = r.update else { continue };
+        // The second half of a move change runs on the tick after the last step's.
+        let (last, first) = (finish(r), after_finish);
+        after_finish = last;
+        let next = ups.get(ups.partition_point(|&n| n <= u)).copied();
+        if !next.is_some_and(|n| n - u < near) {
+            continue;
+        }
+        fast.push(r.cycles);
+        if last {
+            max_last = max_last.max(r.cycles);
+        }
+        if first {
+            max_first = max_first.max(r.cycles);
+        }
+    }
+    b.set_isr_log(false);
+    ensure!(!fast.is_empty(), "no step interrupt at speed");
+    Ok(ChangeResult {
+        axes,
+        hz,
+        period,
+        runs: fast.len(),
+        mean: fast.iter().sum::<u64>() as f64 / fast.len() as f64,
+        max: fast.iter().copied().max().unwrap_or(0),
+        max_change: max_last.max(max_first),
+        max_last,
+        max_first,
+        want,
+        rising,
+    })
+}
