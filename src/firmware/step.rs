@@ -1,10 +1,12 @@
 //! The step interrupt and the ramp interrupt, bound outside RTIC: no framework code on the step
 //! path (no BASEPRI save and restore, no ISB). TIM2 (the engine's step half) sits one level
-//! above everything RTIC runs, so nothing delays an edge; the ramp half runs in the TIM4
-//! vector (TIM4 itself stays off: the step interrupt pends the vector when it has ramp work) at
-//! RTIC's priority 3, like the limit interrupts, above every RTIC task's lock (their locks go
-//! no higher than priority 2). Neither shares anything with RTIC's resources: `init` moves
-//! each half in once (before interrupts are on) and only its handler touches it afterwards.
+//! above everything RTIC runs, so nothing delays an edge. The ramp half runs in the TIM4 vector
+//! (TIM4 itself stays off: the step interrupt pends the vector when it has ramp work) at RTIC's
+//! priority 1, below the serial interrupt: near the rate cap the step interrupt leaves little
+//! time, and a ramp run there must not hold off a received byte (the USART keeps one). Its
+//! work tolerates the short delays (a trigger's walk down starting some steps late ends a
+//! fraction of a walk high). Neither half shares anything with RTIC's resources: `init` moves
+//! each in once (before interrupts are on) and only its handler touches it afterwards.
 
 use core::cell::UnsafeCell;
 use core::mem::MaybeUninit;
@@ -44,11 +46,11 @@ pub fn install(engine: Engine<'static, AXES>, nvic: &mut cortex_m::peripheral::N
         (*STEPPER.0.get()).write(stepper);
         (*RAMPER.0.get()).write(ramper);
     }
-    // SAFETY: the priorities are above RTIC's tasks (TIM2) and at its top one (the ramp);
+    // SAFETY: the priorities are above RTIC's tasks (TIM2) and at its lowest (the ramp);
     // unmasking is what `init` is for.
     unsafe {
         nvic.set_priority(pac::Interrupt::TIM2, nvic_priority(4));
-        nvic.set_priority(RAMP_IRQ, nvic_priority(3));
+        nvic.set_priority(RAMP_IRQ, nvic_priority(1));
         cortex_m::peripheral::NVIC::unmask(RAMP_IRQ);
         cortex_m::peripheral::NVIC::unmask(pac::Interrupt::TIM2);
     }

@@ -39,6 +39,9 @@ pub struct Ramper<'a, const N: usize, const L: usize = RAMP_LEN> {
     /// published in the link.
     published_at: u32,
     published_succ: usize,
+    /// The ring as this pass saw it ([`Self::look`]).
+    succ: Option<*const Prepared<N>>,
+    succ_next: bool,
     // The step half's counters as last seen.
     seen_ms: u32,
     seen_decel: u32,
@@ -68,6 +71,8 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
             resting: false,
             published_at: 0,
             published_succ: 0,
+            succ: None,
+            succ_next: false,
             seen_ms: link.ms.load(Relaxed),
             seen_decel: link.decel.load(Relaxed),
             seen_moves: shared.record_seq(),
@@ -117,6 +122,7 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
                     self.enter(p);
                 }
             }
+            self.look();
             if decel != self.seen_decel {
                 self.seen_decel = decel;
                 // (A trigger of a move that has ended since is void: its successor's trigger
@@ -138,15 +144,13 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
         }
     }
 
-    /// Where the walk's move is in the ring: the front, or the one after it during a move
-    /// change (the step half frees the front's slot on the tick after its last step).
-    fn cur_at(&self) -> u32 {
-        (self.ring.front() != Some(self.cur)) as u32
-    }
-
-    /// The move after the walk's, if queued.
-    fn successor(&self) -> Option<*const Prepared<N>> {
-        self.ring.nth(self.cur_at() + 1)
+    /// Looks at the ring once per pass: the move after the walk's, and whether one follows it.
+    /// (The walk's move is the front, or the one after it during a move change: the step half
+    /// frees the front's slot on the tick after its last step.)
+    fn look(&mut self) {
+        let at = (self.ring.front() != Some(self.cur)) as u32;
+        self.succ = self.ring.nth(at + 1);
+        self.succ_next = self.succ.is_some() && self.ring.nth(at + 2).is_some();
     }
 
     /// A move the walk is on, not resting under a hold.
@@ -201,7 +205,7 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
     /// The exit target: 0 under a hold or when no successor is queued yet; never above the
     /// cruise (an override may have lowered it below the planned exit).
     fn target(&self) -> u32 {
-        if self.hold || self.successor().is_none() {
+        if self.hold || self.succ.is_none() {
             0
         } else {
             // SAFETY: an atomic field of the running slot.
@@ -282,7 +286,7 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
             };
         }
         self.shared.link.idx.store(self.walk.idx, Relaxed);
-        let next = self.successor();
+        let next = self.succ;
         if let Some(n) = next {
             // SAFETY: a published slot after the running one; plain fields and atomics.
             let n = unsafe { &*n };
@@ -293,7 +297,7 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
             let at = if self.hold {
                 0
             } else {
-                let target = if self.ring.nth(self.cur_at() + 2).is_some() { n.exit_q.load(Relaxed).min(n.ramp.cruise_q) } else { 0 };
+                let target = if self.succ_next { n.exit_q.load(Relaxed).min(n.ramp.cruise_q) } else { 0 };
                 w.settle_trigger(&n.ramp, target, table);
                 w.decel_at
             };
