@@ -81,6 +81,9 @@ pub struct Prepared<const N: usize> {
     /// fire, not computed yet or fired).
     pub(crate) period: AtomicU32,
     pub(crate) decel_at: AtomicU32,
+    /// The period one walk down from the index the trigger was computed at (bits): the
+    /// trigger's own step runs at it.
+    pub(crate) down_period: AtomicU32,
     /// The feeder's: how overrides scale the cruise.
     pub(crate) rates: Rates,
     // Edges.
@@ -159,6 +162,7 @@ impl<const N: usize> Prepared<N> {
             min_period: Period::from_bits(t.min_period_for(n as u32).saturating_mul(16)),
             period: AtomicU32::new(0),
             decel_at: AtomicU32::new(0),
+            down_period: AtomicU32::new(0),
             rates,
             dir_word,
             // Both gaps hold a step tick of this move (its handler cost, as its periods do).

@@ -263,6 +263,14 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
         self.shared.period_bits.store(self.period, Relaxed);
     }
 
+    /// The period (bits) one walk down from the walk's index towards `target`, for a move with
+    /// `plan` and floor `min`: where a trigger puts it at once.
+    fn down_period(&self, plan: &RampPlan, min: Period, target: u32) -> u32 {
+        let idx = self.walk.idx;
+        let down = if idx > target { idx.saturating_sub(plan.walk_q).max(target) } else { idx };
+        scaled(base_at(down, &self.ramp.profile().ramp), down, plan, min).to_bits()
+    }
+
     /// Publishes the results in the slots: the running move's period and trigger (0 while
     /// decelerating, and the period 0 at rest under a hold), the walk's index, and the
     /// successor's period at this index.
@@ -277,6 +285,10 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
         let p = unsafe { &*self.cur };
         p.period.store(if self.resting { 0 } else { self.period }, Relaxed);
         let at = if self.walk.decel || self.resting { 0 } else { self.walk.decel_at };
+        if at != 0 {
+            let target = self.target();
+            p.down_period.store(self.down_period(&self.plan, self.min_period, target), Relaxed);
+        }
         // Only over the value this half left: a trigger the step half fired (0) stays fired
         // until this half has seen it.
         if at != self.published_at {
@@ -299,6 +311,7 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
             } else {
                 let target = if self.succ_next { n.exit_q.load(Relaxed).min(n.ramp.cruise_q) } else { 0 };
                 w.settle_trigger(&n.ramp, target, table);
+                n.down_period.store(self.down_period(&n.ramp, n.min_period, target), Relaxed);
                 w.decel_at
             };
             n.decel_at.store(at, Relaxed);

@@ -200,7 +200,7 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
         // SAFETY: `cur` is the front slot of the ring, owned by the engine until it pops it;
         // only its slaves are borrowed (the feeder and the ramp half store its atomics).
         let p = unsafe { &mut *self.cur };
-        let period = p.period.load(Relaxed);
+        let mut period = p.period.load(Relaxed);
         if period == 0 {
             // The ramp half brought a hold to rest.
             return self.halt();
@@ -235,7 +235,7 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
         // once it fired. (Not at the last step: a successor takes over the walk there, and with
         // none the move has reached its exit.)
         if self.left <= p.decel_at.load(Relaxed) && self.left != 0 {
-            self.trigger();
+            period = self.trigger();
         }
         let acc = self.frac + period;
         self.frac = acc & 15;
@@ -246,15 +246,24 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
         (word, gap)
     }
 
-    /// The deceleration trigger fired: the ramp half walks down, on a fresh millisecond.
+    /// The deceleration trigger fired: the walk steps down at once, on a fresh millisecond
+    /// (this step's gap already at the period one walk down, which the ramp half published with
+    /// the trigger; it takes the walk from there). Returns that period.
     #[inline(never)]
-    fn trigger(&mut self) {
-        // SAFETY: as in `step`; an atomic field.
-        unsafe { (*self.cur).decel_at.store(0, Relaxed) };
+    fn trigger(&mut self) -> u32 {
+        // SAFETY: as in `step`; atomic fields.
+        let period = unsafe {
+            let p = &*self.cur;
+            p.decel_at.store(0, Relaxed);
+            let period = p.down_period.load(Relaxed);
+            p.period.store(period, Relaxed);
+            period
+        };
         self.ms_left = TICKS_PER_MS as i32;
         self.link().decel_in.store(self.cur as usize, Relaxed);
         bump(&self.link().decel);
         (self.pend)();
+        period
     }
 
     /// A hold came to rest: no more steps until it is released.
