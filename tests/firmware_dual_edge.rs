@@ -98,16 +98,20 @@ fn fast_532_toggles_exactly_at_200_khz() {
 
 /// Back-to-back moves (12 segments joined at speed, Y reversing at every junction on 3 and 7
 /// axes) at the dual-edge cap `$I` prints, which is above the full-pulse cap for the same
-/// pulse: every step reaches the pins, no timer update is missed, toggles of a pin stay ≥ `$0`
-/// apart and direction changes lead the next toggle by `$29`.
+/// pulse (3 µs, a TB6600's: full pulses are then limited by the pulse and its low time, one
+/// toggle per step by the handler's cost): every step reaches the pins, no timer update is
+/// missed, toggles of a pin stay ≥ `$0` apart and direction changes lead the next toggle by
+/// `$29`.
 #[test]
 fn back_to_back_moves_above_the_full_pulse_cap_keep_every_step() {
-    use ddastep_bench::emu::sweep::{settings_lines, PULSE_US, RATIO};
+    use ddastep_bench::emu::sweep::{settings_lines, RATIO};
+    const PULSE_US: f64 = 3.0;
     for axes in [1usize, 3, 7] {
         let mut b = boot_dual(Settings::BENCH);
         for l in settings_lines() {
             ok(&mut b, &l);
         }
+        ok(&mut b, &format!("$0={PULSE_US}"));
         let info = reply(&mut b, "$I");
         let mut s = Settings::BENCH;
         s.set(0, PULSE_US, 3).unwrap();

@@ -77,8 +77,8 @@ fn streamed_short_segments_never_starve() {
 /// the cap allows least room for a long tick): a long move, then 12 short ones joined at
 /// speed, on 1 axis collinear, on 3 and 7 axes with Y reversing at every junction (a direction
 /// change at speed). Every step reaches the pins and no timer update is missed; the step ISR's
-/// longest run at speed (a move change) is printed beside its mean (bench/RESULTS.md has the
-/// same measure, `ddastep_bench::emu::changes`).
+/// longest run (a move change) is printed beside its mean (bench/RESULTS.md has the same
+/// measure, `ddastep_bench::emu::changes`).
 #[test]
 fn back_to_back_moves_at_the_rate_cap_keep_every_step() {
     for axes in [1usize, 3, 7] {
@@ -93,8 +93,8 @@ fn back_to_back_moves_at_the_rate_cap_keep_every_step() {
         assert!(info.contains(&format!("[MSG:max step rate {} Hz]", s.timing().max_rate_hz())), "{info}");
         wait_idle(&mut b, 1.0);
         eprintln!(
-            "{axes} axes at {:.0} Hz (cap {cap}): step ISR at speed mean {:.1} / max {} (a move change: {} on its last step, {} on the next move's first) modeled cycles ({} runs), overruns {}",
-            r.hz, r.mean, r.max, r.max_last, r.max_first, r.runs, b.report().overruns
+            "{axes} axes at {:.0} Hz (cap {cap}): step ISR mean {:.1} / max {} (a move change: {} on its last step, {} on the next move's first; not at speed {}, the end {}) modeled cycles ({} runs), overruns {}",
+            r.hz, r.mean, r.max, r.max_last, r.max_first, r.max_start, r.max_end, r.runs, b.report().overruns
         );
         assert!(r.max_change > 0 && r.runs > 1000, "{r:?}");
         assert_eq!(net(&steps(&b)), r.want, "{axes} axes");

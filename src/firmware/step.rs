@@ -40,7 +40,13 @@ const RAMP_IRQ: pac::Interrupt = pac::Interrupt::TIM4;
 /// Hands the two halves to their interrupts and enables them (in `init`, interrupts still off).
 pub fn install(engine: Engine<'static, AXES>, nvic: &mut cortex_m::peripheral::NVIC) {
     let (mut stepper, ramper) = engine.split();
-    stepper.set_pend(|| cortex_m::peripheral::NVIC::pend(RAMP_IRQ));
+    // The NVIC's ISPR word for the ramp vector (what `NVIC::pend` writes), as a plain store.
+    let irq = RAMP_IRQ as usize;
+    // SAFETY: the set-pending register is always writable; this bit pends only the ramp vector.
+    unsafe {
+        let ispr = core::ptr::addr_of!((*cortex_m::peripheral::NVIC::PTR).ispr[irq / 32]);
+        stepper.set_pend(ispr.cast::<u32>().cast_mut(), 1 << (irq % 32));
+    }
     // SAFETY: interrupts are off and neither handler has run yet: no other access.
     unsafe {
         (*STEPPER.0.get()).write(stepper);

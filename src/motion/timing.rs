@@ -122,17 +122,18 @@ impl Timing {
 }
 
 /// Step-handler cost per master step, timer ticks: the virtual bench's step-rate sweep
-/// (bench/RESULTS.md, one long move per point, modeled with the silicon-checked memory model)
-/// holds the CPU ≤ 95 % busy up to 265 kHz on one axis, 234 kHz on three and 193 kHz on seven
-/// (periods 272, 308 and 373 ticks); 277 + 17 per slave covers every axis count.
-pub const HANDLER_BASE_TICKS: u32 = 277;
+/// (bench/RESULTS.md, one long move per point, modeled with the silicon-checked memory model;
+/// the ramp interrupt and `idle` counted in the CPU) holds the CPU ≤ 95 % busy up to 249 kHz on
+/// one axis, 223 kHz on three and 186 kHz on seven (periods 289, 323 and 387 ticks); 290 + 17
+/// per slave covers every axis count.
+pub const HANDLER_BASE_TICKS: u32 = 290;
 /// Extra handler ticks per slave axis (see [`HANDLER_BASE_TICKS`]).
 pub const HANDLER_PER_SLAVE_TICKS: u32 = 17;
 /// The longest step-handler run at speed, timer ticks (plus [`HANDLER_PER_SLAVE_TICKS`] per
-/// slave): a tick carrying one piece of ramp work or a move change; the bench's per-entry log
-/// (`Board::set_isr_log`) measured at most ≈ 490 modeled cycles on one axis and ≈ 535 on
-/// three and seven, during back-to-back moves at speed and ramps.
-pub const HANDLER_LONG_TICKS: u32 = 520;
+/// slave): a move change (the ramp work runs in its own interrupt); the bench's back-to-back
+/// moves at the cap (`ddastep_bench::emu::changes`, per-entry log) measured at most 313
+/// modeled cycles on one axis, 345 on three and 404 on seven.
+pub const HANDLER_LONG_TICKS: u32 = 330;
 /// From a handler's compare-flag check to its end (the self-measurement), less a margin.
 pub const HANDLER_TAIL_TICKS: u32 = 10;
 /// Where a short pulse's falling edge lands after its rising edge when the compare event is

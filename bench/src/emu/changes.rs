@@ -9,6 +9,10 @@ use anyhow::{ensure, Result};
 use super::sweep::{settings_lines, RATIO};
 use super::{Board, HZ};
 
+/// A step-interrupt run is at speed when its update event came within this many cycles of
+/// the one before (above 35 kHz).
+pub const AT_SPEED_CYCLES: u64 = 2048;
+
 /// Short moves after the long first one.
 pub const MOVES: usize = 12;
 
@@ -18,10 +22,9 @@ pub struct ChangeResult {
     pub axes: usize,
     /// The master rate asked for (Hz; above the cap the planner runs the moves at the cap).
     pub hz: f64,
-    /// The shortest step period seen (cycles).
-    pub period: u64,
-    /// Step-interrupt runs at speed (their update event followed by the next within 1.5
-    /// shortest periods): count, mean and longest, modeled cycles.
+    /// Step-interrupt runs at speed (their update event came within [`AT_SPEED_CYCLES`] of the
+    /// one before) up to the chain's last step (excluded): count, mean and longest, modeled
+    /// cycles.
     pub runs: usize,
     pub mean: f64,
     pub max: u64,
@@ -30,6 +33,10 @@ pub struct ChangeResult {
     pub max_change: u64,
     pub max_last: u64,
     pub max_first: u64,
+    /// The longest run not at speed (a start from rest, a tick after a direction change's
+    /// setup gap), and the run that ends the chain (its last step, then idle: no edge follows).
+    pub max_start: u64,
+    pub max_end: u64,
     /// Net steps asked for per axis, and rising step edges asked for in all.
     pub want: [i64; 7],
     pub rising: i64,
@@ -77,21 +84,25 @@ pub fn back_to_back(b: &mut Board, axes: usize, hz: f64) -> Result<ChangeResult>
     }
     b.run_until_quiet(HZ / 10, 5 * HZ)?;
     let log = b.isr_log();
-    let ups: Vec<u64> = log.iter().filter_map(|r| r.update).collect();
-    let period = ups.windows(2).map(|w| w[1] - w[0]).min().unwrap_or(0);
-    let near = period * 3 / 2;
-    let finish = |r: &super::IsrRun| r.blocks.iter().any(|&a| b.symbol(a).is_some_and(|(n, _)| n.ends_with("::finish")));
-    let (mut fast, mut max_last, mut max_first, mut after_finish) = (Vec::new(), 0, 0, false);
-    for r in log {
-        let Some(u) = r.update else { continue };
-        // The second half of a move change runs on the tick after the last step's.
-        let (last, first) = (finish(r), after_finish);
-        after_finish = last;
-        let next = ups.get(ups.partition_point(|&n| n <= u)).copied();
-        if !next.is_some_and(|n| n - u < near) {
+    let has = |r: &super::IsrRun, f: &str| r.blocks.iter().any(|&a| b.symbol(a).is_some_and(|(n, _)| n.ends_with(f)));
+    // The chain: every step-interrupt run with an update event up to the one that ends the
+    // motion (its last step, then idle: no edge follows it, reported apart).
+    let end = log.iter().rposition(|r| r.update.is_some() && has(r, "::end_of_queue")).unwrap_or(log.len());
+    let runs: Vec<&super::IsrRun> = log[..end].iter().filter(|r| r.update.is_some()).collect();
+    // At speed: the update came within 2048 cycles (above 35 kHz) of the one before (not a
+    // start from rest, reported apart).
+    let (mut ticks, mut max_start, mut max_last, mut max_first, mut after_last) = (Vec::new(), 0, 0, 0, false);
+    for (k, r) in runs.iter().enumerate() {
+        // A move change: the tick of a move's last step finds the next one, the tick after it
+        // enters it.
+        let (last, first) = (has(r, "::finish"), after_last);
+        after_last = last;
+        let at_speed = k > 0 && r.update.unwrap_or(0) - runs[k - 1].update.unwrap_or(0) < AT_SPEED_CYCLES;
+        if !at_speed {
+            max_start = max_start.max(r.cycles);
             continue;
         }
-        fast.push(r.cycles);
+        ticks.push(r.cycles);
         if last {
             max_last = max_last.max(r.cycles);
         }
@@ -99,15 +110,17 @@ pub fn back_to_back(b: &mut Board, axes: usize, hz: f64) -> Result<ChangeResult>
             max_first = max_first.max(r.cycles);
         }
     }
+    let max_end = log.get(end).map_or(0, |r| r.cycles);
     b.set_isr_log(false);
-    ensure!(!fast.is_empty(), "no step interrupt at speed");
+    ensure!(!ticks.is_empty(), "no step interrupt");
     Ok(ChangeResult {
         axes,
         hz,
-        period,
-        runs: fast.len(),
-        mean: fast.iter().sum::<u64>() as f64 / fast.len() as f64,
-        max: fast.iter().copied().max().unwrap_or(0),
+        runs: ticks.len(),
+        mean: ticks.iter().sum::<u64>() as f64 / ticks.len() as f64,
+        max: ticks.iter().copied().max().unwrap_or(0),
+        max_start,
+        max_end,
         max_change: max_last.max(max_first),
         max_last,
         max_first,

@@ -63,9 +63,10 @@ pub struct Stepper<'a, const N: usize, const L: usize = RAMP_LEN> {
     gap_in: u32,
     hold: bool,
     ctl_seen: Ctl,
-    /// Asks for the ramp half's interrupt (a counter in [`Link`] moved): the firmware pends
-    /// its vector; the host's [`super::Engine`] runs the ramp half after every tick anyway.
-    pend: fn(),
+    /// How to ask for the ramp half's interrupt (a counter in [`Link`] moved): write `.1` to
+    /// the register at `.0` (the NVIC's set-pending word for its vector); null on the host,
+    /// where [`super::Engine`] runs the ramp half after every tick anyway.
+    pend: (*mut u32, u32),
 }
 
 // SAFETY: `cur` points into the ring the engine consumes; the step half is moved into the
@@ -91,7 +92,7 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
             gap_in: 0,
             hold: false,
             ctl_seen: shared.ctl.load(),
-            pend: || {},
+            pend: (core::ptr::null_mut(), 0),
         }
     }
 
@@ -112,9 +113,22 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
         self.step_off
     }
 
-    /// How to ask for the ramp half's interrupt (the firmware pends its vector).
-    pub fn set_pend(&mut self, pend: fn()) {
-        self.pend = pend;
+    /// How to ask for the ramp half's interrupt: write `bit` to the register at `reg`.
+    ///
+    /// # Safety
+    /// `reg` must be valid for volatile writes of `bit` whenever the step half runs, with no
+    /// effect but pending the ramp half's interrupt (the NVIC's ISPR word of its vector).
+    pub unsafe fn set_pend(&mut self, reg: *mut u32, bit: u32) {
+        self.pend = (reg, bit);
+    }
+
+    /// Pends the ramp half's interrupt.
+    #[inline(always)]
+    fn pend(&self) {
+        if !self.pend.0.is_null() {
+            // SAFETY: `set_pend`'s contract.
+            unsafe { core::ptr::write_volatile(self.pend.0, self.pend.1) };
+        }
     }
 
     /// Computes the next edge's word; returns the ARR value to preload now.
@@ -149,7 +163,7 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
             self.ms_left += TICKS_PER_MS as i32;
             if self.phase != Phase::Idle && self.phase != Phase::Held {
                 bump(&self.link().ms);
-                (self.pend)();
+                self.pend();
             }
         }
         self.gap_in = chunk;
@@ -262,7 +276,7 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
         self.ms_left = TICKS_PER_MS as i32;
         self.link().decel_in.store(self.cur as usize, Relaxed);
         bump(&self.link().decel);
-        (self.pend)();
+        self.pend();
         period
     }
 
@@ -322,7 +336,7 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
         }
         self.hold = hold;
         self.link().hold.store(hold, Relaxed);
-        (self.pend)();
+        self.pend();
         match self.phase {
             Phase::Run | Phase::Enter | Phase::Dir if hold => {
                 // The ramp half walks down from here, on a fresh millisecond.
@@ -421,7 +435,7 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
                 (*p).period.store(period.max((*p).min_period.to_bits()), Relaxed);
             }
         }
-        (self.pend)();
+        self.pend();
         p
     }
 
@@ -484,7 +498,7 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
         }
         if primed == 0 {
             bump(&self.link().primes);
-            (self.pend)();
+            self.pend();
             return Some((0, PRIME_TICKS));
         }
         self.enter(p);
