@@ -143,11 +143,12 @@ pub const HANDLER_FALL_TICKS: u32 = 150;
 
 /// Step-handler cost per master step in dual-edge mode (one update event per step, no compare
 /// event), timer ticks, plus [`HANDLER_PER_SLAVE_TICKS`] per slave: the sweep in dual-edge mode
-/// (bench/RESULTS.md; 20 ms cruise, 0.5 µs pulses) measured 247–257, 281–290 and 341–347
-/// modeled cycles per step on 1, 3 and 7 axes over this branch's builds; at 290 + 17 per slave
-/// the 6-axis cap (192 kHz) ran the whole CPU (step ISR, other interrupts, `idle`) at 95.0 %,
-/// so 292: 246.6, 220.7, 191.0 and 182.7 kHz on 1, 3, 6 and 7 axes, each sustained ≤ 95 % busy.
-pub const DUAL_BASE_TICKS: u32 = 292;
+/// (bench/RESULTS.md; 20 ms cruise, 0.5 µs pulses, the ramp interrupt and `idle` counted) holds
+/// the CPU ≤ 95 % busy up to 243, 219 and 184 kHz on 1, 3 and 7 axes (periods 296, 329 and
+/// 391 ticks; the toggle costs a few cycles more than full pulses' one entry per step): 297 +
+/// 17 per slave covers them. Dual-edge mode gains where the full-pulse rule binds (pulses from
+/// about 1.5 µs: 2·pulse + 72 ticks above [`HANDLER_BASE_TICKS`]).
+pub const DUAL_BASE_TICKS: u32 = 297;
 /// Dual-edge mode: the shortest period a long tick (ramp work, a move change) leaves without a
 /// missed update event, timer ticks (plus [`HANDLER_PER_SLAVE_TICKS`] per slave). A long tick
 /// may overrun one period (the next update then waits for it, its store comes late by at most

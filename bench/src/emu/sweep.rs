@@ -597,6 +597,14 @@ fn bracket_text(b: &Bracket) -> String {
     }
 }
 
+// the master rates the move-change benchmark runs at: 0.5 % under the cap for 1, 3 and 7 axes
+// (the firmware's `Timing::max_rate_for`: `$I`'s one-axis cap, and for more axes the handler's
+// cost per slave, 17 ticks, on the sweep's short pulse)
+fn change_rates(s: &Sweep) -> Vec<(usize, f64)> {
+    let base = (72_000_000.0 / s.cap_hz as f64).round();
+    [1usize, 3, 7].iter().map(|&a| (a, (72_000_000.0 / (base + 17.0 * (a - 1) as f64)).floor() * 0.995)).collect()
+}
+
 // bench/RESULTS.md: command, date, model, table, ISR cost and profile, notes, every point
 pub fn results_markdown(s: &Sweep, dual: Option<&Sweep>, command: &str, firmware: &str, elf: &Path) -> Result<String> {
     use std::fmt::Write as _;
@@ -654,10 +662,26 @@ pub fn results_markdown(s: &Sweep, dual: Option<&Sweep>, command: &str, firmware
         writeln!(m, "| step ISR during the back-to-back moves: mean / max cycles | {:.1} / {} (max/mean {:.2}) |", r.isr.mean_cycles, r.isr.max_cycles, r.isr.max_cycles as f64 / r.isr.mean_cycles.max(1.0))?;
         writeln!(m, "| 10 ms windows without a step while streaming | {} |", r.starved_windows)?;
         writeln!(m, "| motion time | {:.3} s |\n", r.seconds)?;
-        writeln!(m, "The max is a move change (pointer switch, position record, the new move's deceleration")?;
-        writeln!(m, "trigger and period) or a ramp millisecond (walk, trigger, interpolated period) landing on a")?;
-        writeln!(m, "step tick; at this feed (5 kHz master) it never delays an edge.\n")?;
+        writeln!(m, "At this feed (5 kHz master) most step ticks are far apart; the max is a start from rest or")?;
+        writeln!(m, "the end of a chain. Moves changing at the rate cap are measured below.\n")?;
     }
+    writeln!(m, "### Moves changing at the rate cap\n")?;
+    writeln!(m, "`ddastep_bench::emu::changes::back_to_back`, as `tests/firmware_lookahead.rs` runs it: the")?;
+    writeln!(m, "sweep's settings, one long move, then {} short ones (200 master steps each) queued behind it,", super::changes::MOVES)?;
+    writeln!(m, "at 0.5 % under `Timing::max_rate_for` for the axis count (steps in the sweep's ratio; on 3 and")?;
+    writeln!(m, "7 axes Y reverses at every junction: a direction change at speed). The step ISR's runs at")?;
+    writeln!(m, "speed (update within {} cycles of the one before) up to the chain's last step; a move", super::changes::AT_SPEED_CYCLES)?;
+    writeln!(m, "change is the tick of a move's last step (it finds the primed successor) and the next one's")?;
+    writeln!(m, "first (it enters it); the ramp work runs in its own interrupt.\n")?;
+    writeln!(m, "| axes | master rate | mean / max cycles (max/mean) | move change: last step / first step | not at speed (start from rest) / the chain's end |")?;
+    writeln!(m, "|---:|---:|---:|---:|---:|")?;
+    for (axes, hz) in change_rates(s) {
+        let mut b = super::Board::load(elf)?;
+        b.run_until(super::HZ / 2, |b| b.serial_output().contains("Grbl"))?;
+        let r = super::changes::back_to_back(&mut b, axes, hz)?;
+        writeln!(m, "| {axes} | {:.1} kHz | {:.1} / {} ({:.2}) | {} / {} | {} / {} |", hz / 1000.0, r.mean, r.max, r.ratio(), r.max_last, r.max_first, r.max_start, r.max_end)?;
+    }
+    writeln!(m)?;
     writeln!(m, "## Results\n")?;
     m += &s.table();
     writeln!(m, "\nLoad cells: busiest measured window, CPU / step ISR; ¹ sustained except the CPU load (over 95 %),")?;
