@@ -1,6 +1,7 @@
 //! Hard limits (`$21`): EXTI lines 0–2 on the X, Y, Z limit inputs (PA0–PA2), both edges, at
-//! the step interrupt's priority (so it runs right after a step interrupt in progress, never
-//! in the middle of its BSRR store). When an edge leaves a limit pin active that was not
+//! RTIC's top priority, just below the step interrupt (so it runs right after a step interrupt
+//! in progress, never in the middle of its BSRR store; a step interrupt already pending when it
+//! stops the timer may still run once, before the step pins are driven low). When an edge leaves a limit pin active that was not
 //! active at the last poll (`$5` applied; as Grbl's `HARD_LIMIT_FORCE_STATE_CHECK`, and so
 //! neither a switch's release nor its bounce trips), the handler
 //! stops TIM2 and its interrupt, drives every step pin low and sets [`HALTED`]; the idle loop

@@ -131,7 +131,8 @@ mod app {
         )
     }
 
-    /// Limit inputs X, Y, Z (hard limits, `$21`): at the step interrupt's priority.
+    /// Limit inputs X, Y, Z (hard limits, `$21`): at RTIC's top priority, just below the step
+    /// interrupt.
     #[task(binds = EXTI0, priority = 3)]
     fn limit_x(_: limit_x::Context) {
         limits::on_edge(&SHARED);
@@ -147,7 +148,8 @@ mod app {
         limits::on_edge(&SHARED);
     }
 
-    /// The probe input (PC14, EXTI line 14): at the step interrupt's priority.
+    /// The probe input (PC14, EXTI line 14): at RTIC's top priority, just below the step
+    /// interrupt.
     #[task(binds = EXTI15_10, priority = 3)]
     fn probe(_: probe::Context) {
         limits::on_probe_edge();

@@ -1,4 +1,4 @@
-//! Motion core: everything the step interrupt runs, and the data it runs on.
+//! Motion core: everything the step and ramp interrupts run, and the data they run on.
 //!
 //! - [`interp`]: the DDA (Bresenham) interpolator — master axis plus up to six slaves in
 //!   exact integer ratio, every slave within ½ step of the ideal line.
@@ -9,8 +9,10 @@
 //! - [`walk`]: the ramp walk — the table index, its per-millisecond update and the
 //!   deceleration trigger.
 //! - [`control`]: the control word (feed hold + immediate-stop epoch), one type for both sides.
-//! - [`engine`]: the step engine behind TIM2; one [`engine::Engine::tick`] computes the next
-//!   GPIO BSRR word and the next timer period.
+//! - [`engine`]: the step engine in two halves: behind TIM2, one [`engine::Stepper::tick`]
+//!   computes the next GPIO BSRR word and the next timer period; the ramp walk runs in
+//!   [`engine::Ramper::run`], a lower-priority interrupt ([`engine::Engine`] runs both on the
+//!   host).
 //! - [`queue`]: moves as the planner hands them over, and the atomics shared with the step
 //!   interrupt (positions, state, overrides).
 //! - [`timing`]: driver timing (pulse width, direction setup) as typed constants.
