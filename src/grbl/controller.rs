@@ -143,6 +143,7 @@ impl<const N: usize> Job<N> {
 
     /// Nothing to do. (A function, not a constant: a constant of this size would be copied
     /// from flash whole, payloads of its `None`s included.)
+    #[inline(never)]
     fn none() -> Self {
         Job {
             listing: None,
@@ -413,6 +414,7 @@ impl<'a, const N: usize> Controller<'a, N> {
     /// Takes one line byte; `false` when it cannot yet (a line is held, or fewer than
     /// [`REPLY_ROOM`] TX bytes are free): keep the byte and offer it again after a `poll`.
     #[must_use]
+    #[inline(never)]
     pub fn byte(&mut self, b: u8, out: &mut impl Out) -> bool {
         if self.busy() || self.sleep || self.resync || out.room() < REPLY_ROOM {
             return false;

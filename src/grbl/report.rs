@@ -193,6 +193,7 @@ pub fn setting(out: &mut impl Out, id: u16, value: f64, decimals: u32) {
 }
 
 /// `$G`: `[GC:G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0]`.
+#[inline(never)]
 pub fn modes(out: &mut impl Out, m: &Modal) {
     out.put(match m.motion {
         Motion::Rapid => b"[GC:G0" as &[u8],

@@ -71,6 +71,7 @@ impl<const N: usize> Arc<N> {
     /// R form: target equal to the start → `error:33`, radius too small for the chord →
     /// `error:34`; IJK form: no offset in the plane → `error:35`, start and target radii differing
     /// by more than 0.005 mm and more than 0.5 mm or 0.1 % → `error:33`.
+    #[inline(never)]
     pub fn new(plane: u8, start: [f64; N], target: [f64; N], clockwise: bool, center: Center) -> Result<Self, Error> {
         let axes = plane_axes(plane);
         let (a, b) = axes;
@@ -192,6 +193,7 @@ impl<const N: usize> Arc<N> {
     }
 
     /// Chord ends for arc tolerance `tol` (mm, > 0).
+    #[inline(never)]
     pub fn segments(&self, tol: f64) -> Segments<N> {
         let n = segment_count(self.radius, self.travel, tol);
         let phi = self.travel / n as f64;

@@ -22,6 +22,7 @@ impl<const N: usize> Controller<'_, N> {
     }
 
     /// `$J=…` (the text after `=`): only when idle or already jogging.
+    #[inline(never)]
     pub(super) fn jog_line(&mut self, text: &[u8], out: &mut impl Out) -> Result<(), Error> {
         let idle = self.drained() && !self.shared.hold_requested();
         if self.alarm || self.check || !(idle || self.jog == Jogging::On) {

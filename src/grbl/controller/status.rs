@@ -33,6 +33,7 @@ impl<const N: usize> Controller<'_, N> {
 
     /// `<State|MPos:…|FS:feed,0|WCO:…|Ov:…>`: feed from the master rate and the running move's
     /// mm/step; positions per `$10`.
+    #[inline(never)]
     pub(super) fn status(&mut self, out: &mut impl Out) {
         let state = self.state_name();
         let busy = !matches!(state, b"Idle" | b"Alarm" | b"Check" | b"Sleep");

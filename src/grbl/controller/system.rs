@@ -13,6 +13,7 @@ use crate::store::{Text, STARTUP_LINES};
 
 impl<const N: usize> Controller<'_, N> {
     /// A `$` line (without the `$`).
+    #[inline(never)]
     pub(super) fn system(&mut self, cmd: &[u8], out: &mut impl Out) -> Result<(), Error> {
         // Grbl: `$$`, `$#`, `$I`, `$N`, `$RST`, settings need Idle or Alarm (not Check).
         let idle = self.drained() && !self.check && !self.jogging();
@@ -169,6 +170,7 @@ impl<const N: usize> Controller<'_, N> {
     }
 
     /// Writes listing lines while they fit; the listing left, if any.
+    #[inline(never)]
     pub(super) fn list(&self, mut l: Listing, out: &mut impl Out) -> Option<Listing> {
         loop {
             match l {
