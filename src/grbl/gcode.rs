@@ -455,6 +455,7 @@ pub struct Effects<const N: usize> {
 
 impl<const N: usize> Effects<N> {
     /// Nothing to do.
+    #[inline(never)]
     pub fn none() -> Self {
         Effects { drivers: None, dwell_ms: None, coord_write: None, g92: None, tlo: None, motion: None, arc: None, home: None, stop: None, probe: 0 }
     }

@@ -10,6 +10,7 @@ use crate::queue::State;
 
 impl<const N: usize> Controller<'_, N> {
     /// 0x85 arrived: cancel jogging (nothing happens unless jog moves are queued or running).
+    #[inline(never)]
     pub fn jog_cancel(&mut self) {
         if self.jog == Jogging::On {
             self.jog = Jogging::Cancel;
