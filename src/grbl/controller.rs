@@ -579,7 +579,7 @@ impl<'a, const N: usize> Controller<'a, N> {
     /// Runs the `$N` lines, one job at a time (`>line:ok`, as Grbl reports them).
     fn run_startup(&mut self, out: &mut impl Out) {
         while self.startup_next < STARTUP_LINES && self.job.is_none() && out.room() >= REPLY_ROOM {
-            let text = self.stored.startup[self.startup_next];
+            let Some(&text) = self.stored.startup.get(self.startup_next) else { break };
             self.startup_next = self.next_startup(self.startup_next + 1);
             let line = text.as_bytes();
             if line.is_empty() {

@@ -308,12 +308,12 @@ pub fn param<const N: usize>(out: &mut impl Out, i: usize, off: &Offsets<N>, axe
         }
         _ => {
             out.put(b"[PRB:");
-            axes(out, &off.prb[..n]);
+            axes(out, off.prb.get(..n).unwrap_or_default());
             out.put(if off.prb_ok { b":1]\r\n" } else { b":0]\r\n" });
             return;
         }
     };
-    axes(out, &v[..n]);
+    axes(out, v.get(..n).unwrap_or_default());
     out.put(b"]\r\n");
 }
 

@@ -436,7 +436,7 @@ impl Settings {
         if id == AXIS_COUNT && !(3.0..=axes.min(MAX_AXES) as f64).contains(&int) {
             return bad;
         }
-        let (lo, hi) = RANGES[spec.range as usize];
+        let (lo, hi) = RANGES.get(spec.range as usize).copied().unwrap_or_default();
         let in_range = (lo..=hi).contains(&value);
         match self.slot(id) {
             Some(Slot::Real(v)) if in_range => *v = value as f32,

@@ -144,7 +144,9 @@ impl<const N: usize> Controller<'_, N> {
         }
         let text = Text::new(line).ok_or(Error::LineLengthExceeded)?;
         self.gcode(line, out)?;
-        self.stored.startup[slot as usize] = text;
+        if let Some(s) = self.stored.startup.get_mut(slot as usize) {
+            *s = text;
+        }
         self.save_later(out);
         Ok(())
     }
