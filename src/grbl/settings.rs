@@ -566,7 +566,7 @@ impl Settings {
     #[inline(never)]
     pub fn to_bytes(&self) -> [u8; SETTINGS_LEN] {
         let mut b = [0u8; SETTINGS_LEN];
-        b[..4].copy_from_slice(&[MAGIC, VERSION, SETTINGS_LEN as u8, (SETTINGS_LEN >> 8) as u8]);
+        copy_bytes(&mut b, &[MAGIC, VERSION, SETTINGS_LEN as u8, (SETTINGS_LEN >> 8) as u8]);
         let mut s = *self;
         for id in Self::ids(MAX_AXES) {
             let (Some(spec), Some(slot)) = (Self::spec(id, MAX_AXES), s.slot(id)) else { continue };
@@ -585,10 +585,10 @@ impl Settings {
             }
         }
         for (w, v) in b[TAIL + 20..].chunks_exact_mut(4).zip(self.encoder.0) {
-            w.copy_from_slice(&v.to_le_bytes());
+            copy_bytes(w, &v.to_le_bytes());
         }
         let crc = crc32(&b[..SETTINGS_LEN - 4]);
-        b[SETTINGS_LEN - 4..].copy_from_slice(&crc.to_le_bytes());
+        copy_bytes(&mut b[SETTINGS_LEN - 4..], &crc.to_le_bytes());
         b
     }
 
@@ -636,6 +636,14 @@ impl Settings {
 pub(crate) fn put4(b: &mut [u8], at: usize, v: [u8; 4]) {
     if let Some(w) = b.get_mut(at..at + 4) {
         w.copy_from_slice(&v);
+    }
+}
+
+/// Copies `src` to the start of `dst`, as many bytes as both hold: the callers' lengths are
+/// equal, and this has no length-mismatch panic path (`copy_from_slice`'s costs flash).
+pub(crate) fn copy_bytes(dst: &mut [u8], src: &[u8]) {
+    for (d, s) in dst.iter_mut().zip(src) {
+        *d = *s;
     }
 }
 
