@@ -184,10 +184,10 @@ impl<const N: usize> Arc<N> {
                 if !(libm::fabs(v) <= MAX_MM) {
                     return Err(Error::InvalidTarget);
                 }
-                to_steps(v, steps_per_mm[ax])?;
+                to_steps(v, at(steps_per_mm, ax))?;
             }
             // A chord spans at most the diameter: its step count must fit a move.
-            to_steps(2.0 * self.radius, steps_per_mm[ax])?;
+            to_steps(2.0 * self.radius, at(steps_per_mm, ax))?;
         }
         Ok(())
     }
@@ -198,7 +198,7 @@ impl<const N: usize> Arc<N> {
         let n = segment_count(self.radius, self.travel, tol);
         let phi = self.travel / n as f64;
         let (a, b) = self.axes;
-        let r0 = [self.start[a] - self.center[0], self.start[b] - self.center[1]];
+        let r0 = [at(&self.start, a) - self.center[0], at(&self.start, b) - self.center[1]];
         let (sin, cos) = sin_cos(phi);
         Segments { arc: *self, n, i: 0, cos, sin, r: r0 }
     }
@@ -260,7 +260,7 @@ impl<const N: usize> Iterator for Segments<N> {
         self.r = if self.i % CORRECTION == 0 {
             // Exact: the start vector turned by i·φ.
             let (a, b) = arc.axes;
-            let (sx, sy) = (arc.start[a] - arc.center[0], arc.start[b] - arc.center[1]);
+            let (sx, sy) = (at(&arc.start, a) - arc.center[0], at(&arc.start, b) - arc.center[1]);
             let angle = arc.travel * (self.i as f64 / self.n as f64);
             let (s, c) = sin_cos(angle);
             [sx * c - sy * s, sx * s + sy * c]
@@ -269,10 +269,18 @@ impl<const N: usize> Iterator for Segments<N> {
         };
         let frac = self.i as f64 / self.n as f64;
         let mut p: [f64; N] = core::array::from_fn(|k| arc.start[k] + (arc.target[k] - arc.start[k]) * frac);
-        p[arc.axes.0] = arc.center[0] + self.r[0];
-        p[arc.axes.1] = arc.center[1] + self.r[1];
+        for (k, ax) in [arc.axes.0, arc.axes.1].into_iter().enumerate() {
+            if let Some(v) = p.get_mut(ax) {
+                *v = arc.center[k] + self.r[k];
+            }
+        }
         Some(p)
     }
+}
+
+/// `v[i]` of a plane axis (always below `N`): no bounds-check panic path.
+fn at<const N: usize>(v: &[f64; N], i: usize) -> f64 {
+    v.get(i).copied().unwrap_or(0.0)
 }
 
 fn hypot(x: f64, y: f64) -> f64 {
