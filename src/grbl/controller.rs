@@ -774,7 +774,7 @@ impl<'a, const N: usize> Controller<'a, N> {
     /// state and position follow the line, but nothing moves, waits or is stored.
     fn gcode(&mut self, line: &[u8], out: &mut impl Out) -> Result<(), Error> {
         let block = gcode::parse::<N>(line)?;
-        if block.axes[self.axes..].iter().any(Option::is_some) {
+        if block.axes.get(self.axes..).unwrap_or_default().iter().any(Option::is_some) {
             return Err(Error::UnsupportedCommand);
         }
         let mut fx = gcode::Effects::none();
