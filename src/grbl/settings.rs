@@ -584,11 +584,11 @@ impl Settings {
                 w.copy_from_slice(&(if own { word } else { old | word }).to_le_bytes());
             }
         }
-        for (w, v) in b[TAIL + 20..].chunks_exact_mut(4).zip(self.encoder.0) {
-            copy_bytes(w, &v.to_le_bytes());
+        for (k, v) in self.encoder.0.into_iter().enumerate() {
+            put4(&mut b, TAIL + 20 + 4 * k, v.to_le_bytes());
         }
         let crc = crc32(&b[..SETTINGS_LEN - 4]);
-        copy_bytes(&mut b[SETTINGS_LEN - 4..], &crc.to_le_bytes());
+        put4(&mut b, SETTINGS_LEN - 4, crc.to_le_bytes());
         b
     }
 
