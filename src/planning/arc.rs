@@ -179,8 +179,8 @@ impl<const N: usize> Arc<N> {
     /// (else `error:33`).
     pub fn check_range(&self, steps_per_mm: &[f64; N]) -> Result<(), Error> {
         let (a, b) = self.axes;
-        for (k, ax) in [a, b].into_iter().enumerate() {
-            for v in [self.center[k] - self.radius, self.center[k] + self.radius] {
+        for (c, ax) in self.center.into_iter().zip([a, b]) {
+            for v in [c - self.radius, c + self.radius] {
                 if !(libm::fabs(v) <= MAX_MM) {
                     return Err(Error::InvalidTarget);
                 }
@@ -269,9 +269,9 @@ impl<const N: usize> Iterator for Segments<N> {
         };
         let frac = self.i as f64 / self.n as f64;
         let mut p: [f64; N] = core::array::from_fn(|k| arc.start[k] + (arc.target[k] - arc.start[k]) * frac);
-        for (k, ax) in [arc.axes.0, arc.axes.1].into_iter().enumerate() {
+        for ((ax, c), r) in [arc.axes.0, arc.axes.1].into_iter().zip(arc.center).zip(self.r) {
             if let Some(v) = p.get_mut(ax) {
-                *v = arc.center[k] + self.r[k];
+                *v = c + r;
             }
         }
         Some(p)
