@@ -170,6 +170,7 @@ pub fn heartbeat(now_ms: u32) {
 
 impl Board {
     /// Clocks 72 MHz from the 8 MHz crystal, pins, USART1 at 115200 8N1, TIM2 running idle.
+    #[inline(never)]
     pub fn setup(dp: pac::Peripherals, mut syst: cortex_m::peripheral::SYST) -> Board {
         let mut flash = dp.FLASH.constrain();
         let mut rcc = dp.RCC.freeze(

@@ -143,6 +143,7 @@ impl<const N: usize> Job<N> {
 
     /// Nothing to do. (A function, not a constant: a constant of this size would be copied
     /// from flash whole, payloads of its `None`s included.)
+    #[inline(never)]
     fn none() -> Self {
         Job {
             listing: None,
@@ -244,7 +245,8 @@ impl<'a, const N: usize> Controller<'a, N> {
     }
 
     /// [`Self::new`] built in place (the firmware's static slot): the stack holds no copy of
-    /// the controller, which would not fit beside the statics.
+    /// the controller, which would not fit beside the statics. Each field is written where it
+    /// lives (a struct literal is built on the stack and copied in part by part).
     #[inline(never)]
     pub fn init<'s>(
         at: &'s mut core::mem::MaybeUninit<Self>,
@@ -253,66 +255,87 @@ impl<'a, const N: usize> Controller<'a, N> {
         slot: &'a RampSlot,
         mut stored: Stored,
     ) -> &'s mut Self {
+        use core::ptr::addr_of_mut;
         // A store written for more axes than this build drives shows this build's count.
         stored.settings.axes = stored.settings.axes.min(N as u8);
         let settings = stored.settings;
         let axes = settings.axis_count(N);
-        let c = at.write(Controller {
-            feeder,
-            shared,
-            slot,
-            settings,
-            stored,
-            axes,
-            ramped: Ramped::wanted(&settings, axes),
-            limits: Limits::new(&settings, 1),
-            profile_dirty: true,
-            lines: LineBuf::new(),
-            modal: Modal::RESET,
-            offsets: Offsets::new(stored.coords),
-            planner: Planner::new(),
-            job: None,
+        let p = at.as_mut_ptr();
+        // SAFETY: `p` is valid for writes; every field is written once below (the list is
+        // the struct's, checked by `Self::fields`) before the slot is used as initialised.
+        let c = unsafe {
+            addr_of_mut!((*p).feeder).write(feeder);
+            addr_of_mut!((*p).shared).write(shared);
+            addr_of_mut!((*p).slot).write(slot);
+            addr_of_mut!((*p).settings).write(settings);
+            addr_of_mut!((*p).offsets).write(Offsets::new(stored.coords));
+            addr_of_mut!((*p).stored).write(stored);
+            addr_of_mut!((*p).axes).write(axes);
+            addr_of_mut!((*p).ramped).write(Ramped::wanted(&settings, axes));
+            addr_of_mut!((*p).limits).write(Limits::new(&settings, 1));
+            addr_of_mut!((*p).profile_dirty).write(true);
+            addr_of_mut!((*p).lines).write(LineBuf::new());
+            addr_of_mut!((*p).modal).write(Modal::RESET);
+            addr_of_mut!((*p).planner).write(Planner::new());
+            addr_of_mut!((*p).job).write(None);
             // Grbl's homing lock: with homing enabled, power-up is in the alarm state.
-            alarm: settings.homing,
-            check: false,
-            sleep: false,
-            jog: Jogging::Off,
-            status_wanted: false,
-            now: 0,
-            drivers_on: settings.idle_delay_ms == 255,
-            m17: false,
-            enabled_at: None,
-            idle_since: None,
-            save: false,
-            restart: false,
-            pulse_changed: true,
-            pushed: shared.moves_done(),
-            feed_ring: [0.0; FEED_RING],
-            startup_next: 0,
-            wco_count: 0,
-            ovr_count: 0,
-            ov_seen: Overrides::NONE,
-            rx_free: RX_BUFFER_LEN as u32,
-            power_ring: [Power::default(); FEED_RING],
-            tool: (SpindleDir::Off, 0.0, 0),
-            pwm_hz: 0,
-            reset_after: false,
-            resync: false,
-            soft_limit: SoftLimit::Off,
-            watchdog_note: false,
-            limit_pins: 0,
-            probe_pin: false,
-            enc: crate::encoder::loss::Monitor::OFF,
-            homing: None,
-            door: door::Door::Off,
-            door_pin: false,
-            door_event: false,
-        });
+            addr_of_mut!((*p).alarm).write(settings.homing);
+            addr_of_mut!((*p).check).write(false);
+            addr_of_mut!((*p).sleep).write(false);
+            addr_of_mut!((*p).jog).write(Jogging::Off);
+            addr_of_mut!((*p).status_wanted).write(false);
+            addr_of_mut!((*p).now).write(0);
+            addr_of_mut!((*p).drivers_on).write(settings.idle_delay_ms == 255);
+            addr_of_mut!((*p).m17).write(false);
+            addr_of_mut!((*p).enabled_at).write(None);
+            addr_of_mut!((*p).idle_since).write(None);
+            addr_of_mut!((*p).save).write(false);
+            addr_of_mut!((*p).restart).write(false);
+            addr_of_mut!((*p).pulse_changed).write(true);
+            addr_of_mut!((*p).pushed).write(shared.moves_done());
+            addr_of_mut!((*p).feed_ring).write([0.0; FEED_RING]);
+            addr_of_mut!((*p).startup_next).write(0);
+            addr_of_mut!((*p).wco_count).write(0);
+            addr_of_mut!((*p).ovr_count).write(0);
+            addr_of_mut!((*p).ov_seen).write(Overrides::NONE);
+            addr_of_mut!((*p).rx_free).write(RX_BUFFER_LEN as u32);
+            addr_of_mut!((*p).power_ring).write([Power::default(); FEED_RING]);
+            addr_of_mut!((*p).tool).write((SpindleDir::Off, 0.0, 0));
+            addr_of_mut!((*p).pwm_hz).write(0);
+            addr_of_mut!((*p).reset_after).write(false);
+            addr_of_mut!((*p).resync).write(false);
+            addr_of_mut!((*p).soft_limit).write(SoftLimit::Off);
+            addr_of_mut!((*p).watchdog_note).write(false);
+            addr_of_mut!((*p).limit_pins).write(0);
+            addr_of_mut!((*p).probe_pin).write(false);
+            addr_of_mut!((*p).enc).write(crate::encoder::loss::Monitor::OFF);
+            addr_of_mut!((*p).homing).write(None);
+            addr_of_mut!((*p).door).write(door::Door::Off);
+            addr_of_mut!((*p).door_pin).write(false);
+            addr_of_mut!((*p).door_event).write(false);
+            at.assume_init_mut()
+        };
         c.startup_next = c.next_startup(0);
         c.enc_configure();
         c.apply_profile();
         c.planner.sync(shared.positions(), &c.limits);
         c
+    }
+
+    /// Compile-time check that [`Self::init`] writes every field: adding a field to the
+    /// struct without listing it here (and there) fails to build.
+    #[allow(dead_code)]
+    fn fields(c: Self) {
+        let Controller {
+            feeder: _, shared: _, slot: _, settings: _, stored: _, axes: _, ramped: _, limits: _,
+            profile_dirty: _, lines: _, modal: _, offsets: _, planner: _, job: _, alarm: _,
+            check: _, sleep: _, jog: _, status_wanted: _, now: _, drivers_on: _, m17: _,
+            enabled_at: _, idle_since: _, save: _, restart: _, pulse_changed: _, pushed: _,
+            feed_ring: _, startup_next: _, wco_count: _, ovr_count: _, ov_seen: _, rx_free: _,
+            power_ring: _, tool: _, pwm_hz: _, reset_after: _, resync: _, soft_limit: _,
+            watchdog_note: _, limit_pins: _, enc: _, probe_pin: _, homing: _, door: _,
+            door_pin: _, door_event: _,
+        } = c;
     }
 
     /// The first non-empty startup line from `i` (`STARTUP_LINES`: none).
@@ -413,6 +436,7 @@ impl<'a, const N: usize> Controller<'a, N> {
     /// Takes one line byte; `false` when it cannot yet (a line is held, or fewer than
     /// [`REPLY_ROOM`] TX bytes are free): keep the byte and offer it again after a `poll`.
     #[must_use]
+    #[inline(never)]
     pub fn byte(&mut self, b: u8, out: &mut impl Out) -> bool {
         if self.busy() || self.sleep || self.resync || out.room() < REPLY_ROOM {
             return false;
@@ -555,7 +579,7 @@ impl<'a, const N: usize> Controller<'a, N> {
     /// Runs the `$N` lines, one job at a time (`>line:ok`, as Grbl reports them).
     fn run_startup(&mut self, out: &mut impl Out) {
         while self.startup_next < STARTUP_LINES && self.job.is_none() && out.room() >= REPLY_ROOM {
-            let text = self.stored.startup[self.startup_next];
+            let Some(&text) = self.stored.startup.get(self.startup_next) else { break };
             self.startup_next = self.next_startup(self.startup_next + 1);
             let line = text.as_bytes();
             if line.is_empty() {
@@ -750,7 +774,7 @@ impl<'a, const N: usize> Controller<'a, N> {
     /// state and position follow the line, but nothing moves, waits or is stored.
     fn gcode(&mut self, line: &[u8], out: &mut impl Out) -> Result<(), Error> {
         let block = gcode::parse::<N>(line)?;
-        if block.axes[self.axes..].iter().any(Option::is_some) {
+        if block.axes.get(self.axes..).unwrap_or_default().iter().any(Option::is_some) {
             return Err(Error::UnsupportedCommand);
         }
         let mut fx = gcode::Effects::none();

@@ -264,6 +264,7 @@ fn split_code(v: f64) -> Result<(u32, u32), Error> {
     Ok((u32_of(int), round_u32(100.0 * (v - int))))
 }
 
+#[inline(never)]
 fn g_word<const N: usize>(b: &mut Block<N>, v: f64) -> Result<(), Error> {
     use group::*;
     let (code, mut mantissa) = split_code(v)?;
@@ -400,6 +401,7 @@ fn m_word<const N: usize>(b: &mut Block<N>, v: f64) -> Result<(), Error> {
     b.claim(g)
 }
 
+#[inline(never)]
 fn value_word<const N: usize>(b: &mut Block<N>, letter: u8, v: f64) -> Result<(), Error> {
     let slot = match letter {
         b'F' => &mut b.f,
@@ -453,6 +455,7 @@ pub struct Effects<const N: usize> {
 
 impl<const N: usize> Effects<N> {
     /// Nothing to do.
+    #[inline(never)]
     pub fn none() -> Self {
         Effects { drivers: None, dwell_ms: None, coord_write: None, g92: None, tlo: None, motion: None, arc: None, home: None, stop: None, probe: 0 }
     }

@@ -306,11 +306,14 @@ impl LineBuf {
             b'(' => self.paren = true,
             b';' => self.semicolon = true,
             0x7F..=0xFF => self.bad = true,
-            _ if self.len == LINE_LEN => self.overflow = true,
-            _ => {
-                self.buf[self.len] = b.to_ascii_uppercase();
-                self.len += 1;
-            }
+            // (`get_mut`: the full buffer is the overflow, with no panic path to link.)
+            _ => match self.buf.get_mut(self.len) {
+                Some(c) => {
+                    *c = b.to_ascii_uppercase();
+                    self.len += 1;
+                }
+                None => self.overflow = true,
+            },
         }
         LineEvent::More
     }

@@ -193,6 +193,7 @@ pub fn setting(out: &mut impl Out, id: u16, value: f64, decimals: u32) {
 }
 
 /// `$G`: `[GC:G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0]`.
+#[inline(never)]
 pub fn modes(out: &mut impl Out, m: &Modal) {
     out.put(match m.motion {
         Motion::Rapid => b"[GC:G0" as &[u8],
@@ -307,12 +308,12 @@ pub fn param<const N: usize>(out: &mut impl Out, i: usize, off: &Offsets<N>, axe
         }
         _ => {
             out.put(b"[PRB:");
-            axes(out, &off.prb[..n]);
+            axes(out, off.prb.get(..n).unwrap_or_default());
             out.put(if off.prb_ok { b":1]\r\n" } else { b":0]\r\n" });
             return;
         }
     };
-    axes(out, &v[..n]);
+    axes(out, v.get(..n).unwrap_or_default());
     out.put(b"]\r\n");
 }
 

@@ -436,7 +436,7 @@ impl Settings {
         if id == AXIS_COUNT && !(3.0..=axes.min(MAX_AXES) as f64).contains(&int) {
             return bad;
         }
-        let (lo, hi) = RANGES[spec.range as usize];
+        let (lo, hi) = RANGES.get(spec.range as usize).copied().unwrap_or_default();
         let in_range = (lo..=hi).contains(&value);
         match self.slot(id) {
             Some(Slot::Real(v)) if in_range => *v = value as f32,
@@ -563,9 +563,10 @@ impl Settings {
 
     /// The flash image: magic, version, fields (little-endian, where [`LOW`] and
     /// [`Self::spec`] put them), CRC-32.
+    #[inline(never)]
     pub fn to_bytes(&self) -> [u8; SETTINGS_LEN] {
         let mut b = [0u8; SETTINGS_LEN];
-        b[..4].copy_from_slice(&[MAGIC, VERSION, SETTINGS_LEN as u8, (SETTINGS_LEN >> 8) as u8]);
+        copy_bytes(&mut b, &[MAGIC, VERSION, SETTINGS_LEN as u8, (SETTINGS_LEN >> 8) as u8]);
         let mut s = *self;
         for id in Self::ids(MAX_AXES) {
             let (Some(spec), Some(slot)) = (Self::spec(id, MAX_AXES), s.slot(id)) else { continue };
@@ -583,11 +584,11 @@ impl Settings {
                 w.copy_from_slice(&(if own { word } else { old | word }).to_le_bytes());
             }
         }
-        for (w, v) in b[TAIL + 20..].chunks_exact_mut(4).zip(self.encoder.0) {
-            w.copy_from_slice(&v.to_le_bytes());
+        for (k, v) in self.encoder.0.into_iter().enumerate() {
+            put4(&mut b, TAIL + 20 + 4 * k, v.to_le_bytes());
         }
         let crc = crc32(&b[..SETTINGS_LEN - 4]);
-        b[SETTINGS_LEN - 4..].copy_from_slice(&crc.to_le_bytes());
+        put4(&mut b, SETTINGS_LEN - 4, crc.to_le_bytes());
         b
     }
 
@@ -635,6 +636,14 @@ impl Settings {
 pub(crate) fn put4(b: &mut [u8], at: usize, v: [u8; 4]) {
     if let Some(w) = b.get_mut(at..at + 4) {
         w.copy_from_slice(&v);
+    }
+}
+
+/// Copies `src` to the start of `dst`, as many bytes as both hold: the callers' lengths are
+/// equal, and this has no length-mismatch panic path (`copy_from_slice`'s costs flash).
+pub(crate) fn copy_bytes(dst: &mut [u8], src: &[u8]) {
+    for (d, s) in dst.iter_mut().zip(src) {
+        *d = *s;
     }
 }
 

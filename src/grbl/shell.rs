@@ -52,6 +52,7 @@ impl Requests {
 /// overrides) or leave a request (`?`, Ctrl-X, 0x85 jog cancel, 0x84 door, `~` in a door
 /// cycle); a line byte comes back for
 /// the RX ring.
+#[inline(never)]
 pub fn dispatch<const N: usize>(b: u8, shared: &Shared<N>, req: &Requests) -> Option<u8> {
     match realtime(b) {
         Some(Realtime::Hold) => shared.set_hold(true),

@@ -12,7 +12,7 @@
 //! Each page sees every second write, halving flash wear per page.
 
 use crate::coords::{Coords, COORDS_LEN};
-use crate::settings::{crc32, put4, Settings, SETTINGS_LEN};
+use crate::settings::{copy_bytes, crc32, put4, Settings, SETTINGS_LEN};
 
 /// Bytes a stored text line can hold (Grbl keeps 80 with its terminator).
 pub const TEXT_LEN: usize = 79;
@@ -48,7 +48,7 @@ impl Text {
     /// `None` when longer than [`TEXT_LEN`].
     pub fn new(s: &[u8]) -> Option<Text> {
         let mut t = Text::EMPTY;
-        t.buf.get_mut(..s.len())?.copy_from_slice(s);
+        copy_bytes(t.buf.get_mut(..s.len())?, s);
         t.len = s.len() as u8;
         Some(t)
     }
@@ -110,12 +110,12 @@ impl Stored {
         let mut b = [0u8; IMAGE_LEN];
         put4(&mut b, 0, MAGIC);
         put4(&mut b, 4, self.seq.to_le_bytes());
-        b[SETTINGS_AT..COORDS_AT].copy_from_slice(&self.settings.to_bytes());
-        b[COORDS_AT..TEXT_AT].copy_from_slice(&self.coords.to_bytes());
+        copy_bytes(&mut b[SETTINGS_AT..COORDS_AT], &self.settings.to_bytes());
+        copy_bytes(&mut b[COORDS_AT..TEXT_AT], &self.coords.to_bytes());
         let texts = self.startup.iter().chain(core::iter::once(&self.build_info));
         for (w, t) in b[TEXT_AT..].chunks_exact_mut(TEXT_LEN + 1).zip(texts) {
             w[0] = t.len;
-            w[1..].copy_from_slice(&t.buf);
+            copy_bytes(&mut w[1..], &t.buf);
         }
         let crc = crc32(&b[..IMAGE_LEN - 4]);
         put4(&mut b, IMAGE_LEN - 4, crc.to_le_bytes());

@@ -71,6 +71,7 @@ impl<const N: usize> Arc<N> {
     /// R form: target equal to the start → `error:33`, radius too small for the chord →
     /// `error:34`; IJK form: no offset in the plane → `error:35`, start and target radii differing
     /// by more than 0.005 mm and more than 0.5 mm or 0.1 % → `error:33`.
+    #[inline(never)]
     pub fn new(plane: u8, start: [f64; N], target: [f64; N], clockwise: bool, center: Center) -> Result<Self, Error> {
         let axes = plane_axes(plane);
         let (a, b) = axes;
@@ -178,25 +179,26 @@ impl<const N: usize> Arc<N> {
     /// (else `error:33`).
     pub fn check_range(&self, steps_per_mm: &[f64; N]) -> Result<(), Error> {
         let (a, b) = self.axes;
-        for (k, ax) in [a, b].into_iter().enumerate() {
-            for v in [self.center[k] - self.radius, self.center[k] + self.radius] {
+        for (c, ax) in self.center.into_iter().zip([a, b]) {
+            for v in [c - self.radius, c + self.radius] {
                 if !(libm::fabs(v) <= MAX_MM) {
                     return Err(Error::InvalidTarget);
                 }
-                to_steps(v, steps_per_mm[ax])?;
+                to_steps(v, at(steps_per_mm, ax))?;
             }
             // A chord spans at most the diameter: its step count must fit a move.
-            to_steps(2.0 * self.radius, steps_per_mm[ax])?;
+            to_steps(2.0 * self.radius, at(steps_per_mm, ax))?;
         }
         Ok(())
     }
 
     /// Chord ends for arc tolerance `tol` (mm, > 0).
+    #[inline(never)]
     pub fn segments(&self, tol: f64) -> Segments<N> {
         let n = segment_count(self.radius, self.travel, tol);
         let phi = self.travel / n as f64;
         let (a, b) = self.axes;
-        let r0 = [self.start[a] - self.center[0], self.start[b] - self.center[1]];
+        let r0 = [at(&self.start, a) - self.center[0], at(&self.start, b) - self.center[1]];
         let (sin, cos) = sin_cos(phi);
         Segments { arc: *self, n, i: 0, cos, sin, r: r0 }
     }
@@ -258,7 +260,7 @@ impl<const N: usize> Iterator for Segments<N> {
         self.r = if self.i % CORRECTION == 0 {
             // Exact: the start vector turned by i·φ.
             let (a, b) = arc.axes;
-            let (sx, sy) = (arc.start[a] - arc.center[0], arc.start[b] - arc.center[1]);
+            let (sx, sy) = (at(&arc.start, a) - arc.center[0], at(&arc.start, b) - arc.center[1]);
             let angle = arc.travel * (self.i as f64 / self.n as f64);
             let (s, c) = sin_cos(angle);
             [sx * c - sy * s, sx * s + sy * c]
@@ -267,10 +269,18 @@ impl<const N: usize> Iterator for Segments<N> {
         };
         let frac = self.i as f64 / self.n as f64;
         let mut p: [f64; N] = core::array::from_fn(|k| arc.start[k] + (arc.target[k] - arc.start[k]) * frac);
-        p[arc.axes.0] = arc.center[0] + self.r[0];
-        p[arc.axes.1] = arc.center[1] + self.r[1];
+        for ((ax, c), r) in [arc.axes.0, arc.axes.1].into_iter().zip(arc.center).zip(self.r) {
+            if let Some(v) = p.get_mut(ax) {
+                *v = c + r;
+            }
+        }
         Some(p)
     }
+}
+
+/// `v[i]` of a plane axis (always below `N`): no bounds-check panic path.
+fn at<const N: usize>(v: &[f64; N], i: usize) -> f64 {
+    v.get(i).copied().unwrap_or(0.0)
 }
 
 fn hypot(x: f64, y: f64) -> f64 {

@@ -169,6 +169,7 @@ impl<'a, const N: usize> Feeder<'a, N> {
 
     /// Prepares the oldest buffered move and publishes it.
     /// (No replan here: handing over the front block leaves the plan of the rest as it was.)
+    #[inline(never)]
     fn commit(&mut self) {
         let Some(b) = self.blocks.pop_front() else { return };
         let profile = self.slot.producer_view();

@@ -68,7 +68,7 @@ impl<const N: usize> Block<N> {
         // f64 arithmetic (the inputs are stored as f32): the firmware links f64 soft float for the
         // planner anyway, and f32 arithmetic here would add a second set (~2 KB of flash).
         let (table, per_mm) = (&profile.ramp, profile.per_mm as f64);
-        let total = mv.steps[mv.master as usize].unsigned_abs();
+        let total = mv.steps.get(mv.master as usize).map_or(0, |s| s.unsigned_abs());
         let t_accel = table.config().accel.max(1) as f64;
         // `per_mm > 0.0` on the f32's bits (positive: 1 ..= +inf): LLVM would narrow an f64 compare of
         // a widened f32 back to an f32 one and link the f32 compare routines for it.
@@ -157,6 +157,7 @@ fn cruise_index<const L: usize>(table: &RampTable<L>, scale: u32, cruise_bits: u
 
 /// Master steps a deceleration may plan on: the engine's trigger is conservative by
 /// [`DECEL_MARGIN`] steps and by the step a millisecond boundary falls in.
+#[inline(never)]
 fn usable(total: u32) -> f64 {
     total.saturating_sub(2 * DECEL_MARGIN + 1) as f64
 }

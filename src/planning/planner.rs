@@ -200,6 +200,7 @@ impl<const N: usize> Planner<N> {
 /// acceleration the axes allow along the change of direction,
 /// `v² = acc·dev·sin(θ/2)/(1 − sin(θ/2))`; 0 for a reversal, unlimited straight on.
 /// In f64 like the rest of the planner: f32 arithmetic would link a second soft-float set.
+#[inline(never)]
 pub fn junction_speed<const N: usize>(a: &[f64; N], b: &[f64; N], axis_accel: &[f64; N], dev: f64) -> f64 {
     let mut cos = 0.0f64;
     let mut ju = [0.0f64; N];

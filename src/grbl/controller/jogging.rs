@@ -10,6 +10,7 @@ use crate::queue::State;
 
 impl<const N: usize> Controller<'_, N> {
     /// 0x85 arrived: cancel jogging (nothing happens unless jog moves are queued or running).
+    #[inline(never)]
     pub fn jog_cancel(&mut self) {
         if self.jog == Jogging::On {
             self.jog = Jogging::Cancel;
@@ -22,6 +23,7 @@ impl<const N: usize> Controller<'_, N> {
     }
 
     /// `$J=…` (the text after `=`): only when idle or already jogging.
+    #[inline(never)]
     pub(super) fn jog_line(&mut self, text: &[u8], out: &mut impl Out) -> Result<(), Error> {
         let idle = self.drained() && !self.shared.hold_requested();
         if self.alarm || self.check || !(idle || self.jog == Jogging::On) {

@@ -33,6 +33,7 @@ impl<const N: usize> Controller<'_, N> {
 
     /// `<State|MPos:…|FS:feed,0|WCO:…|Ov:…>`: feed from the master rate and the running move's
     /// mm/step; positions per `$10`.
+    #[inline(never)]
     pub(super) fn status(&mut self, out: &mut impl Out) {
         let state = self.state_name();
         let busy = !matches!(state, b"Idle" | b"Alarm" | b"Check" | b"Sleep");
@@ -85,14 +86,14 @@ impl<const N: usize> Controller<'_, N> {
             out,
             &Status {
                 state,
-                pos: &pos[..n],
+                pos: pos.get(..n).unwrap_or_default(),
                 mpos: mpos_only,
                 bf: (self.settings.status_mask & 2 != 0).then_some((blocks, self.rx_free)),
                 feed: rate * per_step * 60.0,
                 speed,
                 acc: &acc[..n_acc],
                 pins: self.limit_pins | if self.probe_pin { report::PIN_PROBE } else { 0 } | if self.door_pin { report::PIN_DOOR } else { 0 },
-                wco: show_wco.then_some(&wco[..n]),
+                wco: show_wco.then_some(wco.get(..n).unwrap_or_default()),
                 ov: show_ov.then_some(ov),
                 enc: self.encoder_status(),
             },

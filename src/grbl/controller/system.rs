@@ -13,6 +13,7 @@ use crate::store::{Text, STARTUP_LINES};
 
 impl<const N: usize> Controller<'_, N> {
     /// A `$` line (without the `$`).
+    #[inline(never)]
     pub(super) fn system(&mut self, cmd: &[u8], out: &mut impl Out) -> Result<(), Error> {
         // Grbl: `$$`, `$#`, `$I`, `$N`, `$RST`, settings need Idle or Alarm (not Check).
         let idle = self.drained() && !self.check && !self.jogging();
@@ -143,7 +144,9 @@ impl<const N: usize> Controller<'_, N> {
         }
         let text = Text::new(line).ok_or(Error::LineLengthExceeded)?;
         self.gcode(line, out)?;
-        self.stored.startup[slot as usize] = text;
+        if let Some(s) = self.stored.startup.get_mut(slot as usize) {
+            *s = text;
+        }
         self.save_later(out);
         Ok(())
     }
@@ -169,6 +172,7 @@ impl<const N: usize> Controller<'_, N> {
     }
 
     /// Writes listing lines while they fit; the listing left, if any.
+    #[inline(never)]
     pub(super) fn list(&self, mut l: Listing, out: &mut impl Out) -> Option<Listing> {
         loop {
             match l {

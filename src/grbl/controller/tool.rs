@@ -53,7 +53,9 @@ impl<const N: usize> Controller<'_, N> {
         let mut acc = [0u8; 3];
         let mut n = 0;
         let mut push = |c: u8| {
-            acc[n] = c;
+            if let Some(a) = acc.get_mut(n) {
+                *a = c;
+            }
             n += 1;
         };
         let speed = match dir {
