@@ -132,7 +132,7 @@ fn short_pulses_raise_the_rate_limit() {
     let pulse_limit = 72_000_000 / (2 * 144 + LAT);
     assert_eq!(s.timing().max_rate_hz(), pulse_limit);
     assert_eq!(s.timing().max_rate_for(2), pulse_limit);
-    assert_eq!(s.timing().max_rate_for(6), 72_000_000 / (FALL + 6 * SLAVE + 144).max(LONG + 6 * SLAVE - 144 - LAT - TAIL));
+    assert_eq!(s.timing().max_rate_for(6), 72_000_000 / (BASE + 6 * SLAVE).max(FALL + 6 * SLAVE + 144).max(LONG + 6 * SLAVE - 144 - LAT - TAIL));
     s.set(0, 1.0, 3).unwrap();
     // One axis: the handler's mean cost binds (2 × 72 + 72, the low time and the long tick's
     // compare check are shorter: a long tick is a move change, the ramp work runs elsewhere).
