@@ -181,6 +181,57 @@ proptest! {
         }
     }
 
+    /// The engine's two halves out of step (the ramp interrupt runs only every `lag + 1` ticks,
+    /// as when the step interrupt leaves it little time near the cap): chains of moves at speed
+    /// (look-ahead junctions, direction changes) still end every axis on its exact count, every
+    /// move is entered once (the count of moves done is the count pushed), the direction setup
+    /// holds, no period is shorter than the timing allows, and a hold still comes to rest and
+    /// resumes exactly.
+    #[test]
+    fn chains_stay_exact_when_the_ramp_half_lags(moves in prop::collection::vec(
+            prop::array::uniform3(-3000i64..3000), 1..12), lag in 0u32..60, cruise in 20_000u32..200_000,
+            hold_at in prop::option::of(100u64..5_000)) {
+        use ddastep::settings::Settings;
+        let mut s = Settings::BENCH;
+        s.accel = [200_000.0; ddastep::MAX_AXES];
+        let mut rig = Rig::<3>::with_settings(&s);
+        rig.engine.set_ramp_lag(lag);
+        let timing = s.timing();
+        let (mut want, mut n) = ([0i64; 3], 0u32);
+        for m in &moves {
+            if Move::new(*m, cruise).is_ok() {
+                rig.push(*m, cruise);
+                n += 1;
+                for a in 0..3 { want[a] += m[a]; }
+            }
+        }
+        prop_assume!(n > 0);
+        if let Some(h) = hold_at {
+            for _ in 0..h { rig.update(); }
+            rig.shared.set_hold(true);
+            for _ in 0..2_000_000 {
+                rig.update();
+                if rig.shared.state() == State::Held || rig.shared.state() == State::Idle { break; }
+            }
+            let frozen = rig.shared.positions();
+            for _ in 0..500 { rig.update(); }
+            prop_assert_eq!(rig.shared.positions(), frozen, "held still");
+            rig.shared.set_hold(false);
+        }
+        rig.run_to_idle(u64::MAX);
+        prop_assert_eq!(rig.net_steps(), want);
+        prop_assert_eq!(rig.shared.positions().map(i64::from), want);
+        prop_assert_eq!(rig.shared.moves_done(), n);
+        for st in &rig.steps {
+            let d = st.dir_changed_at.expect("direction written before the first step");
+            prop_assert!(st.t - d >= timing.dir_setup_ticks as u64);
+        }
+        for a in 0..3 {
+            let t = rig.times(a);
+            prop_assert!(t.windows(2).all(|w| w[1] - w[0] >= timing.min_period_ticks as u64), "axis {}", a);
+        }
+    }
+
     /// Dual-edge mode (`$580`): every step is one toggle of its pin, so the toggles per axis are
     /// its step count (net: its signed steps), two toggles of a pin are at least the pulse
     /// (plus the store jitter the firmware allows for) apart, a direction change leads the next

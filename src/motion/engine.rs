@@ -111,13 +111,17 @@ impl Link {
 pub struct Engine<'a, const N: usize, const L: usize = RAMP_LEN> {
     step: Stepper<'a, N, L>,
     ramp: Ramper<'a, N, L>,
+    /// Ticks the ramp half waits between runs (0: after every tick; tests of the two halves
+    /// out of step, as when the step interrupt leaves the ramp interrupt little time).
+    lag: u32,
+    since: u32,
 }
 
 impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
     /// An idle engine.
     pub fn new(shared: &'a Shared<N>, ring: RingConsumer<'a, N>, ramp: &'a RampSlot<L>, pins: PinMap<N>) -> Self {
         let peek = ring.peek();
-        Engine { step: Stepper::new(shared, ring, ramp, pins), ramp: Ramper::new(shared, peek, ramp) }
+        Engine { step: Stepper::new(shared, ring, ramp, pins), ramp: Ramper::new(shared, peek, ramp), lag: 0, since: 0 }
     }
 
     /// The two halves, for the two interrupts.
@@ -140,8 +144,18 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
     /// One tick of the step half, then the ramp half's work it asked for; returns the ARR value.
     pub fn tick(&mut self) -> u16 {
         let arr = self.step.tick();
-        self.ramp.run();
+        if self.since >= self.lag {
+            self.since = 0;
+            self.ramp.run();
+        } else {
+            self.since += 1;
+        }
         arr
+    }
+
+    /// Runs the ramp half only after every `lag + 1`-th tick from now on (0: every tick).
+    pub fn set_ramp_lag(&mut self, lag: u32) {
+        self.lag = lag;
     }
 
     /// Ramp-walk state for tests: (index Q20, decelerating, decel trigger, master steps left).
