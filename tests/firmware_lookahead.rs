@@ -62,7 +62,13 @@ fn fast_532_reaches_200_khz_on_the_seven_axis_firmware() {
     let x: Vec<u64> = s.iter().filter(|s| s.axis == 0).map(|s| s.cycle).collect();
     let rate = 1000.0 * HZ as f64 / (x[3000] - x[2000]) as f64;
     assert!((rate - 200_000.0).abs() < 1_000.0, "cruise {rate} Hz");
-    assert_eq!(b.report().overruns, 0);
+    // `$0=1`: every pulse and every low time between two pulses at least 1 µs, move changes
+    // and deceleration triggers included.
+    let r = b.report();
+    for (name, a) in &r.axes.0[..3] {
+        assert!(a.min_high_ns.is_some_and(|h| h >= 1000.0) && a.min_low_ns.is_some_and(|l| l >= 1000.0), "{name}: {a:?}");
+    }
+    assert_eq!(r.overruns, 0);
 }
 
 #[test]

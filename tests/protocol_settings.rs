@@ -129,18 +129,26 @@ fn short_pulses_raise_the_rate_limit() {
     // a pulse's low time after its end; and a long tick's compare check before the next
     // period's compare event (bench/RESULTS.md measures all three).
     s.set(0, 2.0, 3).unwrap();
-    let pulse_limit = 72_000_000 / (2 * 144 + LAT);
-    assert_eq!(s.timing().max_rate_hz(), pulse_limit);
-    assert_eq!(s.timing().max_rate_for(2), pulse_limit);
+    // Long pulses: the low time after a falling edge at the longest handler's end binds.
+    assert!(FALL + 144 > (2 * 144 + LAT).max(BASE));
+    assert_eq!(s.timing().max_rate_hz(), 72_000_000 / (FALL + 144));
+    assert_eq!(s.timing().max_rate_for(2), 72_000_000 / (FALL + 2 * SLAVE + 144));
     assert_eq!(s.timing().max_rate_for(6), 72_000_000 / (BASE + 6 * SLAVE).max(FALL + 6 * SLAVE + 144).max(LONG + 6 * SLAVE - 144 - LAT - TAIL));
+    // Twice the pulse binds only where the low time's rule is shorter (no such pulse now:
+    // a pulse longer than the fall time binds through the low time first).
+    s.set(0, 10.0, 3).unwrap();
+    assert_eq!(s.timing().max_rate_hz(), 72_000_000 / (FALL + 720).max(2 * 720 + LAT));
     s.set(0, 1.0, 3).unwrap();
-    // One axis: the handler's mean cost binds (2 × 72 + 72, the low time and the long tick's
-    // compare check are shorter: a long tick is a move change, the ramp work runs elsewhere).
-    assert!(BASE > (2 * 72 + LAT).max(FALL + 72).max(LONG - 72 - LAT - TAIL));
-    assert_eq!(s.timing().max_rate_hz(), 72_000_000 / BASE);
+    // 1 µs: the low time binds still (a long tick is a move change, the ramp work runs
+    // elsewhere: its compare check comes in time).
+    assert!(FALL + 72 > (2 * 72 + LAT).max(BASE).max(LONG - 72 - LAT - TAIL));
+    assert_eq!(s.timing().max_rate_hz(), 72_000_000 / (FALL + 72));
     assert_eq!(s.timing().max_rate_for(6), 72_000_000 / (BASE + 6 * SLAVE).max(FALL + 6 * SLAVE + 72));
-    // Shorter pulses than that gain nothing more: the handler's cost is the limit.
+    // 0.5 µs: the handler's cost is the limit; shorter pulses gain nothing more.
     s.set(0, 0.5, 3).unwrap();
+    assert!(BASE > FALL + 36);
+    assert_eq!(s.timing().max_rate_hz(), 72_000_000 / BASE);
+    s.set(0, 0.2, 3).unwrap();
     assert_eq!(s.timing().max_rate_hz(), 72_000_000 / BASE);
     assert!(s.set(0, 0.1, 3).is_err());
 }
@@ -165,7 +173,7 @@ fn dual_edge_is_a_pin_setting_with_its_own_rate_rule() {
     assert_eq!(Settings::decode(&s.to_bytes()).map(|d| d.dual_edge), Some(false));
     // One event per step: the handler's cost binds, not twice the pulse; every pulse from
     // 0.2 µs up to the period the cost allows runs at the same cap, above the full-pulse one
-    // where twice the pulse binds full pulses (at short pulses both are the handler's cost).
+    // where the pulse binds full pulses (from 2 µs; at 0.5 µs both are the handler's cost).
     for (pulse, slaves) in [(0.2, 0u32), (0.5, 0), (0.5, 2), (2.0, 0), (2.0, 6), (3.0, 0), (3.0, 6)] {
         let mut d = Settings { dual_edge: true, ..Settings::BENCH };
         d.set(0, pulse, 3).unwrap();
@@ -174,14 +182,14 @@ fn dual_edge_is_a_pin_setting_with_its_own_rate_rule() {
         assert_eq!(t.min_period_for(slaves), want, "{pulse} µs, {slaves} slaves");
         d.dual_edge = false;
         let full = d.timing();
-        if 2 * full.pulse_ticks + ddastep::timing::STORE_LATENCY_TICKS > want {
+        if pulse >= 2.0 {
             assert!(t.max_rate_for(slaves) > full.max_rate_for(slaves), "{pulse} µs, {slaves} slaves");
         }
     }
-    // (Twice the pulse binds at 3 µs on every axis count, at 2 µs on one axis.)
+    // (Full pulses from 2 µs are bound by the pulse, dual-edge ones by the handler's cost.)
     let mut d = Settings::BENCH;
     d.set(0, 2.0, 3).unwrap();
-    assert!(2 * d.timing().pulse_ticks + ddastep::timing::STORE_LATENCY_TICKS > BASE);
+    assert!(d.timing().max_rate_hz() < Settings { dual_edge: true, ..d }.timing().max_rate_hz());
     // A pulse longer than the handler's cost sets the period: toggles of a pin ≥ pulse apart.
     let mut d = Settings { dual_edge: true, ..Settings::BENCH };
     d.set(0, 10.0, 3).unwrap();

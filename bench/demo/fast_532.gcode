@@ -1,6 +1,7 @@
-; 5:3:2 again with the master at 200 kHz: 2 µs pulses (fine for DRV8825, A4988, TMC2209;
-; not for TB6600), faster rate and acceleration limits, then the same move as the paper.
-$0=2
+; 5:3:2 again with the master at 200 kHz: 1 µs pulses and at least 1 µs low (fine for A4988,
+; TMC2209; not for DRV8825 or TB6600), faster rate and acceleration limits, then the same move
+; as the paper.
+$0=1
 $100=100
 $101=100
 $102=100

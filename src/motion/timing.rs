@@ -81,7 +81,7 @@ impl Timing {
 
     /// Shortest master period for a move with `slaves` slave axes: the pulse timing, the step
     /// handler's cost (so the CPU stays ≤ 95 % busy), and room for a low time of at least one
-    /// pulse after a falling edge that a short pulse gets only at the end of the handler.
+    /// pulse after a falling edge that comes only at the end of the handler (its longest run).
     pub const fn min_period_for(&self, slaves: u32) -> u32 {
         if self.dual {
             // One event per step: the handler's cost (CPU ≤ 95 %) and its longest run at speed.
@@ -137,10 +137,13 @@ pub const HANDLER_PER_SLAVE_TICKS: u32 = 17;
 pub const HANDLER_LONG_TICKS: u32 = 330;
 /// From a handler's compare-flag check to its end (the self-measurement), less a margin.
 pub const HANDLER_TAIL_TICKS: u32 = 10;
-/// Where a short pulse's falling edge lands after its rising edge when the compare event is
-/// already pending at the end of the update handler (measured high time ≈ 142 + 12 per slave
-/// modeled cycles), rounded up.
-pub const HANDLER_FALL_TICKS: u32 = 150;
+/// Where a falling edge lands after its rising edge at the latest (plus
+/// [`HANDLER_PER_SLAVE_TICKS`] per slave), when the compare event comes during the update
+/// handler and the handler stores the edge at its end: in the longest handler at speed (a move
+/// change or a trigger), on the bench's per-entry log the falling store up to 317 cycles after
+/// its update on three axes, the next rising store at least 46 after the next update. A low
+/// time of at least the pulse then needs the period to be this plus the pulse.
+pub const HANDLER_FALL_TICKS: u32 = 250;
 
 /// Step-handler cost per master step in dual-edge mode (one update event per step, no compare
 /// event), timer ticks, plus [`HANDLER_PER_SLAVE_TICKS`] per slave: the sweep in dual-edge mode
