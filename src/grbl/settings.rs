@@ -641,6 +641,7 @@ pub(crate) fn put4(b: &mut [u8], at: usize, v: [u8; 4]) {
 
 /// Copies `src` to the start of `dst`, as many bytes as both hold: the callers' lengths are
 /// equal, and this has no length-mismatch panic path (`copy_from_slice`'s costs flash).
+#[inline(never)]
 pub(crate) fn copy_bytes(dst: &mut [u8], src: &[u8]) {
     for (d, s) in dst.iter_mut().zip(src) {
         *d = *s;

@@ -64,6 +64,7 @@ impl<const N: usize> Block<N> {
     /// Plans `mv` on `table` (`per_mm`: table rate per mm/s of path; 0 if the table is in
     /// master steps) under the overrides `o`; `joins` when a move runs before it (else it
     /// starts from rest).
+    #[inline(never)]
     pub fn new<const L: usize>(mv: Move<N>, profile: &Profile<L>, joins: bool, o: Overrides) -> Self {
         // f64 arithmetic (the inputs are stored as f32): the firmware links f64 soft float for the
         // planner anyway, and f32 arithmetic here would add a second set (~2 KB of flash).

@@ -51,6 +51,7 @@ impl<const N: usize> Controller<'_, N> {
     }
 
     /// `~` during a door state: resumes only with the door closed and motion stopped.
+    #[inline(never)]
     pub fn cycle_start(&mut self) {
         if self.door == Door::Ready && !self.door_pin {
             let (dir, _, coolant) = self.tool;
@@ -81,6 +82,7 @@ impl<const N: usize> Controller<'_, N> {
     }
 
     /// Every poll: starts, follows and ends the door cycle.
+    #[inline(never)]
     pub(super) fn door_poll(&mut self, out: &mut impl Out) {
         let event = core::mem::take(&mut self.door_event) || self.door_pin;
         if event && self.homing.is_some() {
