@@ -282,17 +282,21 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
         }
         self.settle();
         // SAFETY: atomic fields of the running slot.
-        let p = unsafe { &*self.cur };
-        p.period.store(if self.resting { 0 } else { self.period }, Relaxed);
+        // (Fields through the pointer: the step half borrows the running move's slaves.)
+        let p = self.cur;
+        // SAFETY: atomic fields of the running slot.
+        unsafe { (*p).period.store(if self.resting { 0 } else { self.period }, Relaxed) };
         let at = if self.walk.decel || self.resting { 0 } else { self.walk.decel_at };
         if at != 0 {
             let target = self.target();
-            p.down_period.store(self.down_period(&self.plan, self.min_period, target), Relaxed);
+            // SAFETY: as above.
+            unsafe { (*p).down_period.store(self.down_period(&self.plan, self.min_period, target), Relaxed) };
         }
         // Only over the value this half left: a trigger the step half fired (0) stays fired
         // until this half has seen it.
         if at != self.published_at {
-            self.published_at = match p.decel_at.compare_exchange(self.published_at, at, Relaxed, Relaxed) {
+            // SAFETY: as above.
+            self.published_at = match unsafe { (*p).decel_at.compare_exchange(self.published_at, at, Relaxed, Relaxed) } {
                 Ok(_) => at,
                 Err(now) => now,
             };
@@ -300,21 +304,26 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
         self.shared.link.idx.store(self.walk.idx, Relaxed);
         let next = self.succ;
         if let Some(n) = next {
-            // SAFETY: a published slot after the running one; plain fields and atomics.
-            let n = unsafe { &*n };
+            // SAFETY: a published slot after the running one; plain fields the step half never
+            // writes and atomics, through the pointer (the step half may enter it meanwhile).
+            let (ramp, min) = unsafe { ((*n).ramp, (*n).min_period) };
             let table = &self.ramp.profile().ramp;
-            n.period.store(scaled(base_at(self.walk.idx, table), self.walk.idx, &n.ramp, n.min_period).to_bits(), Relaxed);
+            // SAFETY: as above.
+            unsafe { (*n).period.store(scaled(base_at(self.walk.idx, table), self.walk.idx, &ramp, min).to_bits(), Relaxed) };
             // Its trigger from here, for its own target (as `target` will find it).
             let mut w = self.walk;
             let at = if self.hold {
                 0
             } else {
-                let target = if self.succ_next { n.exit_q.load(Relaxed).min(n.ramp.cruise_q) } else { 0 };
-                w.settle_trigger(&n.ramp, target, table);
-                n.down_period.store(self.down_period(&n.ramp, n.min_period, target), Relaxed);
+                // SAFETY: as above.
+                let target = if self.succ_next { unsafe { (*n).exit_q.load(Relaxed) }.min(ramp.cruise_q) } else { 0 };
+                w.settle_trigger(&ramp, target, table);
+                // SAFETY: as above.
+                unsafe { (*n).down_period.store(self.down_period(&ramp, min, target), Relaxed) };
                 w.decel_at
             };
-            n.decel_at.store(at, Relaxed);
+            // SAFETY: as above.
+            unsafe { (*n).decel_at.store(at, Relaxed) };
         }
         // Only over the value this half left: if the step half entered the successor since
         // (and cleared it), the next pass primes the new one's.

@@ -211,20 +211,21 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
     /// One master step (and the slaves' share): the hot path.
     #[inline(always)]
     fn step(&mut self) -> (u32, u32) {
+        let p = self.cur;
         // SAFETY: `cur` is the front slot of the ring, owned by the engine until it pops it;
-        // only its slaves are borrowed (the feeder and the ramp half store its atomics).
-        let p = unsafe { &mut *self.cur };
-        let mut period = p.period.load(Relaxed);
+        // its fields are reached through the pointer, never a reference to the whole move:
+        // only its slaves are borrowed mutably (the feeder and the ramp half store its atomics).
+        let mut period = unsafe { (*p).period.load(Relaxed) };
         if period == 0 {
             // The ramp half brought a hold to rest.
             return self.halt();
         }
-        let mut word = p.master_on;
-        let total = p.total;
+        // SAFETY: as above; plain fields nobody writes while the move is published.
+        let (mut word, total, n) = unsafe { ((*p).master_on, (*p).total, (*p).n_slaves as usize) };
         // Unrolled over the slots (N is a constant), stopping after the move's last slave: no
         // loop counter, no bounds checks, no branch inside a slot.
-        let n = p.n_slaves as usize;
-        let slaves = &mut p.slaves;
+        // SAFETY: as above; only the step half touches the slaves of the running move.
+        let slaves = unsafe { &mut (*p).slaves };
         macro_rules! slaves {
             ($out:lifetime; $($i:literal)*) => {$(
                 if $i + 1 >= N || $i >= n {
@@ -248,7 +249,8 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
         // The trigger is 0 (cannot fire) until the ramp half has computed it for this move and
         // once it fired. (Not at the last step: a successor takes over the walk there, and with
         // none the move has reached its exit.)
-        if self.left <= p.decel_at.load(Relaxed) && self.left != 0 {
+        // SAFETY: as above; an atomic field.
+        if self.left <= unsafe { (*p).decel_at.load(Relaxed) } && self.left != 0 {
             period = self.trigger();
         }
         let acc = self.frac + period;
@@ -266,11 +268,11 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
     #[inline(never)]
     fn trigger(&mut self) -> u32 {
         // SAFETY: as in `step`; atomic fields.
+        let p = self.cur;
         let period = unsafe {
-            let p = &*self.cur;
-            p.decel_at.store(0, Relaxed);
-            let period = p.down_period.load(Relaxed);
-            p.period.store(period, Relaxed);
+            (*p).decel_at.store(0, Relaxed);
+            let period = (*p).down_period.load(Relaxed);
+            (*p).period.store(period, Relaxed);
             period
         };
         self.ms_left = TICKS_PER_MS as i32;
