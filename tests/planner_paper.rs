@@ -56,14 +56,15 @@ fn a_faster_feed_is_held_at_the_axis_limit() {
 fn paper_532_at_200_khz() {
     assert_eq!(format!("{:.3}", feed_for(200_000.0)), "147945.936");
     let mut b = bench();
-    for l in ["$0=2", "$110=150000", "$111=150000", "$112=150000", "$120=100000", "$121=100000", "$122=100000"] {
+    for l in ["$0=1", "$110=150000", "$111=150000", "$112=150000", "$120=100000", "$121=100000", "$122=100000"] {
         assert_eq!(b.line(l), "ok\r\n", "{l}");
     }
     b.run_ms(2);
     let info = b.line("$I");
-    // 2 µs pulses: the period floor is 2 × 144 ticks plus the store latency (the step
-    // handler's cost, 290 + 18 per slave ticks, and the low time after a pulse stay below it).
-    let limit = 72_000_000 / (2 * 144 + ddastep::timing::STORE_LATENCY_TICKS);
+    // 1 µs pulses (as bench/demo/fast_532.gcode): the period floor is a low time of 1 µs
+    // after the latest falling edge (twice the pulse plus the store latency and the step
+    // handler's cost stay below it).
+    let limit = 72_000_000 / (ddastep::timing::HANDLER_FALL_TICKS + 72);
     assert!(limit >= 200_000, "{limit}");
     assert!(info.contains(&format!("[MSG:max step rate {limit} Hz]")), "{info}");
     // The table is in path units (100 steps/mm): up to √3 × 2500 mm/s, at twice the

@@ -168,7 +168,8 @@ fn settings_list_change_and_refuse_while_moving() {
     assert_eq!(b.line("$0=2"), "ok\r\n");
     b.run_ms(2);
     assert!(b.actions.iter().any(|a| a.pulse_ticks == Some(144)), "{:?}", b.actions);
-    let limit = 72_000_000 / (2 * 144 + ddastep::timing::STORE_LATENCY_TICKS);
+    // 2 µs: the low time after the latest falling edge binds the rate.
+    let limit = 72_000_000 / (ddastep::timing::HANDLER_FALL_TICKS + 144);
     assert!(b.line("$I").contains(&format!("[MSG:max step rate {limit} Hz]")));
 }
 
