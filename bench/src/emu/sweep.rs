@@ -795,9 +795,12 @@ const NOTES: &str = "\
   buffered); the APB2 figure is fitted to a silicon measurement, the APB1 one extrapolated.
 - The step interrupt includes its own DWT self-measurement (about 25 cycles per entry; `$I`).
 - The sweep measures one straight move per point. Back-to-back moves at the `$I` cap (moves
-  changing at speed, a direction reversing at every junction) are checked by
-  `tests/firmware_lookahead.rs` (`back_to_back_moves_at_the_rate_cap_keep_every_step`, which
-  prints the step ISR's mean and longest run); the cap's long-tick term comes from there.
+  changing at speed, a direction reversing at every junction) are the \"Moves changing at the
+  rate cap\" table above, also checked by `tests/firmware_lookahead.rs`
+  (`back_to_back_moves_at_the_rate_cap_keep_every_step`: every step, no overrun); the cap's
+  long-tick and low-time terms come from there.
+- \"CPU\" includes the ramp interrupt (the engine's ramp half, pended by the step interrupt at
+  each ramp millisecond, trigger and move start): a few hundred cycles per millisecond.
 ";
 
 // today's date (UTC) as YYYY-MM-DD
