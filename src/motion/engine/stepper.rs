@@ -133,23 +133,39 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
 
     /// Computes the next edge's word; returns the ARR value to preload now.
     /// Not inlined, so the handler's own prologue stays small and the BSRR store comes first.
+    /// Period extension stays off this path: only a period over 65 536 ticks (< 1.1 kHz) or
+    /// its filler events take the out-of-line branch.
     #[inline(never)]
     pub fn tick(&mut self) -> u16 {
-        if self.extend == 0 {
-            let (word, ticks) = self.next_event();
-            self.word = word;
-            self.extend = ticks;
-        } else {
-            self.word = 0;
+        if self.extend != 0 {
+            return self.filler();
         }
-        self.emit_chunk()
+        let (word, ticks) = self.next_event();
+        self.word = word;
+        if ticks > MAX_TICK {
+            return self.extended(ticks);
+        }
+        self.elapse(ticks)
     }
 
-    /// Takes the next ≤ 65 536-tick piece of the current period and keeps time for the ramp.
-    #[inline(always)]
-    fn emit_chunk(&mut self) -> u16 {
+    /// A period longer than the timer holds: its first piece now, fillers for the rest.
+    #[inline(never)]
+    fn extended(&mut self, ticks: u32) -> u16 {
+        self.extend = ticks;
+        self.filler_piece()
+    }
+
+    /// A filler event of an extended period: an empty word and the next piece.
+    #[inline(never)]
+    fn filler(&mut self) -> u16 {
+        self.word = 0;
+        self.filler_piece()
+    }
+
+    /// The next ≤ 65 536-tick piece of an extended period. Pieces are ≥ 32 768 ticks, so a
+    /// filler never gets shorter than a real period.
+    fn filler_piece(&mut self) -> u16 {
         let rem = self.extend;
-        // Pieces are ≥ 32 768 ticks, so a filler never gets shorter than a real period.
         let chunk = if rem <= MAX_TICK {
             rem
         } else if rem >= MAX_TICK + MAX_TICK / 2 {
@@ -158,6 +174,13 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
             MAX_TICK / 2
         };
         self.extend = rem - chunk;
+        self.elapse(chunk)
+    }
+
+    /// `chunk` ticks until the next update event: keeps time for the ramp; returns the ARR
+    /// value.
+    #[inline(always)]
+    fn elapse(&mut self, chunk: u32) -> u16 {
         self.ms_left -= chunk as i32;
         if self.ms_left <= 0 {
             self.ms_left += TICKS_PER_MS as i32;
