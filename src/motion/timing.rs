@@ -123,11 +123,11 @@ impl Timing {
 
 /// Step-handler cost per master step, timer ticks: the virtual bench's step-rate sweep
 /// (bench/RESULTS.md, one long move per point, modeled with the silicon-checked memory model;
-/// the ramp interrupt and `idle` counted in the CPU) holds the CPU ≤ 95 % busy up to 244 kHz on
-/// one axis, 220 kHz on three and 185 kHz on seven (periods 295, 327 and 389 ticks; builds
-/// that differ only in code placement moved these by 2 %): 298 + 17 per slave covers every
-/// axis count with about 1 % to spare.
-pub const HANDLER_BASE_TICKS: u32 = 298;
+/// the ramp interrupt and `idle` counted in the CPU) holds the CPU ≤ 95 % busy up to 227 kHz
+/// on three axes and 187 kHz on seven (periods 317 and 385 ticks; one axis reaches the cap the
+/// low time sets at 0.5 µs pulses, 252 kHz); builds that differ only in code placement moved
+/// these by up to 2 %, so 288 + 17 per slave, about 1.5 % to spare.
+pub const HANDLER_BASE_TICKS: u32 = 288;
 /// Extra handler ticks per slave axis (see [`HANDLER_BASE_TICKS`]).
 pub const HANDLER_PER_SLAVE_TICKS: u32 = 17;
 /// The longest step-handler run at speed, timer ticks (plus [`HANDLER_PER_SLAVE_TICKS`] per
@@ -148,12 +148,11 @@ pub const HANDLER_FALL_TICKS: u32 = 250;
 /// Step-handler cost per master step in dual-edge mode (one update event per step, no compare
 /// event), timer ticks, plus [`HANDLER_PER_SLAVE_TICKS`] per slave: the sweep in dual-edge mode
 /// (bench/RESULTS.md; 20 ms cruise, 0.5 µs pulses, the ramp interrupt and `idle` counted) holds
-/// the CPU ≤ 95 % busy up to 243, 219 and 184 kHz on 1, 3 and 7 axes (periods 296, 329 and
-/// 391 ticks; the toggle costs a few cycles more than full pulses' one entry per step): 300 +
-/// 17 per slave covers them with about 1 % to spare for code placement. Dual-edge mode gains
-/// where the full-pulse rule binds (pulses from about 1.6 µs: 2·pulse + 72 ticks above
-/// [`HANDLER_BASE_TICKS`]).
-pub const DUAL_BASE_TICKS: u32 = 300;
+/// the CPU ≤ 95 % busy up to 253, 225 and 186 kHz on 1, 3 and 7 axes (periods 285, 320 and
+/// 387 ticks; the toggle costs a few cycles more than full pulses' one entry per step): 291 +
+/// 17 per slave, about 1.5 % to spare for code placement. Dual-edge mode gains where the
+/// full-pulse rule binds (from 1 µs: the low time after the latest falling edge).
+pub const DUAL_BASE_TICKS: u32 = 291;
 /// Dual-edge mode: the shortest period a long tick (ramp work, a move change) leaves without a
 /// missed update event, timer ticks (plus [`HANDLER_PER_SLAVE_TICKS`] per slave). A long tick
 /// may overrun one period (the next update then waits for it, its store comes late by at most
