@@ -28,7 +28,7 @@ pub mod steptime;
 pub mod watchdog;
 
 pub use grbl::{controller, coords, gcode, jog, limits, protocol, report, settings, shell, spindle, store};
-pub use motion::{control, engine, interp, prepared, queue, ramp, ring, sim, timing, walk};
+pub use motion::{burst, control, engine, interp, prepared, queue, ramp, ring, sim, timing, walk};
 pub use planning::{arc, feeder, inverse_time, lookahead, planner};
 
 /// Timer clock of TIM2 (APB1 at 36 MHz, doubled for timers): one timer tick is 1/72 µs.

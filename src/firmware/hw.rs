@@ -95,12 +95,86 @@ pub fn set_enable(high: bool) {
 }
 
 /// New step pulse width: CCR1 is preloaded, so it takes effect at the next update event.
-/// Nothing in dual-edge mode ([`no_falling_edge`]: the compare interrupt is off).
-pub fn set_pulse_ticks(ticks: u32) {
-    if tim2().dier().read().bits() & SR_CC1IF == 0 {
-        return;
+/// Nothing in dual-edge mode ([`no_falling_edge`]: the compare interrupt is off). `false` when
+/// DMA burst mode's buffers cannot hold the pulse (their layout follows it: a restart).
+pub fn set_pulse_ticks(ticks: u32) -> bool {
+    let dier = tim2().dier().read().bits();
+    let ccr = if super::burst::active() {
+        if dier & DIER_CC1DE == 0 {
+            return true;
+        }
+        let Some(fall) = super::burst::fall_ticks(ticks) else { return false };
+        fall
+    } else {
+        if dier & SR_CC1IF == 0 {
+            return true;
+        }
+        ticks + ddastep::timing::STORE_LATENCY_TICKS
+    };
+    tim2().ccr1().write(|w| unsafe { w.bits(ccr.min(0xFFFF)) });
+    true
+}
+
+/// TIM2 DIER: DMA requests on update, compare 1, compare 3.
+const DIER_UDE: u32 = 1 << 8;
+const DIER_CC1DE: u32 = 1 << 9;
+const DIER_CC3DE: u32 = 1 << 11;
+
+/// DMA1's registers (the fill interrupt owns channel 1's flags after `init`).
+#[inline(always)]
+pub fn dma1() -> &'static pac::dma1::RegisterBlock {
+    // SAFETY: after init only the fill interrupt touches DMA1 (ISR read, IFCR write).
+    unsafe { &*pac::DMA1::ptr() }
+}
+
+/// DMA burst mode (`ddastep::burst`): TIM2 without interrupts, its update event storing
+/// `words[k]` into GPIOB's BSRR (channel 2), its compare 3 event storing `periods[k]` into ARR
+/// (channel 1, with the fill interrupt at each half), and with full pulses its compare 1
+/// event, `fall` ticks after the update, storing `*off` into BSRR (channel 5). `n` entries,
+/// circular; the first period is `first` ticks.
+pub fn setup_dma(words: u32, periods: u32, off: u32, n: u32, first: u32, fall: u32, dual: bool) {
+    // RCC_AHBENR.DMA1EN.
+    // SAFETY: one bit of the clock enables, set once in init.
+    unsafe { (*pac::RCC::ptr()).ahbenr().modify(|r, w| w.bits(r.bits() | 1)) };
+    let t = tim2();
+    t.dier().write(|w| unsafe { w.bits(0) });
+    t.arr().write(|w| unsafe { w.bits(first - 1) });
+    // Compare 3 frozen, not preloaded, one tick after the update: the period store.
+    t.ccmr2_output().write(|w| unsafe { w.bits(0) });
+    t.ccr3().write(|w| unsafe { w.bits(1) });
+    t.ccr1().write(|w| unsafe { w.bits(fall) });
+    t.egr().write(|w| w.ug().set_bit());
+    // Counting starts past compare 3, so the first period store follows the first update.
+    t.cnt().write(|w| unsafe { w.bits(2) });
+    t.sr().write(|w| unsafe { w.bits(0) });
+    // CCR: memory to peripheral (DIR), circular, memory increment, very high priority, on.
+    const DIR: u32 = 1 << 4;
+    const CIRC: u32 = 1 << 5;
+    const MINC: u32 = 1 << 7;
+    const P32: u32 = 0b10 << 8;
+    const M16: u32 = 0b01 << 10;
+    const M32: u32 = 0b10 << 10;
+    const VERY_HIGH: u32 = 0b11 << 12;
+    const HTIE: u32 = 1 << 2;
+    const TCIE: u32 = 1 << 1;
+    const EN: u32 = 1;
+    let gpiob_bsrr = gpiob().bsrr().as_ptr() as u32;
+    let dma = dma1();
+    let channel = |ch: &pac::dma1::CH, par: u32, mar: u32, n: u32, cr: u32| {
+        ch.cr().write(|w| unsafe { w.bits(0) });
+        ch.par().write(|w| unsafe { w.bits(par) });
+        ch.mar().write(|w| unsafe { w.bits(mar) });
+        ch.ndtr().write(|w| unsafe { w.bits(n) });
+        ch.cr().write(|w| unsafe { w.bits(cr | EN) });
+    };
+    channel(dma.ch2(), gpiob_bsrr, words, n, DIR | CIRC | MINC | P32 | M32 | VERY_HIGH);
+    channel(dma.ch1(), t.arr().as_ptr() as u32, periods, n, DIR | CIRC | MINC | P32 | M16 | VERY_HIGH | HTIE | TCIE);
+    let mut dier = DIER_UDE | DIER_CC3DE;
+    if !dual {
+        channel(dma.ch5(), gpiob_bsrr, off, 1, DIR | CIRC | P32 | M32 | VERY_HIGH);
+        dier |= DIER_CC1DE;
     }
-    tim2().ccr1().write(|w| unsafe { w.bits((ticks + ddastep::timing::STORE_LATENCY_TICKS).min(0xFFFF)) });
+    t.dier().write(|w| unsafe { w.bits(dier) });
 }
 
 /// Dual-edge mode: no compare event (interrupt off, CCR1 past every period the engine sets).

@@ -1,6 +1,7 @@
 //! The RTIC application and its hardware glue (MCU only).
 
 mod boot;
+mod burst;
 mod encoder;
 mod hw;
 mod limits;
@@ -28,7 +29,7 @@ mod app {
     use stm32f1xx_hal::pac;
     use stm32f1xx_hal::serial::{Rx, Tx};
 
-    use super::{encoder, hw, limits, step, watchdog};
+    use super::{burst, encoder, hw, limits, step, watchdog};
 
     /// Axes the firmware drives: X Y Z A B C U.
     pub const AXES: usize = ddastep::MAX_AXES;
@@ -113,7 +114,16 @@ mod app {
             controller.position_lost();
         }
         limits::setup();
-        step::install(engine, &mut core.NVIC);
+        if settings.dma_burst {
+            // DMA burst output (`$581`, fixed until the next boot: a change restarts).
+            let dual = settings.dual_edge;
+            let fall = if dual { 0 } else { settings.timing().pulse_ticks + ddastep::timing::DMA_MARGIN_TICKS };
+            let layout = ddastep::burst::Layout::for_pulse(fall);
+            let engine = ddastep::burst::Burst::new(engine, &SHARED, layout.max_tick);
+            burst::install(engine, layout, fall, dual, &mut core.NVIC);
+        } else {
+            step::install(engine, &mut core.NVIC);
+        }
         defmt::info!("ddastep up: 72 MHz, {} axes", AXES);
         hw::start_step_timer();
         watchdog::start();
@@ -234,8 +244,10 @@ mod app {
             limits::arm(ctl.settings().hard_limits, invert, ddastep::limits::active_pins(idr, invert), ctl.homing_watch());
             hw::ENABLE_OFF_HIGH.store(!ctl.settings().enable_invert, Relaxed);
             hw::set_enable(act.enable_pin_high);
+            let mut restart = act.restart;
             if let Some(ticks) = act.pulse_ticks {
-                hw::set_pulse_ticks(ticks);
+                // (DMA mode: a pulse its buffers' layout cannot hold restarts with a new one.)
+                restart |= !hw::set_pulse_ticks(ticks);
             }
             if let Some(t) = act.pwm {
                 hw::set_pwm_timing(t);
@@ -244,7 +256,7 @@ mod app {
                 spindle = act.spindle;
                 hw::set_spindle(spindle);
             }
-            if act.save || act.restart {
+            if act.save || restart {
                 hw::save_store(cx.local.flash, &ctl.image());
             }
             hw::heartbeat(now);
@@ -255,7 +267,7 @@ mod app {
             if tx_in.len() > 0 {
                 cx.shared.tx.lock(|tx| tx.listen());
             }
-            if act.restart {
+            if restart {
                 // Let the reply leave (TX interrupt on, above), then reset: the engine takes
                 // the pin map at boot.
                 while tx_in.len() > 0 {}

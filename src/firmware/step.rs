@@ -30,7 +30,7 @@ static RAMPER: Slot<Ramper<'static, AXES>> = Slot(UnsafeCell::new(MaybeUninit::u
 
 /// NVIC priority of RTIC's logical priority `p` (4 priority bits, higher logical = lower
 /// number): `((1 << 4) - p) << 4`.
-const fn nvic_priority(p: u8) -> u8 {
+pub(super) const fn nvic_priority(p: u8) -> u8 {
     ((1 << pac::NVIC_PRIO_BITS) - p) << (8 - pac::NVIC_PRIO_BITS)
 }
 

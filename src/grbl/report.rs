@@ -250,7 +250,12 @@ pub fn build_info(out: &mut impl Out, info: &[u8], queue_moves: usize, r: &Rampe
     put_u32(out, RX_BUFFER_LEN as u32);
     out.put(b"]\r\n[MSG:max step rate ");
     put_u32(out, r.max_rate_hz);
-    out.put(if r.dual { b" Hz dual-edge]\r\n[MSG:ramp " as &[u8] } else { b" Hz]\r\n[MSG:ramp " });
+    out.put(match (r.dual, r.dma) {
+        (false, false) => b" Hz]\r\n[MSG:ramp " as &[u8],
+        (true, false) => b" Hz dual-edge]\r\n[MSG:ramp ",
+        (false, true) => b" Hz DMA]\r\n[MSG:ramp ",
+        (true, true) => b" Hz dual-edge DMA]\r\n[MSG:ramp ",
+    });
     put_u32(out, r.cfg.v0);
     out.put(b"-");
     put_u32(out, r.cfg.vmax);
@@ -357,6 +362,7 @@ mod tests {
             max_rate_hz: 166_666,
             table_limited: false,
             dual: false,
+            dma: false,
         };
         let info = text(|o| build_info(o, b"", 15, &r));
         assert_eq!(
@@ -370,7 +376,9 @@ mod tests {
         let worst = crate::steptime::StepTimeReport { entries: 1, min: u32::MAX, mean: u32::MAX as f32, max: u32::MAX, load: 1.0, peak_load: 1.0 };
         let dual = text(|o| build_info(o, b"", 15, &Ramped { dual: true, ..r }));
         assert!(dual.contains("[MSG:max step rate 166666 Hz dual-edge]\r\n"), "{dual}");
-        let r = Ramped { table_limited: true, dual: true, ..r };
+        let dma = text(|o| build_info(o, b"", 15, &Ramped { dma: true, ..r }));
+        assert!(dma.contains("[MSG:max step rate 166666 Hz DMA]\r\n"), "{dma}");
+        let r = Ramped { table_limited: true, dual: true, dma: true, ..r };
         let all = text(|o| {
             build_info(o, &[b'x'; crate::grbl::store::TEXT_LEN], 15, &r);
             step_time(o, &worst);

@@ -30,8 +30,9 @@ const TAIL: usize = 24 + 4 * 4 * MAX_AXES;
 /// Byte offset of the homing settings, after the encoder's.
 const HOME: usize = TAIL + 20 + crate::encoder::IMAGE_LEN;
 const _: () = assert!(HOME + 16 <= SETTINGS_LEN - 4);
-/// Byte offset of the flag bits (`$4`, `$5`, `$6`, `$20`, `$22`, `$21`, `$580` as bits 0..=6;
-/// an image from before `$580` has bit 6 clear: single-edge, as it ran).
+/// Byte offset of the flag bits (`$4`, `$5`, `$6`, `$20`, `$22`, `$21`, `$580`, `$581` as bits
+/// 0..=7; an image from before `$580`/`$581` has their bits clear: single-edge, interrupt mode,
+/// as it ran).
 const FLAGS: usize = 19;
 /// Absolute floor of the step period (ticks; 144 = 500 kHz, the engine's design limit). The
 /// binding limits are the pulse rule and the step handler's measured cost, both applied by
@@ -51,6 +52,9 @@ pub const SPINDLE_PWM_HZ: u16 = 33; // grblHAL's number for the spindle PWM freq
 /// Dual-edge step mode (each step toggles its pin): free in Grbl 1.1 and in grblHAL (between
 /// its panel settings, 540-579, and button actions, 590-599).
 pub const DUAL_EDGE: u16 = 580;
+/// DMA burst step output (TIM2 paces every edge, DMA stores the precomputed words; no interrupt
+/// per edge): next to `$580`.
+pub const DMA_BURST: u16 = 581;
 
 /// Grbl settings we report but do not implement, with the only value they accept.
 /// (Their decimals for `$$` are in [`LOW`].)
@@ -95,7 +99,7 @@ const fn spec(id: u16, range: u8, decimals: u8, change: Change, at: usize, bit: 
 }
 
 /// Settings below 100 in `$$` order: Grbl's, ours and the [`FIXED`] ones.
-const LOW: [Spec; 34] = {
+const LOW: [Spec; 35] = {
     use Change::{None as Fixed, Pins, Profile, Shell};
     [
         spec(0, 1, 3, Profile, 4, 0),
@@ -134,6 +138,7 @@ const LOW: [Spec; 34] = {
         spec(encoder::LAG, 0, 0, Fixed, 0, 0),
         // Listed after the axis settings (`Settings::id`).
         spec(DUAL_EDGE, 0, 0, Pins, FLAGS, 6),
+        spec(DMA_BURST, 0, 0, Pins, FLAGS, 7),
     ]
 };
 
@@ -213,6 +218,9 @@ pub struct Settings {
     /// `$580` dual-edge step mode: each step toggles its pin (drivers stepping on both edges,
     /// TMC22xx `dedge`); `$2` does not apply then.
     pub dual_edge: bool,
+    /// `$581` DMA burst step output: TIM2's events have DMA store the step words and periods
+    /// the engine buffered (`crate::burst`); a change restarts the MCU.
+    pub dma_burst: bool,
 }
 
 impl Default for Settings {
@@ -244,13 +252,15 @@ pub struct Ramped {
     pub table_limited: bool,
     /// The cap is dual-edge mode's (`$580`).
     pub dual: bool,
+    /// The cap is DMA burst mode's (`$581`).
+    pub dma: bool,
 }
 
 impl Ramped {
     /// What `s` asks for on `axes` axes, before the table is built.
     pub fn wanted(s: &Settings, axes: usize) -> Ramped {
         let timing = s.timing();
-        Ramped { cfg: s.ramp_config(axes, &timing), max_rate_hz: timing.max_rate_hz(), table_limited: false, dual: timing.dual }
+        Ramped { cfg: s.ramp_config(axes, &timing), max_rate_hz: timing.max_rate_hz(), table_limited: false, dual: timing.dual, dma: timing.dma }
     }
 }
 
@@ -290,6 +300,7 @@ impl Settings {
         axes: 3,
         encoder: EncoderSettings::DEFAULT,
         dual_edge: false,
+        dma_burst: false,
     };
 
     /// The seed paper's bench (the settings before the safe defaults, which the demos and
@@ -312,11 +323,13 @@ impl Settings {
     /// Setting number `i` of the `$$` listing for `axes` axes (`None` past the end).
     pub fn id(i: usize, axes: usize) -> Option<u16> {
         let axes = axes.min(MAX_AXES);
-        // [`LOW`]'s last entry, `$580`, comes after the axis settings: numeric order.
-        match i.checked_sub(LOW.len() - 1) {
+        // [`LOW`]'s last two entries, `$580` and `$581`, come after the axis settings: numeric
+        // order.
+        match i.checked_sub(LOW.len() - 2) {
             None => LOW.get(i).map(|s| s.id),
             Some(j) if j < 4 * axes => Some(100 + 10 * (j / axes) as u16 + (j % axes) as u16),
             Some(j) if j == 4 * axes => Some(DUAL_EDGE),
+            Some(j) if j == 4 * axes + 1 => Some(DMA_BURST),
             Some(_) => None,
         }
     }
@@ -374,6 +387,7 @@ impl Settings {
             31 => Real(&mut self.spindle_min),
             32 => Flag(&mut self.laser_mode),
             DUAL_EDGE => Flag(&mut self.dual_edge),
+            DMA_BURST => Flag(&mut self.dma_burst),
             SPINDLE_PWM_HZ => Whole(&mut self.spindle_pwm_hz),
             RAMP_START => Whole(&mut self.ramp_start_hz),
             RAMP_SHAPE => Shape(&mut self.shape),
@@ -484,7 +498,9 @@ impl Settings {
         let pulse = ns_to_ticks(round_u32(self.pulse_us as f64 * 1000.0));
         let dir = ns_to_ticks(round_u32(self.dir_setup_us as f64 * 1000.0));
         let t = Timing::new(pulse, dir, ISR_FLOOR_TICKS);
-        if self.dual_edge {
+        if self.dma_burst {
+            t.burst(self.dual_edge)
+        } else if self.dual_edge {
             t.dual_edge(0)
         } else {
             t
@@ -558,7 +574,7 @@ impl Settings {
                 Ok(()) => break,
             }
         }
-        Ramped { cfg, max_rate_hz: timing.max_rate_hz(), table_limited, dual: timing.dual }
+        Ramped { cfg, max_rate_hz: timing.max_rate_hz(), table_limited, dual: timing.dual, dma: timing.dma }
     }
 
     /// The flash image: magic, version, fields (little-endian, where [`LOW`] and
@@ -668,7 +684,7 @@ mod tests {
     fn low_ids_are_ours_and_every_fixed_one() {
         let ours = [
             0, 1, 2, 3, 4, 5, 6, STATUS_MASK, 12, 20, 21, 22, 23, 24, 25, 26, 27, 30, 31, 32, SPINDLE_PWM_HZ, DIR_SETUP,
-            RAMP_START, RAMP_SHAPE, AXIS_COUNT, 87, 88, 89, 97, 98, 99, DUAL_EDGE,
+            RAMP_START, RAMP_SHAPE, AXIS_COUNT, 87, 88, 89, 97, 98, 99, DUAL_EDGE, DMA_BURST,
         ];
         assert_eq!(LOW.len(), ours.len() + FIXED.len());
         assert!(ours.iter().chain(FIXED.iter().map(|f| &f.0)).all(|id| LOW.iter().any(|s| s.id == *id)));

@@ -158,6 +158,12 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
         self.lag = lag;
     }
 
+    /// Whether the next tick is a filler piece of a period longer than one event holds: it
+    /// reads nothing shared (for tests that act between real ticks only).
+    pub fn filler_next(&self) -> bool {
+        self.step.filler_next()
+    }
+
     /// Ramp-walk state for tests: (index Q20, decelerating, decel trigger, master steps left).
     pub fn walk_state(&self) -> (u32, bool, u32, u32) {
         let (idx, decel, at) = self.ramp.walk_state();

@@ -13,12 +13,15 @@
 //!   computes the next GPIO BSRR word and the next timer period; the ramp walk runs in
 //!   [`engine::Ramper::run`], a lower-priority interrupt ([`engine::Engine`] runs both on the
 //!   host).
+//! - [`burst`]: DMA burst output — the engine fills the buffers DMA plays out at TIM2's
+//!   events (no interrupt per edge).
 //! - [`queue`]: moves as the planner hands them over, and the atomics shared with the step
 //!   interrupt (positions, state, overrides).
 //! - [`timing`]: driver timing (pulse width, direction setup) as typed constants.
 //! - [`sim`]: a model of the TIM2 preload pipeline that turns ticks into timed edges (host
 //!   tests, benchmarks).
 
+pub mod burst;
 pub mod control;
 pub mod engine;
 pub mod interp;

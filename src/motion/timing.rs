@@ -47,6 +47,9 @@ pub struct Timing {
     /// Dual-edge stepping (`$580`): each step toggles its pin, no falling-edge event; the
     /// "pulse" is the shortest time between two toggles of one pin.
     pub dual: bool,
+    /// DMA burst output (`$581`): TIM2's events have DMA store buffered words; the pulse is
+    /// hardware-timed and the cost per step is the buffer fill's ([`DMA_BASE_TICKS`]).
+    pub dma: bool,
 }
 
 impl Timing {
@@ -57,7 +60,7 @@ impl Timing {
     pub const DEFAULT: Timing = Timing::new(216, 360, 144);
 
     /// All zero: "not set yet"; the engine uses [`Timing::DEFAULT`] in its place.
-    pub const UNSET: Timing = Timing { pulse_ticks: 0, dir_setup_ticks: 0, min_period_ticks: 0, dual: false };
+    pub const UNSET: Timing = Timing { pulse_ticks: 0, dir_setup_ticks: 0, min_period_ticks: 0, dual: false, dma: false };
 
     /// Timing from its parts (ticks); the shortest period is never below twice the pulse plus
     /// [`STORE_LATENCY_TICKS`] (the pulse is stretched by that much, see the firmware).
@@ -68,7 +71,23 @@ impl Timing {
             dir_setup_ticks,
             min_period_ticks: if min_period_ticks > floor { min_period_ticks } else { floor },
             dual: false,
+            dma: false,
         }
+    }
+
+    /// The same pulse and setup in DMA burst mode (`$581`), single- or dual-edge: every edge
+    /// is a DMA store at a timer event, so the pulse is the compare value plus the stores'
+    /// latency spread ([`DMA_MARGIN_TICKS`] each side) and the period's floor follows the pulse
+    /// and low time alone (never below [`DMA_FLOOR_TICKS`], 1 MHz); the fill's cost comes in
+    /// [`Self::min_period_for`].
+    pub const fn burst(self, dual: bool) -> Self {
+        let floor = if dual {
+            self.pulse_ticks + DMA_MARGIN_TICKS
+        } else {
+            2 * (self.pulse_ticks + DMA_MARGIN_TICKS)
+        };
+        let floor = if floor > DMA_FLOOR_TICKS { floor } else { DMA_FLOOR_TICKS };
+        Timing { min_period_ticks: floor, dual, dma: true, ..self }
     }
 
     /// The same pulse and setup in dual-edge mode: a step is one toggle at an update event, so
@@ -83,6 +102,11 @@ impl Timing {
     /// handler's cost (so the CPU stays ≤ 95 % busy), and room for a low time of at least one
     /// pulse after a falling edge that comes only at the end of the handler (its longest run).
     pub const fn min_period_for(&self, slaves: u32) -> u32 {
+        if self.dma {
+            // The fill's cost per step (CPU ≤ 95 %, the DMA's bus cycles counted).
+            let cpu = if self.dual { DMA_DUAL_BASE_TICKS } else { DMA_BASE_TICKS } + DMA_PER_SLAVE_TICKS * slaves;
+            return if cpu > self.min_period_ticks { cpu } else { self.min_period_ticks };
+        }
         if self.dual {
             // One event per step: the handler's cost (CPU ≤ 95 %) and its longest run at speed.
             let cpu = DUAL_BASE_TICKS + HANDLER_PER_SLAVE_TICKS * slaves;
@@ -159,6 +183,22 @@ pub const DUAL_BASE_TICKS: u32 = 291;
 /// the overrun); two updates inside one run would be an overrun. The bench's back-to-back
 /// moves at the cap (tests/firmware_dual_edge.rs) keep every step with the CPU rule alone.
 pub const DUAL_LONG_TICKS: u32 = 0;
+
+/// DMA burst mode: the buffer fill's cost per master step, timer ticks, plus
+/// [`DMA_PER_SLAVE_TICKS`] per slave, with DMA's bus cycles (three stores per step) counted:
+/// see bench/RESULTS.md (the sweep in DMA mode).
+pub const DMA_BASE_TICKS: u32 = 160;
+/// The same in dual-edge DMA mode (two stores per step: no falling-edge store).
+pub const DMA_DUAL_BASE_TICKS: u32 = 150;
+/// Extra fill ticks per slave axis in DMA burst mode.
+pub const DMA_PER_SLAVE_TICKS: u32 = 16;
+/// Shortest period in DMA burst mode: 72 ticks, 1 MHz (the ramp tables' top rate).
+pub const DMA_FLOOR_TICKS: u32 = 72;
+/// DMA burst mode: the spread of a DMA store's latency after its timer event (arbitration,
+/// the bus matrix, a bridge busy with the other channel's store), timer ticks. The falling
+/// edge's compare event comes this much after the pulse width, and the low time gets the
+/// same margin.
+pub const DMA_MARGIN_TICKS: u32 = 8;
 
 /// Timer ticks from an update event to the step handler's BSRR store: 57..71 modeled cycles
 /// on the virtual bench with its silicon-checked memory model (bench/golden/paper_532.json,

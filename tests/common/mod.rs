@@ -151,3 +151,20 @@ impl<const N: usize> Rig<N> {
         self.steps.iter().filter(|s| s.axis == axis).map(|s| s.t).collect()
     }
 }
+
+impl<const N: usize> Rig<N> {
+    /// The same rig with its engine filling DMA buffers of entries at most `max_tick` long
+    /// (the firmware's DMA burst mode) instead of running tick by tick.
+    pub fn into_burst(self, max_tick: u32) -> BurstRig<N> {
+        let burst = ddastep::burst::Burst::new(self.engine, self.shared, max_tick);
+        BurstRig { shared: self.shared, feeder: self.feeder, burst, pins: self.pins }
+    }
+}
+
+/// A rig whose engine fills DMA buffers ([`Rig::into_burst`]).
+pub struct BurstRig<const N: usize> {
+    pub shared: &'static Shared<N>,
+    pub feeder: Feeder<'static, N>,
+    pub burst: ddastep::burst::Burst<'static, N>,
+    pub pins: PinMap<N>,
+}

@@ -59,14 +59,24 @@ pub struct Stepper<'a, const N: usize, const L: usize = RAMP_LEN> {
     phase: Phase,
     cur: *mut Prepared<N>,
     left: u32,
-    /// This tick's own period: from its update event to the next (the previous tick's ARR).
+    /// This tick's own period: from its update event to the next (the previous tick's ARR); for
+    /// the last piece of a split period, the whole period (so the decisions that depend on it
+    /// do not depend on how a period is split).
     gap_in: u32,
+    /// The whole of the period being split.
+    whole: u32,
     hold: bool,
     ctl_seen: Ctl,
     /// How to ask for the ramp half's interrupt (a counter in [`Link`] moved): write `.1` to
     /// the register at `.0` (the NVIC's set-pending word for its vector); null on the host,
     /// where [`super::Engine`] runs the ramp half after every tick anyway.
     pend: (*mut u32, u32),
+    /// Set when a tick asked for the ramp half and no register is set to pend ([`Self::set_pend`]):
+    /// the DMA burst fill runs the ramp half itself ([`crate::burst`]).
+    pended: bool,
+    /// Longest period one event may have: [`MAX_TICK`] (the timer's 16 bits), less in DMA burst
+    /// mode, where it bounds the time the buffers hold (longer periods are split into fillers).
+    max_tick: u32,
 }
 
 // SAFETY: `cur` points into the ring the engine consumes; the step half is moved into the
@@ -90,10 +100,18 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
             cur: core::ptr::null_mut(),
             left: 0,
             gap_in: 0,
+            whole: 0,
             hold: false,
             ctl_seen: shared.ctl.load(),
             pend: (core::ptr::null_mut(), 0),
+            pended: false,
+            max_tick: MAX_TICK,
         }
+    }
+
+    /// Whether the next tick is a filler piece of an extended period (it reads nothing shared).
+    pub(crate) fn filler_next(&self) -> bool {
+        self.extend != 0
     }
 
     /// Master steps left in the running move.
@@ -122,13 +140,26 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
         self.pend = (reg, bit);
     }
 
-    /// Pends the ramp half's interrupt.
+    /// Pends the ramp half's interrupt (or notes the request, with no register set).
     #[inline(always)]
-    fn pend(&self) {
+    fn pend(&mut self) {
         if !self.pend.0.is_null() {
             // SAFETY: `set_pend`'s contract.
             unsafe { core::ptr::write_volatile(self.pend.0, self.pend.1) };
+        } else {
+            self.pended = true;
         }
+    }
+
+    /// Whether a tick asked for the ramp half since the last call (no register set).
+    #[inline(always)]
+    pub(crate) fn take_pended(&mut self) -> bool {
+        core::mem::replace(&mut self.pended, false)
+    }
+
+    /// Longest period of one event, timer ticks (at most [`MAX_TICK`], at least 2).
+    pub(crate) fn set_max_tick(&mut self, ticks: u32) {
+        self.max_tick = ticks.clamp(2, MAX_TICK);
     }
 
     /// Computes the next edge's word; returns the ARR value to preload now.
@@ -142,7 +173,7 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
         }
         let (word, ticks) = self.next_event();
         self.word = word;
-        if ticks > MAX_TICK {
+        if ticks > self.max_tick {
             return self.extended(ticks);
         }
         self.elapse(ticks)
@@ -152,6 +183,7 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
     #[inline(never)]
     fn extended(&mut self, ticks: u32) -> u16 {
         self.extend = ticks;
+        self.whole = ticks;
         self.filler_piece()
     }
 
@@ -162,19 +194,25 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
         self.filler_piece()
     }
 
-    /// The next ≤ 65 536-tick piece of an extended period. Pieces are ≥ 32 768 ticks, so a
-    /// filler never gets shorter than a real period.
+    /// The next piece of an extended period, at most the longest period (65 536 ticks, less in
+    /// DMA burst mode) and at least half of it: with the timer's 16 bits a filler never gets
+    /// shorter than a real period, and a step's own first piece always holds its pulse.
     fn filler_piece(&mut self) -> u16 {
         let rem = self.extend;
-        let chunk = if rem <= MAX_TICK {
+        let max = self.max_tick;
+        let chunk = if rem <= max {
             rem
-        } else if rem >= MAX_TICK + MAX_TICK / 2 {
-            MAX_TICK
+        } else if rem >= max + max / 2 {
+            max
         } else {
-            MAX_TICK / 2
+            max / 2
         };
         self.extend = rem - chunk;
-        self.elapse(chunk)
+        let arr = self.elapse(chunk);
+        if self.extend == 0 {
+            self.gap_in = self.whole;
+        }
+        arr
     }
 
     /// `chunk` ticks until the next update event: keeps time for the ramp; returns the ARR

@@ -1,0 +1,113 @@
+//! DMA burst step output (`$581=1`): TIM2 paces every edge and DMA stores the words the engine
+//! buffered (`ddastep::burst`); no interrupt runs per edge.
+//!
+//! TIM2's update event requests DMA1 channel 2, which stores the next step word into GPIOB's
+//! BSRR; its compare 3 event, one tick later, requests channel 1, which stores the next period
+//! into the (preloaded) ARR; with full pulses its compare 1 event, the pulse width after the
+//! update, requests channel 5, which stores the constant falling-edge word. Both buffers are
+//! circular; channel 1's half-transfer and transfer-complete interrupt (after the period store,
+//! so both channels are done with the half) fills the half just played. The fill runs at the
+//! priority the step interrupt has in interrupt mode (above every RTIC task) and does the ramp
+//! half's work itself, so the ramp vector stays off.
+//!
+//! Hard limits stop TIM2 (`limits.rs`), and with it every DMA request, at once; entries already
+//! buffered (≤ 1 ms) are then never played, so the position is lost as in interrupt mode (it
+//! is anyway after a hard limit). Feed hold and stop reach the pins after the buffered
+//! entries: ≤ `Layout::latency_ticks` (1 ms).
+
+use core::cell::UnsafeCell;
+use core::mem::MaybeUninit;
+use core::sync::atomic::{AtomicU32, Ordering::Relaxed};
+
+use ddastep::burst::{Burst, Layout, HALF_MAX};
+use ddastep::steptime::STEP_TIME;
+use stm32f1xx_hal::pac::{self, interrupt};
+
+use super::app::AXES;
+use super::hw;
+
+/// The engine and the buffers DMA reads, owned by the fill interrupt after `init`.
+struct State {
+    burst: MaybeUninit<Burst<'static, AXES>>,
+    words: [u32; 2 * HALF_MAX],
+    periods: [u16; 2 * HALF_MAX],
+    /// The falling-edge word channel 5 stores at every compare event.
+    off: u32,
+}
+
+struct Slot(UnsafeCell<State>);
+
+// SAFETY: written by `init` with interrupts off, then only by the fill interrupt (one context,
+// never re-entered); DMA reads the half the fill is not writing.
+unsafe impl Sync for Slot {}
+
+static STATE: Slot = Slot(UnsafeCell::new(State {
+    burst: MaybeUninit::uninit(),
+    words: [0; 2 * HALF_MAX],
+    periods: [0; 2 * HALF_MAX],
+    off: 0,
+}));
+
+/// Entries per half in use (0: interrupt mode).
+static HALF: AtomicU32 = AtomicU32::new(0);
+/// The layout's longest entry (0: interrupt mode).
+static MAX_TICK: AtomicU32 = AtomicU32::new(0);
+
+/// DMA1 interrupt flags of channel 1: global, transfer complete, half transfer.
+const ISR_CH1: u32 = 0xF;
+const HTIF1: u32 = 1 << 2;
+const TCIF1: u32 = 1 << 1;
+
+/// Whether the step output runs on DMA.
+pub fn active() -> bool {
+    HALF.load(Relaxed) != 0
+}
+
+/// The compare value of the falling edge for a pulse of `ticks` in DMA mode, if the buffers'
+/// layout holds it (else the layout must change: a restart).
+pub fn fall_ticks(ticks: u32) -> Option<u32> {
+    let fall = ticks + ddastep::timing::DMA_MARGIN_TICKS;
+    (fall < MAX_TICK.load(Relaxed) / 2).then_some(fall)
+}
+
+/// Fills both halves, hands the engine to the fill interrupt, starts DMA1 (in `init`,
+/// interrupts off; TIM2 starts counting later, in `hw::start_step_timer`).
+pub fn install(burst: Burst<'static, AXES>, layout: Layout, fall: u32, dual: bool, nvic: &mut cortex_m::peripheral::NVIC) {
+    let n = 2 * layout.half;
+    // SAFETY: interrupts are off and DMA is not running yet: no other access.
+    let s = unsafe { &mut *STATE.0.get() };
+    let burst = s.burst.write(burst);
+    s.off = burst.step_off();
+    burst.fill(s.words.get_mut(..n).unwrap_or_default(), s.periods.get_mut(..n).unwrap_or_default());
+    HALF.store(layout.half as u32, Relaxed);
+    MAX_TICK.store(layout.max_tick, Relaxed);
+    hw::setup_dma(s.words.as_ptr() as u32, s.periods.as_ptr() as u32, &s.off as *const u32 as u32, n as u32, layout.max_tick, fall, dual);
+    // SAFETY: the step interrupt's priority, above RTIC's tasks; unmasking is what `init` is for.
+    unsafe {
+        nvic.set_priority(pac::Interrupt::DMA1_CHANNEL1, super::step::nvic_priority(4));
+        cortex_m::peripheral::NVIC::unmask(pac::Interrupt::DMA1_CHANNEL1);
+    }
+}
+
+/// Channel 1 played a half (or the whole buffer): fill it again. Times itself like the step
+/// interrupt (`$I`: cycles per fill of one half).
+#[interrupt]
+fn DMA1_CHANNEL1() {
+    let t0 = hw::cycles();
+    let dma = hw::dma1();
+    let flags = dma.isr().read().bits() & ISR_CH1;
+    dma.ifcr().write(|w| unsafe { w.bits(flags) });
+    let half = HALF.load(Relaxed) as usize;
+    // SAFETY: installed before the interrupt was unmasked; this handler is its only user.
+    let s = unsafe { &mut *STATE.0.get() };
+    let burst = unsafe { s.burst.assume_init_mut() };
+    let (w0, w1) = s.words.split_at_mut(half);
+    let (p0, p1) = s.periods.split_at_mut(half);
+    if flags & HTIF1 != 0 {
+        burst.fill(w0, p0);
+    }
+    if flags & TCIF1 != 0 {
+        burst.fill(&mut w1[..half], &mut p1[..half]);
+    }
+    STEP_TIME.record(hw::cycles().wrapping_sub(t0));
+}

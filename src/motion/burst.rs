@@ -1,0 +1,132 @@
+//! DMA burst output: the step engine fills buffers that DMA plays out at TIM2's events.
+//!
+//! Who uses it: the firmware in DMA mode (`$581=1`), from the DMA half-transfer and
+//! transfer-complete interrupt; host tests, which compare the buffers with the interrupt engine.
+//!
+//! The mode. TIM2 still paces every edge, but no interrupt runs per edge: at each update event
+//! DMA stores the next word of [`Burst`]'s word buffer into the step port's BSRR, and at a
+//! compare event just after it DMA stores the next entry of the period buffer into TIM2's
+//! (preloaded) ARR; with full pulses a second compare event `pulse` after each update has DMA
+//! store the constant falling-edge word. Entry `k` of the two buffers is exactly what the
+//! interrupt handler stores at update event `k`: the word ([`crate::engine::Stepper::word`])
+//! and the ARR the tick returns ([`crate::engine::Stepper::tick`]). Both buffers are circular;
+//! when DMA has played one half, its interrupt fills that half again ([`Burst::fill`]).
+//!
+//! The same engine. [`Burst`] holds both halves of the engine and runs them as the host's
+//! [`crate::engine::Engine`] does, the ramp half's work right after the tick that asked for
+//! it, so the buffers carry the same edges at the same times as the interrupt engine: the
+//! property tests check it entry by entry. Counts and ratios are the engine's.
+//!
+//! Latency. A feed hold, a stop or anything else the engine reacts to reaches the pins after
+//! the entries already buffered: at most two halves. Each entry is at most [`Burst::max_tick`]
+//! ticks long (longer periods are split into filler entries, word 0), so the buffered time is
+//! at most `2 × half × max_tick` ticks; [`Layout::for_pulse`] keeps that ≤ 1 ms. (A hard limit
+//! does not wait: its interrupt stops TIM2, and with it the DMA requests, at once.)
+//!
+//! Costs. The fill runs the step half's tick for every entry (no interrupt entry and exit,
+//! no register access); DMA moves two or three words per entry on the bus.
+
+use crate::engine::{Engine, Ramper, Stepper};
+use crate::queue::Shared;
+use crate::ramp::RAMP_LEN;
+use crate::TICKS_PER_MS;
+
+/// Entries per buffer half, at most: 64 (both buffers 768 bytes).
+pub const HALF_MAX: usize = 64;
+
+/// Longest entry at the full half length: 1 ms over both halves.
+pub const ENTRY_TICKS: u32 = TICKS_PER_MS / (2 * HALF_MAX as u32);
+
+/// Buffered time, at most (ticks): 1 ms.
+pub const HORIZON_TICKS: u32 = TICKS_PER_MS;
+
+/// Buffer geometry for a pulse width: entries per half and the longest entry.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Layout {
+    /// Entries per half (2..=[`HALF_MAX`]).
+    pub half: usize,
+    /// Longest entry, timer ticks.
+    pub max_tick: u32,
+}
+
+impl Layout {
+    /// The layout for a falling edge `fall_ticks` after each update event (the compare value;
+    /// 0 in dual-edge mode): the first piece of a split period must hold the fall, and pieces
+    /// are at least half the longest entry, so the longest entry is above twice the fall. The
+    /// half shrinks for long pulses so two halves stay within [`HORIZON_TICKS`].
+    pub const fn for_pulse(fall_ticks: u32) -> Layout {
+        let need = 2 * fall_ticks + 4;
+        let max_tick = if need > ENTRY_TICKS { need } else { ENTRY_TICKS };
+        let mut half = (HORIZON_TICKS / (2 * max_tick)) as usize;
+        if half > HALF_MAX {
+            half = HALF_MAX;
+        }
+        if half < 2 {
+            half = 2;
+        }
+        Layout { half, max_tick }
+    }
+
+    /// Longest time between a change the engine sees and the pins showing it (ticks).
+    pub const fn latency_ticks(&self) -> u32 {
+        2 * self.half as u32 * self.max_tick
+    }
+}
+
+/// The engine filling DMA buffers.
+pub struct Burst<'a, const N: usize, const L: usize = RAMP_LEN> {
+    step: Stepper<'a, N, L>,
+    ramp: Ramper<'a, N, L>,
+    shared: &'a Shared<N>,
+    /// The position record's sequence and the move being entered, as the ramp half last saw
+    /// them (a move change the step half made without asking for the ramp half).
+    seen: (u32, usize),
+    max_tick: u32,
+}
+
+impl<'a, const N: usize, const L: usize> Burst<'a, N, L> {
+    /// The engine for buffers of entries at most `max_tick` ticks long.
+    pub fn new(engine: Engine<'a, N, L>, shared: &'a Shared<N>, max_tick: u32) -> Self {
+        let (mut step, ramp) = engine.split();
+        step.set_max_tick(max_tick);
+        Burst { step, ramp, shared, seen: (shared.record_seq(), 0), max_tick }
+    }
+
+    /// Longest entry, timer ticks.
+    pub fn max_tick(&self) -> u32 {
+        self.max_tick
+    }
+
+    /// Whether the next entry is a filler piece of a longer period (for tests, as
+    /// [`Engine::filler_next`]).
+    pub fn filler_next(&self) -> bool {
+        self.step.filler_next()
+    }
+
+    /// The falling-edge word the compare event's DMA stores (0 in dual-edge mode).
+    pub fn step_off(&self) -> u32 {
+        self.step.step_off()
+    }
+
+    /// Fills `words` and `periods` (the same length) with the next entries: the BSRR word for
+    /// each update event and the ARR value to preload at it.
+    pub fn fill(&mut self, words: &mut [u32], periods: &mut [u16]) {
+        for (w, p) in words.iter_mut().zip(periods.iter_mut()) {
+            *w = self.step.word();
+            *p = self.step.tick();
+            self.ramp_work();
+        }
+    }
+
+    /// The ramp half's work, when a tick asked for it or changed moves (what the host engine
+    /// does after every tick: its ramp half returns at once when nothing changed).
+    #[inline(always)]
+    fn ramp_work(&mut self) {
+        let link = &self.shared.link;
+        let now = (self.shared.record_seq(), link.next.load(core::sync::atomic::Ordering::Relaxed));
+        if self.step.take_pended() || now != self.seen {
+            self.seen = now;
+            self.ramp.run();
+        }
+    }
+}
