@@ -144,6 +144,63 @@ proptest! {
         prop_assert_eq!(r.burst.step_off(), r.pins.step_off);
     }
 
+    /// The fill's fast path (runs of fillers and plain steps) gives the same entries as whole
+    /// ticks for every entry, with the feeder serviced and
+    /// a hold switched between halves in both; 1 to 7 axes, single- and dual-edge.
+    #[test]
+    fn the_fast_path_fills_like_whole_ticks(
+            moves in prop::collection::vec(prop::array::uniform7(-1500i64..1500), 1..10),
+            axes in 1usize..=7, cruise in 1_000u32..400_000, pulse_us in 0.2f32..5.0, half in 2usize..=HALF_MAX,
+            dual: bool, hold in prop::option::of((0u64..300, 1u64..40))) {
+        let mut s = Settings::BENCH;
+        s.accel = [300_000.0; ddastep::MAX_AXES];
+        s.pulse_us = pulse_us;
+        s.dual_edge = dual;
+        s.dma_burst = true;
+        let timing = s.timing();
+        let layout = Layout::for_pulse(if dual { 0 } else { timing.pulse_ticks });
+        let mut rigs = [Rig::<7>::with_settings(&s), Rig::<7>::with_settings(&s)].map(|r| r.into_burst(layout.max_tick));
+        let mut want = [0i64; 7];
+        for m in &moves {
+            let mut m = *m;
+            m[axes..].fill(0);
+            if Move::new(m, cruise).is_ok() {
+                for r in &mut rigs { r.feeder.push(Move::new(m, cruise).unwrap()).unwrap(); }
+                for i in 0..7 { want[i] += m[i]; }
+            }
+        }
+        let mut out = [Vec::new(), Vec::new()];
+        for (k, r) in rigs.iter_mut().enumerate() {
+            let mut words = vec![0u32; half];
+            let mut periods = vec![0u16; half];
+            let mut done_at = None;
+            for h in 0..200_000u64 {
+                if let Some((on, len)) = hold {
+                    r.shared.set_hold(h >= on && h < on + len);
+                }
+                r.feeder.service();
+                r.burst.set_quick(k == 0);
+                r.burst.fill(&mut words, &mut periods);
+                out[k].extend(words.iter().copied().zip(periods.iter().copied()));
+                let idle = r.feeder.pending() == 0 && r.shared.state() == State::Idle
+                    && hold.is_none_or(|(on, len)| h >= on + len);
+                if idle && done_at.is_none() {
+                    done_at = Some(h);
+                }
+                if done_at.is_some_and(|d| h > d + 1) {
+                    break;
+                }
+            }
+            prop_assert!(done_at.is_some(), "rig {} finished", k);
+            prop_assert_eq!(r.shared.positions().map(i64::from), want);
+        }
+        prop_assert_eq!(out[0].len(), out[1].len());
+        if let Some(i) = out[0].iter().zip(&out[1]).position(|(a, b)| a != b) {
+            prop_assert!(false, "entry {} differs: whole halves {:?}, single entries {:?}", i,
+                &out[0][i..(i + 4).min(out[0].len())], &out[1][i..(i + 4).min(out[1].len())]);
+        }
+    }
+
     /// The geometry for every pulse width `$0` allows (0.2–100 µs, plus the margin the compare
     /// event adds): two halves hold at most 1 ms, each half at least 2 entries, and a split
     /// period's first piece (at least half the longest entry) always holds the falling edge.

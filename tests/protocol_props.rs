@@ -137,7 +137,7 @@ proptest! {
     fn settings_round_trip_through_flash(
         pulse in 1.0f32..100.0,
         dir in 0.0f32..1000.0,
-        idle: u8, step_inv: u8, dir_inv: u8, flags in 0u8..128, scurve: bool,
+        idle: u8, step_inv: u8, dir_inv: u8, flags in 0u8..=255, scurve: bool,
         start in 1u32..=1_000_000,
         arc_tol in 1e-4f32..1000.0,
         spindle in (0.0f32..1e6, 0.0f32..1e6, any::<bool>(), 1u32..=100_000),
@@ -166,6 +166,7 @@ proptest! {
             homing: flags & 16 != 0,
             hard_limits: flags & 32 != 0,
             dual_edge: flags & 64 != 0,
+            dma_burst: flags & 128 != 0,
             homing_dir: home.0,
             homing_feed: home.1,
             homing_seek: home.2,

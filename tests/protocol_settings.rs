@@ -45,12 +45,12 @@ fn set_follows_grbl_rules() {
 fn ids_cover_every_gettable_setting_once() {
     let s = Settings::DEFAULT;
     let ids: heapless::Vec<u16, 64> = Settings::ids(3).collect();
-    // ours: $29, $33, $40, $41, $42 and $10's mask; the encoder's $87-$89, $97-$99; $580
-    assert_eq!(ids.len(), 7 + 14 + 6 + 6 + 1 + 12);
+    // ours: $29, $33, $40, $41, $42 and $10's mask; the encoder's $87-$89, $97-$99; $580, $581
+    assert_eq!(ids.len(), 7 + 14 + 6 + 6 + 2 + 12);
     assert!(ids.windows(2).all(|w| w[0] < w[1]), "{ids:?}");
     assert!(ids.iter().all(|&id| s.get(id, 3).is_some()));
     assert_eq!(s.get(133, 3), None);
-    assert_eq!(Settings::ids(7).count(), 7 + 14 + 6 + 6 + 1 + 28);
+    assert_eq!(Settings::ids(7).count(), 7 + 14 + 6 + 6 + 2 + 28);
 }
 
 #[test]
@@ -194,4 +194,35 @@ fn dual_edge_is_a_pin_setting_with_its_own_rate_rule() {
     let mut d = Settings { dual_edge: true, ..Settings::BENCH };
     d.set(0, 10.0, 3).unwrap();
     assert_eq!(d.timing().min_period_for(0), 720 + JIT);
+}
+
+#[test]
+fn dma_burst_is_a_restarting_flag_whose_cap_is_the_fill_cost() {
+    use ddastep::settings::DMA_BURST;
+    use ddastep::timing::{DMA_BASE_TICKS, DMA_DUAL_BASE_TICKS, DMA_FLOOR_TICKS, DMA_MARGIN_TICKS, DMA_PER_SLAVE_TICKS};
+    let mut s = Settings::BENCH;
+    assert_eq!(s.get(DMA_BURST, 3), Some((0.0, 0)));
+    // Like `$580`: the step output changes how it is built, so the MCU restarts.
+    assert_eq!(s.set(DMA_BURST, 1.0, 3), Ok(Change::Pins));
+    assert!(s.dma_burst && s.timing().dma && !s.timing().dual);
+    assert_eq!(s.set(DMA_BURST, f64::NAN, 3), Err(Error::BadNumberFormat));
+    // Its own flag bit: the image round-trips, and one without it loads as interrupt mode.
+    assert_eq!(Settings::decode(&s.to_bytes()), Some(s));
+    let off = Settings { dma_burst: false, ..s };
+    assert_eq!(Settings::decode(&off.to_bytes()).map(|d| d.dma_burst), Some(false));
+    // The fill's cost binds at short pulses; from there the pulse and low time (plus the
+    // stores' latency margin each) bind; dual-edge needs one margin-padded pulse per step.
+    for (pulse, slaves) in [(0.2, 0u32), (0.5, 0), (0.5, 6), (2.0, 0), (3.0, 2), (10.0, 6)] {
+        for dual in [false, true] {
+            let mut d = Settings { dma_burst: true, dual_edge: dual, ..Settings::BENCH };
+            d.set(0, pulse, 3).unwrap();
+            let t = d.timing();
+            let cpu = if dual { DMA_DUAL_BASE_TICKS } else { DMA_BASE_TICKS } + DMA_PER_SLAVE_TICKS * slaves;
+            let pulses = if dual { t.pulse_ticks + DMA_MARGIN_TICKS } else { 2 * (t.pulse_ticks + DMA_MARGIN_TICKS) };
+            assert_eq!(t.min_period_for(slaves), cpu.max(pulses).max(DMA_FLOOR_TICKS), "{pulse} µs, {slaves} slaves, dual {dual}");
+        }
+    }
+    // `$I` names the mode with its cap.
+    let r = ddastep::settings::Ramped::wanted(&s, 3);
+    assert!(r.dma && r.max_rate_hz == s.timing().max_rate_hz());
 }

@@ -82,6 +82,7 @@ pub struct Burst<'a, const N: usize, const L: usize = RAMP_LEN> {
     /// them (a move change the step half made without asking for the ramp half).
     seen: (u32, usize),
     max_tick: u32,
+    quick: bool,
 }
 
 impl<'a, const N: usize, const L: usize> Burst<'a, N, L> {
@@ -89,7 +90,7 @@ impl<'a, const N: usize, const L: usize> Burst<'a, N, L> {
     pub fn new(engine: Engine<'a, N, L>, shared: &'a Shared<N>, max_tick: u32) -> Self {
         let (mut step, ramp) = engine.split();
         step.set_max_tick(max_tick);
-        Burst { step, ramp, shared, seen: (shared.record_seq(), 0), max_tick }
+        Burst { step, ramp, shared, seen: (shared.record_seq(), 0), max_tick, quick: true }
     }
 
     /// Longest entry, timer ticks.
@@ -110,12 +111,25 @@ impl<'a, const N: usize, const L: usize> Burst<'a, N, L> {
 
     /// Fills `words` and `periods` (the same length) with the next entries: the BSRR word for
     /// each update event and the ARR value to preload at it.
+    /// Runs of fillers and plain steps take the step half's fast path (the same words and
+    /// periods without the per-tick checks, see `engine::stepper::plain`); every other entry is
+    /// a whole tick.
     pub fn fill(&mut self, words: &mut [u32], periods: &mut [u16]) {
-        for (w, p) in words.iter_mut().zip(periods.iter_mut()) {
+        let (mut words, mut periods) = (words, periods);
+        loop {
+            let n = if self.quick { self.step.quick_entries(words, periods) } else { 0 };
+            (words, periods) = (&mut words[n..], &mut periods[n..]);
+            let (Some((w, wr)), Some((p, pr))) = (words.split_first_mut(), periods.split_first_mut()) else { return };
             *w = self.step.word();
             *p = self.step.tick();
             self.ramp_work();
+            (words, periods) = (wr, pr);
         }
+    }
+
+    /// Turns the fast path off (every entry a whole tick) or on, for tests that compare them.
+    pub fn set_quick(&mut self, on: bool) {
+        self.quick = on;
     }
 
     /// The ramp half's work, when a tick asked for it or changed moves (what the host engine

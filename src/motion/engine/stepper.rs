@@ -19,6 +19,8 @@ use crate::TICKS_PER_MS;
 /// view fails).
 const CLEARED: usize = 1;
 
+mod plain;
+
 /// A tick whose own period (the gap from its update event to the next) is at least this (2048
 /// ticks: below 35 kHz) leaves room before a direction change for the change itself: the
 /// finishing step's gap is shortened by the setup.
