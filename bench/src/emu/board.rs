@@ -15,6 +15,7 @@ use unicorn_engine::RegisterARM;
 
 use super::bus::{Stop, TIM2_IRQ};
 use super::cpu::{self, Cpu, Image};
+use super::dma_run;
 use super::exception;
 use super::gpio::PinEdge;
 use super::nvic::IRQ0;
@@ -325,9 +326,43 @@ impl Board {
         self.cpu.get_data().usart1.rx_overruns
     }
 
-    // TIM2 events that found their flag still set
+    // TIM2 events that found their flag still set, plus the DMA's overruns (`dma_overruns`)
     pub fn overruns(&self) -> u64 {
-        self.cpu.get_data().tim2.overruns
+        let m = self.cpu.get_data();
+        m.tim2.overruns + m.dma.overruns()
+    }
+
+    // TIM2 update events (counter wraps) so far and the cycle of the last one
+    pub fn timer_updates(&self) -> (u64, u64) {
+        let t = &self.cpu.get_data().tim2;
+        (t.updates, t.last_update)
+    }
+
+    // DMA1 overruns: HTIF/TCIF set again while set with their interrupt enabled (a half not
+    // refilled in time), plus requests lost because the previous one of the same channel was
+    // not yet acknowledged (included in `overruns`)
+    pub fn dma_overruns(&self) -> u64 {
+        self.cpu.get_data().dma.overruns()
+    }
+
+    // DMA1 data items moved so far, per channel (index 0 = channel 1)
+    pub fn dma_transfers(&self) -> [u64; super::dma::CHANNELS] {
+        self.cpu.get_data().dma.transfers
+    }
+
+    // bus-matrix cycles of all DMA transfers so far (`dma.rs`: SRAM access + bridge transfer)
+    pub fn dma_bus_cycles(&self) -> u64 {
+        self.cpu.get_data().dma.bus_cycles
+    }
+
+    // the part of `dma_bus_cycles` charged to the CPU (transfers while it was not asleep)
+    pub fn dma_stolen_cycles(&self) -> u64 {
+        self.cpu.get_data().dma.stolen
+    }
+
+    // DMA1 channel `x` (1..=7): CCR, CNDTR, CPAR, CMAR
+    pub fn dma_channel(&self, x: usize) -> super::dma::Channel {
+        self.cpu.get_data().dma.ch[x - 1]
     }
 
     // peripheral registers without a model that the program touched (address -> first PC)
@@ -448,6 +483,11 @@ impl Board {
             self.set_input(f.port, f.pin, f.level);
         }
         self.cpu.get_data_mut().sync(now);
+        // DMA requests up to `now`: served here (the CPU loses bus cycles unless asleep);
+        // transfers already due land at once.
+        if dma_run::service(&mut self.cpu, !self.sleeping) {
+            self.cpu.get_data_mut().sync(now);
+        }
         if let Some(flag) = self.cpu.get_data().reset_due {
             self.system_reset(flag);
             return Ok(());

@@ -12,6 +12,7 @@
 use std::collections::{BTreeMap, HashMap, HashSet};
 
 use super::cost::{Block, BlockCache};
+use super::dma::{self, Dma};
 use super::gpio::{PinEdge, Port};
 use super::exti::{self, Exti};
 use super::iwdg::{self, Iwdg};
@@ -37,6 +38,7 @@ const ENCODER_PINS: [u8; 2] = [6, 7];
 const USART1: u32 = 0x4001_3800;
 const GPIOA: u32 = 0x4001_0800;
 const RCC: u32 = 0x4002_1000;
+const DMA1: u32 = 0x4002_0000;
 const IWDG: u32 = 0x4000_3000;
 const EXTI: u32 = 0x4001_0400;
 const AFIO_EXTICR1: u32 = 0x4001_0008;
@@ -113,6 +115,8 @@ pub struct Machine {
     pub tim1: Pwm,
     /// TIM3: the quadrature encoder counter on PA6/PA7.
     pub tim3: EncoderTimer,
+    /// DMA1 (`dma.rs`, `dma_run.rs`).
+    pub dma: Dma,
     pub usart1: Usart,
     pub systick: SysTick,
     pub ports: Vec<Port>,
@@ -174,6 +178,7 @@ impl Machine {
             tim2: Timer::new(),
             tim1: Pwm::default(),
             tim3: EncoderTimer::default(),
+            dma: Dma::default(),
             usart1: Usart::default(),
             systick: SysTick::default(),
             ports: vec![Port::new(); 5],
@@ -290,7 +295,7 @@ impl Machine {
     }
 
     // a peripheral transfer issued at cycle `t`: waits for the bridge, returns (start, end)
-    fn bridge(&mut self, addr: u32, t: u64) -> Option<(u64, u64)> {
+    pub(super) fn bridge(&mut self, addr: u32, t: u64) -> Option<(u64, u64)> {
         let d = self.apb(addr)?;
         let start = t.max(self.bridge_free);
         self.bridge_free = start + bridge_cycles(d);
@@ -299,7 +304,9 @@ impl Machine {
 
     // bring peripherals to cycle `t` and refresh the NVIC's interrupt lines
     pub fn sync(&mut self, t: u64) {
+        self.dma_land(t);
         self.tim2.advance(t);
+        self.dma_collect();
         self.tim1.advance(t);
         self.usart1.advance(t);
         let wraps = self.systick.advance(t);
@@ -317,12 +324,21 @@ impl Machine {
             self.nvic.level[(IRQ0 + exti::irq_of(line)) as usize] |= self.exti.irq(line);
         }
         self.nvic.level[(IRQ0 + USART1_IRQ) as usize] = self.usart1.irq();
+        for x in 0..dma::CHANNELS {
+            self.nvic.level[(IRQ0 + dma::IRQ_CHANNEL1) as usize + x] = self.dma.irq(x);
+        }
         self.pending = self.nvic.any_pending();
     }
 
     // the next cycle at which a peripheral changes state
     pub fn next_event(&self) -> u64 {
-        [self.tim2.next_event(), self.usart1.next_event(), self.systick.next_event(), self.iwdg.expires_at(super::board::HZ)]
+        [
+            self.tim2.next_event(),
+            self.usart1.next_event(),
+            self.systick.next_event(),
+            self.iwdg.expires_at(super::board::HZ),
+            self.dma.next_event(),
+        ]
             .into_iter()
             .flatten()
             .min()
@@ -343,8 +359,17 @@ impl Machine {
         self.sync(t);
         let word = addr & !3;
         let shift = (addr & 3) * 8;
-        let v = match word {
+        let v = self.read_reg(word, t);
+        self.sync(t);
+        let mask = if size >= 4 { u32::MAX } else { (1u32 << (8 * size)) - 1 };
+        (v >> shift) & mask
+    }
+
+    // the register (word) at `word` read at cycle `t`, by the CPU or the DMA
+    pub(super) fn read_reg(&mut self, word: u32, t: u64) -> u32 {
+        match word {
             TIM2..=0x4000_03FF => self.tim2.read(word - TIM2, t),
+            DMA1..=0x4002_03FF => self.dma.read(word - DMA1),
             TIM1..=0x4001_2FFF => self.tim1.read(word - TIM1),
             TIM3..=0x4000_07FF => self.tim3.read(word - TIM3, t),
             USART1..=0x4001_3BFF => self.usart1.read(word - USART1, t),
@@ -359,10 +384,7 @@ impl Machine {
             DWT_CYCCNT => self.dwt.cyccnt(t),
             SCS..=0xE000_EFFF if self.nvic.read(word - SCS).is_some() => self.nvic.read(word - SCS).unwrap(),
             _ => self.plain_read(word),
-        };
-        self.sync(t);
-        let mask = if size >= 4 { u32::MAX } else { (1u32 << (8 * size)) - 1 };
-        (v >> shift) & mask
+        }
     }
 
     // MMIO write of `size` bytes at `addr`
@@ -381,7 +403,18 @@ impl Machine {
         let shift = (addr & 3) * 8;
         let mask = if size >= 4 { u32::MAX } else { ((1u32 << (8 * size)) - 1) << shift };
         let v = (value << shift) & mask;
+        self.write_reg(word, v, mask, t, lands);
+        self.sync(t);
+    }
+
+    // write `v` (already in its lanes, `mask`) to the register at `word` at cycle `t`, by the
+    // CPU or the DMA; a GPIO write changes the pins at `lands`
+    pub(super) fn write_reg(&mut self, word: u32, v: u32, mask: u32, t: u64, lands: u64) {
         match word {
+            DMA1..=0x4002_03FF => {
+                let merged = (self.dma.read(word - DMA1) & !mask) | v;
+                self.dma.write(word - DMA1, merged, t)
+            }
             TIM2..=0x4000_03FF => {
                 let v = if word == TIM2 + 0x10 { v | !mask } else { v };
                 self.tim2.write(word - TIM2, v, t)
@@ -426,12 +459,10 @@ impl Machine {
                 if word == SCS + 0xD0C && v >> 16 == 0x05FA && v & 4 != 0 {
                     self.reset_due = Some(iwdg::CSR_SFTRSTF);
                     self.deadline = 0; // stop at the next block
-
                 }
             }
             _ => self.plain_write(word, v, mask),
         }
-        self.sync(t);
     }
 
     // an external level change of input `pin` on port `port` (index): EXTI edge detection
@@ -472,9 +503,12 @@ impl Machine {
                 }
             }
             if self.record_edges && changed != 0 {
+                // In cycle order: a DMA write can land before a CPU store already recorded.
+                let mut at = self.edges.partition_point(|e| e.cycle <= t);
                 for pin in 0..16 {
                     if changed & 1 << pin != 0 {
-                        self.edges.push(PinEdge { cycle: t, port: p as u8, pin, level: new & 1 << pin != 0 });
+                        self.edges.insert(at, PinEdge { cycle: t, port: p as u8, pin, level: new & 1 << pin != 0 });
+                        at += 1;
                     }
                 }
             }

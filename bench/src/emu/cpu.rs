@@ -185,6 +185,9 @@ fn on_block(uc: &mut Unicorn<Machine>, addr: u64, size: u32) {
         m.account(prev, cycles, n);
     }
     m.apply_flash_config();
+    // DMA requests raised by this run's peripheral accesses: served at this block boundary.
+    super::dma_run::service(uc, true);
+    let m = uc.get_data_mut();
     if m.fn_timer.is_some() && m.nvic.ipsr() == 0 {
         time_calls(uc, addr);
     }

@@ -1,5 +1,5 @@
 //! Virtual bench: runs the real firmware ELF on an emulated STM32F103C8 "Blue Pill"
-//! (unicorn Cortex-M3 + models of TIM2, USART1, GPIO, SysTick, NVIC, RCC). Time is modeled
+//! (unicorn Cortex-M3 + models of TIM2, DMA1, USART1, GPIO, SysTick, NVIC, RCC). Time is modeled
 //! cycles at 72 MHz, from per-instruction costs of the Cortex-M3 TRM (see `cost.rs` and
 //! bench/README.md for the model and its expected error). For firmware-in-the-loop tests,
 //! the `sim` CLI and the benchmark sweep.
@@ -19,6 +19,8 @@ mod bus;
 pub mod changes;
 pub mod cost;
 mod cpu;
+pub mod dma;
+mod dma_run;
 mod exception;
 mod exti;
 pub mod figures;

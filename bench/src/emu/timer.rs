@@ -2,10 +2,16 @@
 //! the state is a counter value at a reference cycle, and `advance(t)` replays the update and
 //! compare events up to cycle `t`. For the bus (register access) and the run loop (next event).
 //!
-//! Modeled: CR1 (CEN, UDIS, URS, OPM, ARPE), DIER (UIE, CC1IE..CC4IE), SR (rc_w0), EGR (UG,
-//! CC1G), CNT, PSC (preloaded), ARR (preloaded when ARPE), CCR1..4 (preloaded when OCxPE in
-//! CCMR1/2). Update event: the counter wraps from ARR to 0. Compare event: CNT becomes CCRx.
-//! An event whose flag is still set (and whose interrupt is enabled) counts as an overrun.
+//! Modeled: CR1 (CEN, UDIS, URS, OPM, ARPE), CR2.CCDS, DIER (UIE, CC1IE..CC4IE, UDE,
+//! CC1DE..CC4DE), SR (rc_w0), EGR (UG, CC1G..CC4G), CNT, PSC (preloaded), ARR (preloaded when
+//! ARPE), CCR1..4 (preloaded when OCxPE in CCMR1/2). Update event: the counter wraps from ARR
+//! to 0. Compare event: CNT becomes CCRx. An event whose flag is still set (and whose
+//! interrupt is enabled) counts as an overrun.
+//!
+//! DMA requests (RM0008 §15.4.4): an update event (not UG when URS = 1) with UDE, and a
+//! compare event (or CCxG) with CCxDE, queue `(cycle, source)` in `dma_requests` (source
+//! [`DMA_UP`] or 1..=4 for CCx; with CCDS = 1 the CCx requests come with the update event
+//! instead). The bus hands them to `dma.rs` at the next sync.
 
 /// Timer register file and lazy counter.
 #[derive(Default)]
@@ -30,7 +36,14 @@ pub struct Timer {
     pub last_update: u64,
     /// Events that found their flag still set.
     pub overruns: u64,
+    /// DMA requests raised and not yet taken by the DMA controller: (cycle, source).
+    pub dma_requests: Vec<(u64, u8)>,
 }
+
+/// DMA request source of the update event (CCx requests are 1..=4).
+pub const DMA_UP: u8 = 0;
+/// DIER.UDE; CCxDE is `UDE << x`.
+const UDE: u32 = 1 << 8;
 
 const UIF: u32 = 1;
 const TOP: u32 = 0xFFFF;
@@ -79,7 +92,7 @@ impl Timer {
                 self.update_event(te, true);
             } else {
                 self.cnt = cnt as u32;
-                self.compare(self.cnt);
+                self.compare(self.cnt, te);
             }
         }
         if self.running() && t > self.base {
@@ -89,12 +102,12 @@ impl Timer {
         }
     }
 
-    // counter value at cycle `t` (after `advance(t)`)
+    // counter value at cycle `t` (after `advance(t)`; a cycle before `base` reads as `base`)
     fn count_at(&self, t: u64) -> u32 {
         if !self.running() {
             return self.cnt;
         }
-        self.cnt + ((t - self.base) / self.tick()) as u32
+        self.cnt + (t.saturating_sub(self.base) / self.tick()) as u32
     }
 
     fn set_flag(&mut self, bit: u32) {
@@ -104,11 +117,22 @@ impl Timer {
         self.sr |= bit;
     }
 
-    fn compare(&mut self, cnt: u32) {
+    // compare events of the channels whose CCR equals `cnt`, at cycle `t`
+    fn compare(&mut self, cnt: u32, t: u64) {
         for i in 0..4 {
             if self.ccr[i] == cnt {
                 self.set_flag(2 << i);
+                self.cc_dma(i, t, false);
             }
+        }
+    }
+
+    // the DMA request of channel `i`'s CCx event at `t` (`on_update`: sent with the update
+    // event, CR2.CCDS = 1)
+    fn cc_dma(&mut self, i: usize, t: u64, on_update: bool) {
+        let ccds = self.cr2 & 8 != 0;
+        if self.dier & UDE << (i + 1) != 0 && ccds == on_update {
+            self.dma_requests.push((t, i as u8 + 1));
         }
     }
 
@@ -124,6 +148,12 @@ impl Timer {
         }
         if overflow || self.cr1 & 4 == 0 {
             self.set_flag(UIF);
+            if self.dier & UDE != 0 {
+                self.dma_requests.push((t, DMA_UP));
+            }
+            for i in 0..4 {
+                self.cc_dma(i, t, true);
+            }
         }
         if overflow {
             self.updates += 1;
@@ -132,7 +162,7 @@ impl Timer {
                 self.cr1 &= !1; // one-pulse mode stops the counter
             }
         }
-        self.compare(self.cnt);
+        self.compare(self.cnt, t);
     }
 
     // true when an enabled interrupt flag is set
@@ -146,6 +176,7 @@ impl Timer {
 
     // register read at `offset` at cycle `t`
     pub fn read(&mut self, offset: u32, t: u64) -> u32 {
+        let t = t.max(self.base); // a DMA access that lands after the counter was brought on
         self.advance(t);
         match offset {
             0x00 => self.cr1,
@@ -165,6 +196,7 @@ impl Timer {
 
     // register write at `offset` at cycle `t`
     pub fn write(&mut self, offset: u32, value: u32, t: u64) {
+        let t = t.max(self.base); // a DMA write that lands after the counter was brought on
         self.advance(t);
         let cnt = self.count_at(t);
         self.cnt = cnt;
@@ -182,6 +214,7 @@ impl Timer {
                 for i in 0..4 {
                     if value & (2 << i) != 0 {
                         self.set_flag(2 << i);
+                        self.cc_dma(i, t, false);
                     }
                 }
             }
@@ -223,5 +256,25 @@ mod tests {
         t.advance(100);
         assert_eq!(t.sr & UIF, UIF);
         assert_eq!(t.next_event(), Some(150));
+    }
+
+    #[test]
+    fn update_and_compare_raise_dma_requests_ccr1_included() {
+        let mut t = Timer::new();
+        t.write(0x2C, 99, 0); // ARR = 99: updates at 100, 200, ...
+        t.write(0x34, 40, 0); // CCR1 = 40
+        t.write(0x3C, 1, 0); // CCR3 = 1: one tick after the update at CNT = 0
+        t.write(0x0C, UDE | UDE << 1 | UDE << 3, 0); // UDE | CC1DE | CC3DE, no interrupts
+        t.write(0x00, 0x81, 0);
+        t.advance(250);
+        let expect = vec![(1, 3), (40, 1), (100, DMA_UP), (101, 3), (140, 1), (200, DMA_UP), (201, 3), (240, 1)];
+        assert_eq!(t.dma_requests, expect);
+        assert!(!t.irq(), "DMA enables raise no interrupt");
+        assert_eq!(t.overruns, 0, "flags without interrupt enables are no overruns");
+        // CCDS = 1: the CC requests come with the update event instead
+        t.dma_requests.clear();
+        t.write(0x04, 8, 250);
+        t.advance(300);
+        assert_eq!(t.dma_requests, vec![(300, DMA_UP), (300, 1), (300, 3)]);
     }
 }
