@@ -6,9 +6,9 @@
 //! into the (preloaded) ARR; with full pulses its compare 1 event, the pulse width after the
 //! update, requests channel 5, which stores the constant falling-edge word. Both buffers are
 //! circular; channel 1's half-transfer and transfer-complete interrupt (after the period store,
-//! so both channels are done with the half) fills the half just played. The fill runs at the
-//! priority the step interrupt has in interrupt mode (above every RTIC task) and does the ramp
-//! half's work itself, so the ramp vector stays off.
+//! so both channels are done with the half) fills the half just played. The fill runs at
+//! RTIC's lowest priority, below the serial interrupt (see `install`), and does the ramp half's
+//! work itself, so the ramp vector stays off.
 //!
 //! Hard limits stop TIM2 (`limits.rs`), and with it every DMA request, at once; entries already
 //! buffered (≤ 1 ms) are then never played, so the position is lost as in interrupt mode (it
@@ -82,9 +82,12 @@ pub fn install(burst: Burst<'static, AXES>, layout: Layout, fall: u32, dual: boo
     HALF.store(layout.half as u32, Relaxed);
     MAX_TICK.store(layout.max_tick, Relaxed);
     hw::setup_dma(s.words.as_ptr() as u32, s.periods.as_ptr() as u32, &s.off as *const u32 as u32, n as u32, layout.max_tick, fall, dual);
-    // SAFETY: the step interrupt's priority, above RTIC's tasks; unmasking is what `init` is for.
+    // SAFETY: RTIC's lowest priority (with SysTick), below the serial interrupt: a fill runs
+    // for a whole half (up to ~150 µs near the cap), longer than one byte's time at 115200
+    // baud, so above the USART it would lose received bytes; the serial interrupt is short
+    // against a half's time. Unmasking is what `init` is for.
     unsafe {
-        nvic.set_priority(pac::Interrupt::DMA1_CHANNEL1, super::step::nvic_priority(4));
+        nvic.set_priority(pac::Interrupt::DMA1_CHANNEL1, super::step::nvic_priority(1));
         cortex_m::peripheral::NVIC::unmask(pac::Interrupt::DMA1_CHANNEL1);
     }
 }

@@ -152,3 +152,10 @@ pub fn boot_machine(spec: &ddastep_bench::machine::MachineSpec, base: Settings) 
     assert!(b.run_until(HZ / 2, |b| b.serial_output().contains("Grbl")).unwrap());
     b
 }
+
+/// A booted board in DMA burst mode (`$581=1` in flash with `base`; `dual`: with `$580=1`).
+pub fn boot_dma(base: Settings, dual: bool) -> Board {
+    let mut b = boot_with(Some(Stored::from(Settings { dma_burst: true, dual_edge: dual, ..base })));
+    b.dual_edge = dual;
+    b
+}

@@ -1,0 +1,199 @@
+//! Firmware in the loop, DMA burst step output (`$581=1`): TIM2 paces every edge and DMA stores
+//! the words the engine buffered. Exact counts and the paper's pattern, pulse and low time,
+//! direction setup, moves at the mode's cap, feed hold and stop latency within the buffers'
+//! bound, and the setting itself.
+
+mod fil;
+
+use ddastep::settings::Settings;
+use ddastep_bench::emu::{gcode_lines, HZ};
+use fil::*;
+
+/// Steps per axis from the pins.
+fn counts(s: &[Step]) -> [usize; 7] {
+    let mut c = [0; 7];
+    for st in s {
+        c[st.axis] += 1;
+    }
+    c
+}
+
+/// Master-step (X) rising-edge cycles.
+fn x_times(s: &[Step]) -> Vec<u64> {
+    s.iter().filter(|s| s.axis == 0).map(|s| s.cycle).collect()
+}
+
+#[test]
+fn paper_532_is_exact_with_the_papers_pattern() {
+    let mut b = boot_dma(Settings::BENCH, false);
+    assert!(reply(&mut b, "$I").contains(" Hz DMA]"));
+    ok(&mut b, "G91");
+    ok(&mut b, "G1 X50 Y30 Z20 F36986.484");
+    wait_idle(&mut b, 2.0);
+    let s = steps(&b);
+    assert_eq!(net(&s), [5000, 3000, 2000, 0, 0, 0, 0]);
+    // Per five master steps Y at 1,3,5, Z at 2,4: the rising edges of one step share a cycle.
+    let mut k = 0usize;
+    for (i, st) in s.iter().enumerate().filter(|(_, st)| st.axis == 0) {
+        let mut all: Vec<usize> = s[..i].iter().rev().take_while(|o| o.cycle == st.cycle).map(|o| o.axis).collect();
+        all.extend(s[i..].iter().take_while(|o| o.cycle == st.cycle).map(|o| o.axis));
+        all.sort();
+        let want = if k % 5 % 2 == 0 { vec![0, 1] } else { vec![0, 2] };
+        assert_eq!(all, want, "master step {}", k + 1);
+        k += 1;
+    }
+    let x = x_times(&s);
+    let rate = 1000.0 * HZ as f64 / (x[3000] - x[2000]) as f64;
+    assert!((rate - 50_000.0).abs() < 250.0, "cruise {rate} Hz");
+    let r = b.report();
+    for (i, want) in [5000u64, 3000, 2000].into_iter().enumerate() {
+        let a = &r.axes.0[i].1;
+        assert_eq!((a.rising_edges, a.net_steps), (want, want as i64), "{}", r.axes.0[i].0);
+        assert!(a.min_high_ns.unwrap() >= 3000.0 && a.min_low_ns.unwrap() >= 3000.0, "{a:?}");
+        assert!(a.min_dir_setup_ns.is_none_or(|d| d >= 5000.0), "{a:?}");
+    }
+    assert_eq!(r.overruns, 0);
+    assert!(r.max_slave_deviation_steps <= 0.5);
+}
+
+#[test]
+fn fast_532_is_exact_at_200_khz_in_both_edge_modes() {
+    let g = std::fs::read_to_string(ddastep_bench::emu::repo_root().join("bench/demo/fast_532.gcode")).unwrap();
+    for dual in [false, true] {
+        let mut b = boot_dma(Settings::BENCH, dual);
+        for l in gcode_lines(&g) {
+            ok(&mut b, &l);
+        }
+        wait_idle(&mut b, 3.0);
+        let s = if dual { toggles(&b) } else { steps(&b) };
+        assert_eq!(counts(&s)[..3], [10_000, 6_000, 4_000], "dual {dual}");
+        assert_eq!(net(&s), [0; 7]);
+        let x = x_times(&s);
+        let rate = 1000.0 * HZ as f64 / (x[3000] - x[2000]) as f64;
+        assert!((rate - 200_000.0).abs() < 1_000.0, "cruise {rate} Hz");
+        let r = b.report();
+        let pulse_ns = 1000.0; // the demo's `$0=1`
+        for (name, a) in &r.axes.0[..3] {
+            assert!(a.min_high_ns.unwrap() >= pulse_ns && a.min_low_ns.unwrap() >= pulse_ns, "{name}: {a:?}");
+            assert!(a.min_dir_setup_ns.unwrap() >= 5000.0, "{name}: {a:?}");
+        }
+        assert_eq!(r.overruns, 0, "dual {dual}");
+    }
+}
+
+/// Back-to-back moves (12 segments joined at speed, Y reversing at every junction) on 1, 3 and 7
+/// axes at 99.5 % of the DMA cap `$I` prints: every step reaches the pins, pulses and low
+/// times ≥ `$0`, direction setup ≥ `$29`, no DMA half refilled late.
+#[test]
+fn back_to_back_moves_at_the_dma_cap_keep_every_step() {
+    use ddastep_bench::emu::sweep::{settings_lines, RATIO};
+    for axes in [1usize, 3, 7] {
+        let mut b = boot_dma(Settings::BENCH, false);
+        for l in settings_lines() {
+            ok(&mut b, &l);
+        }
+        let info = reply(&mut b, "$I");
+        let mut s = Settings { dma_burst: true, ..Settings::BENCH };
+        s.set(0, ddastep_bench::emu::sweep::PULSE_US, 3).unwrap();
+        let cap = s.timing().max_rate_for(axes as u32 - 1);
+        assert!(info.contains(&format!("[MSG:max step rate {} Hz DMA]", s.timing().max_rate_hz())), "{info}");
+        let hz = cap as f64 * 0.995;
+        ok(&mut b, "G91");
+        eprintln!("rx overruns {}", b.usart_rx_overruns());
+        let mut want = [0i64; 7];
+        for k in 0..12 {
+            let mut steps: Vec<i64> = RATIO[..axes].iter().map(|&r| 200 * r as i64).collect();
+            if axes > 1 {
+                steps[1] = if k % 2 == 0 { 200 } else { -200 };
+            }
+            for (w, s) in want.iter_mut().zip(&steps) {
+                *w += s;
+            }
+            let mm: Vec<f64> = steps.iter().map(|&s| s as f64 / 100.0).collect();
+            let path = mm.iter().map(|m| m * m).sum::<f64>().sqrt();
+            let feed = path / (steps[0] as f64 / hz) * 60.0;
+            let words: String = "XYZABCU".chars().zip(&mm).map(|(a, m)| format!(" {a}{m}")).collect();
+            let l = format!("G1{words} F{feed:.3}");
+            let r = reply(&mut b, &l);
+            assert!(r.contains("ok"), "{l}: {r}; rx overruns {}", b.usart_rx_overruns());
+        }
+        wait_idle(&mut b, 3.0);
+        let st = steps(&b);
+        let r = b.report();
+        eprintln!("{axes} axes at {hz:.0} Hz (DMA cap {cap}): overruns {}", r.overruns);
+        assert_eq!(net(&st), want, "{axes} axes");
+        for (name, a) in &r.axes.0[..axes] {
+            assert!(a.min_high_ns.unwrap() >= 500.0 && a.min_low_ns.unwrap() >= 500.0, "{name}: {a:?}");
+            assert!(a.min_dir_setup_ns.is_none_or(|d| d >= 5000.0), "{name}: {a:?}");
+        }
+        assert_eq!(r.overruns, 0, "{axes} axes");
+    }
+}
+
+/// Feed hold and a stop reach the pins within the buffers' bound: the time from the realtime
+/// byte to the first step at a lower rate (hold) or to the last step (stop) exceeds interrupt
+/// mode's by at most the buffered time (1 ms), and positions stay exact.
+#[test]
+fn hold_and_stop_latency_stay_within_the_buffer_bound() {
+    let mut lat = [[0f64; 2]; 2];
+    for (m, dma) in [false, true].into_iter().enumerate() {
+        for (k, byte) in [b'!', 0x18u8].into_iter().enumerate() {
+            let mut b = if dma { boot_dma(Settings::BENCH, false) } else { boot() };
+            ok(&mut b, "G91");
+            b.serial_send(b"G1 X500 F6000\n");
+            b.run_seconds(0.3).unwrap();
+            let mark = b.edges().len();
+            let t0 = b.cycles();
+            b.serial_send_urgent(&[byte]);
+            b.run_seconds(0.3).unwrap();
+            let s: Vec<u64> = steps(&b).iter().filter(|s| s.axis == 0 && s.cycle > t0).map(|s| s.cycle).collect();
+            assert!(b.edges().len() > mark);
+            // Cruise period before the byte: 10 kHz.
+            let period = HZ as f64 / 10_000.0;
+            let t = if byte == b'!' {
+                // First gap clearly longer than cruise: the walk down has begun.
+                let i = s.windows(2).position(|w| (w[1] - w[0]) as f64 > period * 1.02).expect("slows down");
+                s[i]
+            } else {
+                *s.last().unwrap_or(&t0)
+            };
+            lat[m][k] = (t - t0) as f64 / HZ as f64 * 1e3;
+            let p = status(&mut b);
+            eprintln!("dma {dma} byte {byte:#x}: {:.3} ms; {p}", lat[m][k]);
+        }
+    }
+    for k in 0..2 {
+        assert!(lat[1][k] <= lat[0][k] + 1.0 + 0.05, "DMA {:.3} ms vs interrupt {:.3} ms", lat[1][k], lat[0][k]);
+    }
+}
+
+/// `$581` is a setting like `$580`: changing it restarts the MCU, `$$` lists it, `$I` names the
+/// mode; a pulse the buffers' layout cannot hold restarts into a layout that can.
+#[test]
+fn switching_to_dma_restarts_and_keeps_working() {
+    let mut b = boot();
+    assert!(reply(&mut b, "$$").contains("$581=0\r\n"));
+    let banners = b.serial_output().matches("Grbl").count();
+    ok(&mut b, "$581=1");
+    let up = b.run_until(HZ / 2, |b| b.serial_output().matches("Grbl").count() > banners).unwrap();
+    assert!(up, "no restart after $581=1");
+    assert!(reply(&mut b, "$$").contains("$581=1\r\n"));
+    assert!(reply(&mut b, "$I").contains(" Hz DMA]"));
+    assert!(stored(&mut b).unwrap().settings.dma_burst);
+    ok(&mut b, "G91 G1 X0.03 F600");
+    wait_idle(&mut b, 1.0);
+    assert_eq!(steps(&b).len(), 3);
+    // 20 µs pulses need longer entries: the MCU restarts with them, and they hold.
+    let banners = b.serial_output().matches("Grbl").count();
+    ok(&mut b, "$0=20");
+    let up = b.run_until(HZ / 2, |b| b.serial_output().matches("Grbl").count() > banners).unwrap();
+    assert!(up, "no restart after $0=20");
+    let mark = b.edges().len();
+    ok(&mut b, "G91 G1 X0.03 F600");
+    wait_idle(&mut b, 1.0);
+    let x: Vec<(u64, bool)> = b.edges()[mark..].iter().filter(|e| e.port == 1 && e.pin == ddastep::board::STEP_PINS[0]).map(|e| (e.cycle, e.level)).collect();
+    assert_eq!(x.len(), 6);
+    for w in x.chunks(2) {
+        assert!(w[0].1 && !w[1].1 && w[1].0 - w[0].0 >= 20 * 72, "{x:?}");
+    }
+}
