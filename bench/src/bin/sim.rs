@@ -72,9 +72,13 @@ struct Args {
     #[arg(long)]
     point: Option<String>,
     /// With --sweep or --point: dual-edge step mode (`$580=1`, each step toggles its pin).
-    /// With --results the sweep runs both modes and the file shows them side by side.
+    /// With --results the sweep runs every mode and the file shows them side by side.
     #[arg(long)]
     dual_edge: bool,
+    /// With --sweep or --point: DMA burst step output (`$581=1`; the step path is the buffer
+    /// fill, DMA1 channel 1's interrupt).
+    #[arg(long)]
+    dma: bool,
 }
 
 // parse "PA0@0.25=0"
@@ -134,7 +138,8 @@ fn run(args: Args) -> Result<()> {
     }
     if let Some(spec) = &args.point {
         let (axes, hz) = spec.split_once('@').context("expected AXES@HZ")?;
-        let p = sweep::run_point(&elf, axes.parse()?, hz.parse()?, 20, 0.95, true, args.dual_edge);
+        let mode = sweep::Mode { dual_edge: args.dual_edge, dma: args.dma };
+        let p = sweep::run_point(&elf, axes.parse()?, hz.parse()?, 20, 0.95, true, mode);
         println!("{}", sweep::point_line(&p));
         let entries = p.isr_entries.max(1) as f64;
         println!("step ISR profile over the measured cruise ({} entries, {:.1} cycles per master step):", p.isr_entries, p.isr_cycles_per_step);
@@ -208,22 +213,26 @@ fn run(args: Args) -> Result<()> {
 
 // the step-rate sweep: table on stdout, progress on stderr, optionally the results file
 fn run_sweep(args: &Args, elf: &std::path::Path) -> Result<()> {
-    let mut opts = sweep::Options { jobs: args.jobs, dual_edge: args.dual_edge && args.results.is_none(), ..Default::default() };
+    let mode = if args.results.is_none() { sweep::Mode { dual_edge: args.dual_edge, dma: args.dma } } else { sweep::Mode::default() };
+    let mut opts = sweep::Options { jobs: args.jobs, mode, ..Default::default() };
     if !args.axes.is_empty() {
         opts.axes = args.axes.clone();
     }
     let s = sweep::sweep(elf, &opts)?;
-    let mode = if opts.dual_edge { " (dual-edge)" } else { "" };
-    println!("max step rate ($I with the sweep settings{mode}): {} Hz", s.cap_hz);
+    println!("max step rate ($I with the sweep settings, {} mode): {} Hz", mode.label(), s.cap_hz);
     print!("{}", s.table());
     println!("{} points in {:.1} s wall", s.points, s.wall_s);
     if let Some(p) = &args.results {
-        let dual = sweep::sweep(elf, &sweep::Options { dual_edge: true, ..opts.clone() })?;
-        println!("dual-edge ($580=1): max step rate {} Hz", dual.cap_hz);
-        print!("{}", dual.table());
+        let mut others = Vec::new();
+        for m in [sweep::Mode { dual_edge: true, dma: false }, sweep::Mode { dual_edge: false, dma: true }] {
+            let o = sweep::sweep(elf, &sweep::Options { mode: m, ..opts.clone() })?;
+            println!("{} mode: max step rate {} Hz", m.label(), o.cap_hz);
+            print!("{}", o.table());
+            others.push(o);
+        }
         let command = std::env::args().skip(1).collect::<Vec<_>>().join(" ");
         let label = args.firmware_label.clone().unwrap_or_else(sweep::firmware_commit);
-        std::fs::write(p, sweep::results_markdown(&s, Some(&dual), &format!("cargo sim -- {command}"), &label, elf)?)?;
+        std::fs::write(p, sweep::results_markdown(&s, &others, &format!("cargo sim -- {command}"), &label, elf)?)?;
         eprintln!("wrote {}", p.display());
     }
     if let Some(p) = &args.readme {

@@ -65,6 +65,9 @@ pub struct Board {
     /// The firmware runs in dual-edge mode (`$580=1`): [`Board::report`] counts both edges of
     /// a step pin as steps.
     pub dual_edge: bool,
+    /// The interrupt whose runs are the step path's statistics (`step_isr`, the profile's
+    /// default): TIM2's, or DMA1 channel 1's in DMA burst mode (`$581=1`, the buffer fill).
+    pub step_irq: u32,
 }
 
 impl Board {
@@ -91,6 +94,7 @@ impl Board {
             watchdogs: Vec::new(),
             soft_resets: Vec::new(),
             dual_edge: false,
+            step_irq: TIM2_IRQ,
         })
     }
 
@@ -588,7 +592,7 @@ impl Board {
         exception::enter(&mut self.cpu, n, exc_return);
         let m = self.cpu.get_data_mut();
         m.account(profile::ENTRY, cost, 0);
-        if n == IRQ0 + TIM2_IRQ {
+        if n == IRQ0 + self.step_irq {
             m.first_bsrr = None;
             if let Some(b) = &mut m.isr_blocks {
                 b.clear();
@@ -609,7 +613,7 @@ impl Board {
         // A tail-chain replaces the return: its cost is charged to the next handler's entry.
         let (_, return_cycles, tail) = self.cpu.get_data().exception_cycles();
         let ret = if next.is_some() { 0 } else { return_cycles };
-        if n == IRQ0 + TIM2_IRQ {
+        if n == IRQ0 + self.step_irq {
             let m = self.cpu.get_data_mut();
             let blocks = m.isr_blocks.as_mut().map(std::mem::take).unwrap_or_default();
             let (insns, bsrr) = (m.insns, m.first_bsrr);

@@ -20,7 +20,6 @@ use anyhow::{bail, Context, Result};
 use serde::Serialize;
 
 use super::board::{Board, HZ};
-use super::bus::TIM2_IRQ;
 use super::nvic::IRQ0;
 use super::profile::FnCost;
 use super::report::{AXES, STEP_PINS};
@@ -38,6 +37,40 @@ const MAX_RATE_MM_MIN: f64 = 600_000.0;
 /// combines the pulse rule (2 × pulse + 72 ticks) with the step handler's measured cost; the
 /// search runs up to whatever `$I` reports for it.
 pub const PULSE_US: f64 = 0.5;
+
+/// How the firmware puts out steps: interrupt mode (the default), dual-edge (`$580=1`), DMA
+/// burst (`$581=1`), or both.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct Mode {
+    /// Every step toggles its pin.
+    pub dual_edge: bool,
+    /// DMA stores the buffered words at TIM2's events; the step path is the buffer fill.
+    pub dma: bool,
+}
+
+impl Mode {
+    /// The settings that select it (each restarts the MCU).
+    fn lines(self) -> Vec<&'static str> {
+        let mut v = Vec::new();
+        if self.dual_edge {
+            v.push("$580=1");
+        }
+        if self.dma {
+            v.push("$581=1");
+        }
+        v
+    }
+
+    /// How tables and logs name it.
+    pub fn label(self) -> &'static str {
+        match (self.dual_edge, self.dma) {
+            (false, false) => "interrupt",
+            (true, false) => "dual-edge",
+            (false, true) => "DMA",
+            (true, true) => "DMA dual-edge",
+        }
+    }
+}
 
 /// What to sweep.
 #[derive(Clone, Debug)]
@@ -58,8 +91,8 @@ pub struct Options {
     pub jobs: usize,
     /// Print each point as it finishes.
     pub verbose: bool,
-    /// Dual-edge step mode (`$580=1`): every step toggles its pin.
-    pub dual_edge: bool,
+    /// The step output mode.
+    pub mode: Mode,
 }
 
 impl Default for Options {
@@ -73,7 +106,7 @@ impl Default for Options {
             max_load: 0.95,
             jobs: 2,
             verbose: true,
-            dual_edge: false,
+            mode: Mode::default(),
         }
     }
 }
@@ -210,8 +243,8 @@ impl Row {
 /// Everything the sweep found.
 #[derive(Clone, Debug, Serialize)]
 pub struct Sweep {
-    /// Dual-edge step mode (`$580=1`).
-    pub dual_edge: bool,
+    /// The step output mode.
+    pub mode: Mode,
     /// `[MSG:max step rate N Hz]` with the sweep settings.
     pub cap_hz: u32,
     /// Settings lines sent to each board.
@@ -240,24 +273,27 @@ struct Prepared {
     accel_hz_s: u32,
 }
 
-/// A booted board, in dual-edge mode if asked (`$580=1` restarts the MCU: the second banner).
-pub fn boot(elf: &Path, dual_edge: bool) -> Result<Board> {
+/// A booted board in `mode` (each mode setting restarts the MCU: one more banner each).
+pub fn boot(elf: &Path, mode: Mode) -> Result<Board> {
     let mut board = Board::load(elf)?;
     board.run_until(HZ / 2, |b| b.serial_output().contains("Grbl"))?;
-    if dual_edge {
-        board.send_line_wait_ok("$580=1")?;
-        let up = board.run_until(HZ / 2, |b| b.serial_output().matches("Grbl").count() >= 2)?;
+    for (i, line) in mode.lines().into_iter().enumerate() {
+        board.send_line_wait_ok(line)?;
+        let up = board.run_until(HZ / 2, |b| b.serial_output().matches("Grbl").count() >= i + 2)?;
         if !up {
-            bail!("no banner after $580=1");
+            bail!("no banner after {line}");
         }
-        board.dual_edge = true;
+    }
+    board.dual_edge = mode.dual_edge;
+    if mode.dma {
+        board.step_irq = super::dma::IRQ_CHANNEL1;
     }
     Ok(board)
 }
 
 // reset a board from `elf`, boot it, send the settings and `$I`
-fn prepare(elf: &Path, dual_edge: bool) -> Result<Prepared> {
-    let mut board = boot(elf, dual_edge)?;
+fn prepare(elf: &Path, mode: Mode) -> Result<Prepared> {
+    let mut board = boot(elf, mode)?;
     for line in settings_lines() {
         board.send_line_wait_ok(&line)?;
     }
@@ -294,9 +330,9 @@ fn move_line(axes: usize, target_hz: u32, master_steps: u64) -> (Vec<u64>, Strin
 }
 
 // run one point: reset, settings, the move, measurements
-pub fn run_point(elf: &Path, axes: usize, target_hz: u32, cruise_ms: u64, max_load: f64, profile: bool, dual_edge: bool) -> Point {
+pub fn run_point(elf: &Path, axes: usize, target_hz: u32, cruise_ms: u64, max_load: f64, profile: bool, mode: Mode) -> Point {
     let wall = std::time::Instant::now();
-    let mut p = match measure(elf, axes, target_hz, cruise_ms, max_load, profile, dual_edge) {
+    let mut p = match measure(elf, axes, target_hz, cruise_ms, max_load, profile, mode) {
         Ok(p) => p,
         Err(e) => Point::failed(axes, target_hz, Verdict::Error(format!("{e:#}"))),
     };
@@ -304,8 +340,9 @@ pub fn run_point(elf: &Path, axes: usize, target_hz: u32, cruise_ms: u64, max_lo
     p
 }
 
-fn measure(elf: &Path, axes: usize, target_hz: u32, cruise_ms: u64, max_load: f64, profile: bool, dual_edge: bool) -> Result<Point> {
-    let Prepared { mut board, accel_hz_s, .. } = prepare(elf, dual_edge)?;
+fn measure(elf: &Path, axes: usize, target_hz: u32, cruise_ms: u64, max_load: f64, profile: bool, mode: Mode) -> Result<Point> {
+    let dual_edge = mode.dual_edge;
+    let Prepared { mut board, accel_hz_s, .. } = prepare(elf, mode)?;
     // Ramp: whole table entries of 1 ms, from the 1 kHz start.
     let ramp_ms = ((target_hz as u64).saturating_sub(1000) * 1000).div_ceil(accel_hz_s.max(1) as u64) + 1;
     let cruise_total_ms = cruise_ms + ramp_ms + 6;
@@ -328,8 +365,8 @@ fn measure(elf: &Path, axes: usize, target_hz: u32, cruise_ms: u64, max_load: f6
     board.set_profile(profile);
     board.run_until_cycle(w1 * WINDOW)?;
     let isr = board.step_isr();
-    let prof = if profile { board.profile(IRQ0 + TIM2_IRQ) } else { Vec::new() };
-    let blocks = if profile { board.profile_blocks(IRQ0 + TIM2_IRQ) } else { Vec::new() };
+    let prof = if profile { board.profile(IRQ0 + board.step_irq) } else { Vec::new() };
+    let blocks = if profile { board.profile_blocks(IRQ0 + board.step_irq) } else { Vec::new() };
     let thread = if profile { board.profile(0) } else { Vec::new() };
     board.set_profile(false);
     // Run until the move is over: no step edge for 2 ms.
@@ -423,7 +460,7 @@ fn sweep_axes(elf: &Path, axes: usize, cap_hz: u32, opts: &Options) -> Row {
         if let Some(p) = tried.iter().find(|p| p.target_hz == hz) {
             return p.clone();
         }
-        let p = run_point(elf, axes, hz, opts.cruise_ms, opts.max_load, false, opts.dual_edge);
+        let p = run_point(elf, axes, hz, opts.cruise_ms, opts.max_load, false, opts.mode);
         if opts.verbose {
             eprintln!("{}", point_line(&p));
         }
@@ -479,7 +516,7 @@ fn refine(run: &mut impl FnMut(u32) -> Point, grid: &[(u32, bool, bool)], opts: 
 // the whole sweep, `opts.jobs` axis counts at a time
 pub fn sweep(elf: &Path, opts: &Options) -> Result<Sweep> {
     let wall = std::time::Instant::now();
-    let cap_hz = prepare(elf, opts.dual_edge)?.cap_hz;
+    let cap_hz = prepare(elf, opts.mode)?.cap_hz;
     let queue = std::sync::Mutex::new(opts.axes.clone());
     let rows = std::sync::Mutex::new(Vec::new());
     std::thread::scope(|s| {
@@ -494,7 +531,7 @@ pub fn sweep(elf: &Path, opts: &Options) -> Result<Sweep> {
     let mut rows = rows.into_inner().unwrap();
     rows.sort_by_key(|r| r.axes);
     let points = rows.iter().map(|r| r.tried.len()).sum();
-    Ok(Sweep { dual_edge: opts.dual_edge, cap_hz, settings: settings_lines(), rows, wall_s: wall.elapsed().as_secs_f64(), points })
+    Ok(Sweep { mode: opts.mode, cap_hz, settings: settings_lines(), rows, wall_s: wall.elapsed().as_secs_f64(), points })
 }
 
 // one line per point for progress output (with the simulated and wall time)
@@ -606,7 +643,9 @@ fn change_rates(s: &Sweep) -> Vec<(usize, f64)> {
 }
 
 // bench/RESULTS.md: command, date, model, table, ISR cost and profile, notes, every point
-pub fn results_markdown(s: &Sweep, dual: Option<&Sweep>, command: &str, firmware: &str, elf: &Path) -> Result<String> {
+pub fn results_markdown(s: &Sweep, others: &[Sweep], command: &str, firmware: &str, elf: &Path) -> Result<String> {
+    let dual = others.iter().find(|o| o.mode == Mode { dual_edge: true, dma: false });
+    let dma = others.iter().find(|o| o.mode == Mode { dual_edge: false, dma: true });
     use std::fmt::Write as _;
     let mut m = String::new();
     let (date, commit, flash) = (utc_date(), firmware, flash_bytes(elf));
@@ -707,8 +746,35 @@ pub fn results_markdown(s: &Sweep, dual: Option<&Sweep>, command: &str, firmware
             let gain = if a.cpu.max_hz > 0 { format!("{:.2}", b.cpu.max_hz as f64 / a.cpu.max_hz as f64) } else { "-".into() };
             writeln!(m, "| {} | {} | {} | {gain} |", a.axes, bracket_text(&a.cpu), bracket_text(&b.cpu))?;
         }
-        writeln!(m, "\nReference lines (silicon, from issue 15): Klipper on an STM32F103 1.18 M toggles/s (590 kHz with")?;
-        writeln!(m, "full pulses, one stepper); grbl32 222 kHz (one axis).\n")?;
+    }
+    if let Some(d) = dma {
+        writeln!(m, "## DMA burst mode (`$581=1`)\n")?;
+        writeln!(m, "The same sweep with `$581=1` first (the MCU restarts): TIM2 paces every edge, DMA1 stores the")?;
+        writeln!(m, "words the engine buffered (update event: the step word into GPIOB's BSRR; compare 3: the next")?;
+        writeln!(m, "period into ARR; compare 1: the falling-edge word), and the step path is the buffer fill in")?;
+        writeln!(m, "DMA1 channel 1's half/complete interrupt (`src/firmware/burst.rs`, `ddastep::burst`). The")?;
+        writeln!(m, "\"ISR\" columns are that interrupt; DMA's own bus cycles are charged to the CPU while it runs")?;
+        writeln!(m, "(the bench's DMA model, bench/src/emu/dma.rs: 7 cycles per store to GPIO, 9 to TIM2, the")?;
+        writeln!(m, "bus-matrix share stolen from a running core). `$I` reports {} Hz with these settings", d.cap_hz)?;
+        writeln!(m, "(`Timing::min_period_for`, DMA rule: the fill's measured cost per step, above the pulse and low")?;
+        writeln!(m, "time plus the stores' latency margin). A \"fails\" just above a row's cap is the planner's clamp.\n")?;
+        m += &d.table();
+        writeln!(m)?;
+    }
+    if !others.is_empty() {
+        writeln!(m, "## The modes side by side\n")?;
+        writeln!(m, "Highest sustainable master rate per axis count (CPU ≤ 95 %, kHz):\n")?;
+        let all: Vec<&Sweep> = std::iter::once(s).chain(others.iter()).collect();
+        let head: Vec<String> = all.iter().map(|w| format!("{} (`$I` {:.1})", w.mode.label(), w.cap_hz as f64 / 1000.0)).collect();
+        writeln!(m, "| axes | {} |\n|---:|{}", head.join(" | "), "---:|".repeat(all.len()))?;
+        for (i, r) in s.rows.iter().enumerate() {
+            let cells: Vec<String> = all.iter().map(|w| w.rows.get(i).map_or("-".into(), |r| bracket_text(&r.cpu))).collect();
+            writeln!(m, "| {} | {} |", r.axes, cells.join(" | "))?;
+        }
+        writeln!(m, "| reference: Klipper on an STM32F103 (silicon, 1 stepper, full pulses) | 590 |{}", " |".repeat(all.len() - 1))?;
+        writeln!(m, "| reference: grbl32 (silicon, 1 axis) | 222 |{}", " |".repeat(all.len() - 1))?;
+        writeln!(m, "\nReference lines from issue 15: Klipper 1.18 M toggles/s (590 kHz with full pulses, one")?;
+        writeln!(m, "stepper), grbl32 222 kHz (one axis), both measured on silicon; ours are modeled.\n")?;
     }
     if let Some((a, b)) = isr_cost_fit(s) {
         writeln!(m, "## Step ISR cost\n")?;
@@ -722,7 +788,7 @@ pub fn results_markdown(s: &Sweep, dual: Option<&Sweep>, command: &str, firmware
     }
     let mut thread_per_entry = 0.0f64;
     for (axes, hz) in [(7usize, 50_000u32), (1, 50_000)] {
-        let p = run_point(elf, axes, hz, cruise_ms, 0.95, true, false);
+        let p = run_point(elf, axes, hz, cruise_ms, 0.95, true, Mode::default());
         let e = p.isr_entries.max(1) as f64;
         writeln!(m, "### Where the cycles go: {axes} {} at {} kHz ({:.0} cycles per step)\n", if axes == 1 { "axis" } else { "axes" }, hz / 1000, p.isr_cycles_per_step)?;
         writeln!(m, "| step ISR, by function | cycles per entry | share |\n|---|---:|---:|")?;
@@ -748,9 +814,11 @@ pub fn results_markdown(s: &Sweep, dual: Option<&Sweep>, command: &str, firmware
             writeln!(m, "{}", point_text(p))?;
         }
     }
-    for r in dual.iter().flat_map(|d| &d.rows) {
-        for p in &r.tried {
-            writeln!(m, "dual-edge {}", point_text(p))?;
+    for o in others {
+        for r in &o.rows {
+            for p in &r.tried {
+                writeln!(m, "{} {}", o.mode.label(), point_text(p))?;
+            }
         }
     }
     writeln!(m, "```\n</details>")?;

@@ -67,23 +67,42 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
             return 0;
         }
         let p = self.cur;
-        // SAFETY: the running move's slot (see `step`); atomics and plain fields.
-        let (period, at, total, master_on, n) = unsafe {
-            ((*p).period.load(Relaxed), (*p).decel_at.load(Relaxed), (*p).total, (*p).master_on, (*p).n_slaves as usize)
-        };
+        // SAFETY: the running move's slot (see `step`); atomics.
+        let (period, at) = unsafe { ((*p).period.load(Relaxed), (*p).decel_at.load(Relaxed)) };
         // A step is plain while the steps left after it stay above the trigger and above 0.
         let room = self.left.saturating_sub(at + 1) as usize;
         if period == 0 || (period + 15) >> 4 > self.max_tick || room == 0 {
             return 0;
         }
-        // SAFETY: as in `step`: only the step half touches the running move's slaves.
-        let slaves = unsafe { &mut (*p).slaves };
-        let slaves = &mut slaves[..n.min(N.saturating_sub(1))];
+        let n = words.len().min(periods.len()).min(room);
+        let (words, periods) = (&mut words[..n], &mut periods[..n]);
+        let made = self.run(words, periods, period);
+        // SAFETY: as above; a plain field.
+        let total = unsafe { (*p).total };
+        self.left -= made as u32;
+        self.shared.mv_done.store(total - self.left, Relaxed);
+        made
+    }
+
+    /// The loop of [`Self::plain_steps`]: at most `words.len()` steps at `period`, until a ramp
+    /// millisecond would end. Not inlined: in a function of its own everything the loop uses
+    /// stays in registers (no stack load per step).
+    #[inline(never)]
+    fn run(&mut self, words: &mut [u32], periods: &mut [u16], period: u32) -> usize {
+        let p = self.cur;
+        // SAFETY: the running move's slot; plain fields, and its slaves, which only the step
+        // half touches (see `step`).
+        let (total, master_on, slaves) = unsafe {
+            let n = ((*p).n_slaves as usize).min(N.saturating_sub(1));
+            ((*p).total, (*p).master_on, (*p).slaves.get_mut(..n).unwrap_or_default())
+        };
         let (mut frac, mut ms_left, mut word, mut level) = (self.frac, self.ms_left, self.word, self.level);
+        let dual = self.dual;
         let mut made = 0usize;
-        for (w, per) in words.iter_mut().zip(periods.iter_mut()).take(room) {
+        let mut gap = self.gap_in;
+        for (w, per) in words.iter_mut().zip(periods.iter_mut()) {
             let acc = frac + period;
-            let gap = acc >> 4;
+            gap = acc >> 4;
             if ms_left <= gap as i32 {
                 break; // the ramp millisecond ends here: a whole tick
             }
@@ -93,7 +112,7 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
             for s in slaves.iter_mut() {
                 next |= s.on & s.dda.step_mask(total);
             }
-            if self.dual {
+            if dual {
                 let old = level;
                 level ^= next;
                 next = (next & !old) | (next & old) << 16;
@@ -101,12 +120,12 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
             *w = word;
             *per = (gap - 1) as u16;
             word = next;
-            self.gap_in = gap;
             made += 1;
         }
-        self.left -= made as u32;
+        if made > 0 {
+            self.gap_in = gap;
+        }
         (self.frac, self.ms_left, self.word, self.level) = (frac, ms_left, word, level);
-        self.shared.mv_done.store(total - self.left, Relaxed);
         made
     }
 }
