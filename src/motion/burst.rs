@@ -115,15 +115,20 @@ impl<'a, const N: usize, const L: usize> Burst<'a, N, L> {
     /// periods without the per-tick checks, see `engine::stepper::plain`); every other entry is
     /// a whole tick.
     pub fn fill(&mut self, words: &mut [u32], periods: &mut [u16]) {
-        let (mut words, mut periods) = (words, periods);
-        loop {
-            let n = if self.quick { self.step.quick_entries(words, periods) } else { 0 };
-            (words, periods) = (&mut words[n..], &mut periods[n..]);
-            let (Some((w, wr)), Some((p, pr))) = (words.split_first_mut(), periods.split_first_mut()) else { return };
-            *w = self.step.word();
-            *p = self.step.tick();
+        let len = words.len().min(periods.len());
+        let (words, periods) = (&mut words[..len], &mut periods[..len]);
+        let mut i = 0;
+        while i < len {
+            if self.quick {
+                i += self.step.quick_entries(&mut words[i..], &mut periods[i..]);
+                if i >= len {
+                    return;
+                }
+            }
+            words[i] = self.step.word();
+            periods[i] = self.step.tick();
             self.ramp_work();
-            (words, periods) = (wr, pr);
+            i += 1;
         }
     }
 

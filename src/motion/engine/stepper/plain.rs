@@ -1,131 +1,143 @@
-//! The DMA burst fill's fast path: runs of fillers and of plain steps, entry by entry what
+//! The DMA burst fill's fast path: runs of plain entries, entry by entry what
 //! [`Stepper::tick`] gives, without its per-tick checks.
 //!
-//! A filler is a piece of a period longer than one entry (word 0). A plain step is one where
-//! nothing but the step happens: the move is running, the control word has not changed (it
-//! cannot change during a fill: the fill interrupt preempts every context that writes it), the
-//! deceleration trigger and the move's last step are not reached, and the gap fits one entry.
-//! Neither may end a ramp millisecond (that asks for the ramp half). Within a run the period is
-//! the one the ramp half last published (only the ramp half writes it, and in DMA mode it runs
-//! inside the fill, between runs), so a run needs no shared load per entry. The first entry
-//! that is neither is left to [`Stepper::tick`].
+//! A plain entry is a filler (a piece of a period longer than one entry, word 0) or a plain
+//! step: the move is running, the control word has not changed (it cannot change during a
+//! fill: the fill interrupt preempts every context that writes it), and neither the
+//! deceleration trigger nor the move's last step is reached. No plain entry ends a ramp
+//! millisecond (that asks for the ramp half). Within a run the period is the one the ramp half
+//! last published (only the ramp half writes it, and in DMA mode it runs inside the fill,
+//! between runs), so a run needs no shared load per entry. The first entry that is not plain
+//! is left to [`Stepper::tick`].
 
 use core::sync::atomic::Ordering::Relaxed;
 
 use super::{Phase, Stepper};
 
-impl<const N: usize, const L: usize> Stepper<'_, N, L> {
-    /// Fills the front of `words` and `periods` with fillers and plain steps; returns how many
-    /// entries (0 when the next one needs a whole tick).
-    pub(crate) fn quick_entries(&mut self, words: &mut [u32], periods: &mut [u16]) -> usize {
-        let len = words.len().min(periods.len());
-        let mut made = 0;
-        loop {
-            let n = if self.extend != 0 {
-                self.fillers(&mut words[made..len], &mut periods[made..len])
-            } else {
-                self.plain_steps(&mut words[made..len], &mut periods[made..len])
-            };
-            if n == 0 {
-                return made;
-            }
-            made += n;
-        }
+/// The piece of a `rem`-tick period an event takes when events are at most `max` ticks: all
+/// of it, else `max`, else half of `max` (so the last piece is at least half of `max`).
+#[inline(always)]
+fn piece(rem: u32, max: u32) -> u32 {
+    if rem <= max {
+        rem
+    } else if rem >= max + max / 2 {
+        max
+    } else {
+        max / 2
     }
+}
 
-    /// Fillers of the period being split, up to its end or a ramp millisecond's.
-    fn fillers(&mut self, words: &mut [u32], periods: &mut [u16]) -> usize {
-        let max = self.max_tick;
-        let mut made = 0;
-        for (w, per) in words.iter_mut().zip(periods.iter_mut()) {
-            let rem = self.extend;
-            // (As `filler_piece`.)
-            let chunk = if rem <= max {
-                rem
-            } else if rem >= max + max / 2 {
-                max
-            } else {
-                max / 2
-            };
-            if rem == 0 || self.ms_left <= chunk as i32 {
-                break;
+impl<const N: usize, const L: usize> Stepper<'_, N, L> {
+    /// Fills the front of `words` and `periods` with plain entries; returns how many (0 when
+    /// the next one needs a whole tick). Not inlined: in a function of its own the loop keeps
+    /// what it uses in registers.
+    #[inline(never)]
+    pub(crate) fn quick_entries(&mut self, words: &mut [u32], periods: &mut [u16]) -> usize {
+        let p = self.cur;
+        // Steps may be plain: running, no control change, a period published.
+        let stepping = self.phase == Phase::Run && self.shared.ctl.load() == self.ctl_seen;
+        // SAFETY: the running move's slot while running (see `step`): atomics, plain fields and
+        // its slaves, which only the step half touches.
+        let (period, mut room, total, master_on, slaves) = if stepping {
+            unsafe {
+                let (period, at) = ((*p).period.load(Relaxed), (*p).decel_at.load(Relaxed));
+                let n = ((*p).n_slaves as usize).min(N.saturating_sub(1));
+                // A step is plain while the steps left after it stay above the trigger and 0.
+                let room = if period == 0 { 0 } else { self.left.saturating_sub(at + 1) };
+                (period, room, (*p).total, (*p).master_on, (*p).slaves.get_mut(..n).unwrap_or_default())
             }
-            *w = self.word;
-            self.word = 0;
-            self.extend = rem - chunk;
-            self.ms_left -= chunk as i32;
-            self.gap_in = if self.extend == 0 { self.whole } else { chunk };
+        } else {
+            (0, 0, 0, 0, Default::default())
+        };
+        let max = self.max_tick;
+        let dual = self.dual;
+        // One axis, full pulses, every gap within an entry: the lane of its own.
+        let mut made = 0usize;
+        if room != 0 && self.extend == 0 && slaves.is_empty() && !dual && (period + 15) >> 4 <= max {
+            made = self.lane(words, periods, period, master_on, room);
+            room -= made as u32;
+        }
+        let mut steps = made as u32;
+        let (words, periods) = (&mut words[made..], &mut periods[made..]);
+        let (mut frac, mut ms_left, mut word, mut level) = (self.frac, self.ms_left, self.word, self.level);
+        let (mut extend, mut whole, mut gap_in) = (self.extend, self.whole, self.gap_in);
+        for (w, per) in words.iter_mut().zip(periods.iter_mut()) {
+            let chunk;
+            if extend != 0 {
+                // A filler (`filler`, `filler_piece`).
+                chunk = piece(extend, max);
+                if ms_left <= chunk as i32 {
+                    break;
+                }
+                *w = word;
+                word = 0;
+                extend -= chunk;
+                gap_in = if extend == 0 { whole } else { chunk };
+            } else {
+                // A plain step (`step`, then `extended` when its gap is longer than an entry).
+                if room == 0 {
+                    break;
+                }
+                let acc = frac + period;
+                let gap = acc >> 4;
+                chunk = piece(gap, max);
+                if ms_left <= chunk as i32 {
+                    break;
+                }
+                frac = acc & 15;
+                let mut next = master_on;
+                for s in slaves.iter_mut() {
+                    next |= s.on & s.dda.step_mask(total);
+                }
+                if dual {
+                    let old = level;
+                    level ^= next;
+                    next = (next & !old) | (next & old) << 16;
+                }
+                *w = word;
+                word = next;
+                room -= 1;
+                steps += 1;
+                extend = gap - chunk;
+                whole = gap;
+                gap_in = chunk;
+            }
+            ms_left -= chunk as i32;
             *per = (chunk - 1) as u16;
             made += 1;
         }
+        (self.frac, self.ms_left, self.word, self.level) = (frac, ms_left, word, level);
+        (self.extend, self.whole, self.gap_in) = (extend, whole, gap_in);
+        if steps > 0 {
+            self.left -= steps;
+            self.shared.mv_done.store(total - self.left, Relaxed);
+        }
         made
     }
 
-    /// Plain steps of the running move.
-    fn plain_steps(&mut self, words: &mut [u32], periods: &mut [u16]) -> usize {
-        if self.phase != Phase::Run || self.shared.ctl.load() != self.ctl_seen {
-            return 0;
-        }
-        let p = self.cur;
-        // SAFETY: the running move's slot (see `step`); atomics.
-        let (period, at) = unsafe { ((*p).period.load(Relaxed), (*p).decel_at.load(Relaxed)) };
-        // A step is plain while the steps left after it stay above the trigger and above 0.
-        let room = self.left.saturating_sub(at + 1) as usize;
-        if period == 0 || (period + 15) >> 4 > self.max_tick || room == 0 {
-            return 0;
-        }
-        let n = words.len().min(periods.len()).min(room);
-        let (words, periods) = (&mut words[..n], &mut periods[..n]);
-        let made = self.run(words, periods, period);
-        // SAFETY: as above; a plain field.
-        let total = unsafe { (*p).total };
-        self.left -= made as u32;
-        self.shared.mv_done.store(total - self.left, Relaxed);
-        made
-    }
-
-    /// The loop of [`Self::plain_steps`]: at most `words.len()` steps at `period`, until a ramp
-    /// millisecond would end. Not inlined: in a function of its own everything the loop uses
-    /// stays in registers (no stack load per step).
+    /// Plain steps of one axis at `period` with full pulses, every gap within an entry: at most
+    /// `room` of them, until a ramp millisecond would end (the caller counts them as steps).
     #[inline(never)]
-    fn run(&mut self, words: &mut [u32], periods: &mut [u16], period: u32) -> usize {
-        let p = self.cur;
-        // SAFETY: the running move's slot; plain fields, and its slaves, which only the step
-        // half touches (see `step`).
-        let (total, master_on, slaves) = unsafe {
-            let n = ((*p).n_slaves as usize).min(N.saturating_sub(1));
-            ((*p).total, (*p).master_on, (*p).slaves.get_mut(..n).unwrap_or_default())
-        };
-        let (mut frac, mut ms_left, mut word, mut level) = (self.frac, self.ms_left, self.word, self.level);
-        let dual = self.dual;
-        let mut made = 0usize;
+    fn lane(&mut self, words: &mut [u32], periods: &mut [u16], period: u32, on: u32, room: u32) -> usize {
+        let (mut frac, mut ms_left, mut word) = (self.frac, self.ms_left, self.word);
         let mut gap = self.gap_in;
-        for (w, per) in words.iter_mut().zip(periods.iter_mut()) {
+        let mut made = 0usize;
+        for (w, per) in words.iter_mut().zip(periods.iter_mut()).take(room as usize) {
             let acc = frac + period;
             gap = acc >> 4;
             if ms_left <= gap as i32 {
-                break; // the ramp millisecond ends here: a whole tick
+                break;
             }
             ms_left -= gap as i32;
             frac = acc & 15;
-            let mut next = master_on;
-            for s in slaves.iter_mut() {
-                next |= s.on & s.dda.step_mask(total);
-            }
-            if dual {
-                let old = level;
-                level ^= next;
-                next = (next & !old) | (next & old) << 16;
-            }
             *w = word;
+            word = on;
             *per = (gap - 1) as u16;
-            word = next;
             made += 1;
         }
         if made > 0 {
-            self.gap_in = gap;
+            (self.frac, self.ms_left, self.word, self.gap_in) = (frac, ms_left, word, gap);
         }
-        (self.frac, self.ms_left, self.word, self.level) = (frac, ms_left, word, level);
         made
     }
 }
