@@ -24,11 +24,8 @@ pub const MAX_LINE_NUMBER: f64 = 10_000_000.0;
 pub const MAX_DWELL_S: f64 = 1_000_000.0;
 /// Largest significand read: 15 decimal digits are exact in `f64`.
 const MAX_SIGNIFICAND: u64 = 999_999_999_999_999;
-/// Exact powers of ten in `f64`.
-const POW10: [f64; 23] = [
-    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
-    1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
-];
+/// Most digits after the point: 10^22 is the largest power of ten exact in `f64`.
+const MAX_FRAC: usize = 22;
 
 /// Reads a decimal number at `s[*i..]` (optional sign, digits, at most one point) and moves
 /// `*i` past it. No exponent, no `inf`/`nan`: anything else is [`Error::BadNumberFormat`].
@@ -58,7 +55,7 @@ pub fn parse_number(s: &[u8], i: &mut usize) -> Result<f64, Error> {
                     };
                     sig = scaled.and_then(|v| v.checked_add(d)).ok_or(Error::BadNumberFormat)?;
                 }
-                if sig > MAX_SIGNIFICAND || frac >= POW10.len() {
+                if sig > MAX_SIGNIFICAND || frac > MAX_FRAC {
                     return Err(Error::BadNumberFormat);
                 }
             }
@@ -71,7 +68,13 @@ pub fn parse_number(s: &[u8], i: &mut usize) -> Result<f64, Error> {
         return Err(Error::BadNumberFormat);
     }
     *i = j;
-    let v = sig as f64 / POW10[frac];
+    // 10^frac by repeated ×10: every product up to 10^22 is exact, so this is the same value
+    // a table would hold, without its 184 bytes of flash.
+    let mut pow10 = 1.0;
+    for _ in 0..frac {
+        pow10 *= 10.0;
+    }
+    let v = sig as f64 / pow10;
     Ok(if neg { -v } else { v })
 }
 
