@@ -74,7 +74,7 @@ pub fn parse_number(s: &[u8], i: &mut usize) -> Result<f64, Error> {
     for _ in 0..frac {
         pow10 *= 10.0;
     }
-    let v = sig as f64 / pow10;
+    let v = crate::num::f64_of_u64(sig) / pow10;
     Ok(if neg { -v } else { v })
 }
 

@@ -23,7 +23,7 @@ use core::sync::atomic::{AtomicBool, Ordering};
 
 use fixed::types::U28F4;
 
-use crate::num::{u32_of, u64_of};
+use crate::num::{f64_of_u64, u32_of, u64_of};
 use crate::timing::Timing;
 use crate::TIMER_HZ;
 
@@ -84,7 +84,7 @@ const S_CURVE_SPAN: f64 = 4.0;
 /// Period of a rate given in milli-steps per second (rounded to the nearest 1/16 tick).
 /// (f64, exact here below 2^53: it keeps 64-bit integer division out of the firmware.)
 pub fn period_of_millihz(milli_hz: u64) -> Period {
-    let q4 = (TIMER_HZ as f64 * 16_000.0) / (milli_hz.max(1) as f64) + 0.5;
+    let q4 = (TIMER_HZ as f64 * 16_000.0) / f64_of_u64(milli_hz.max(1)) + 0.5;
     Period::from_bits(if q4 >= u32::MAX as f64 { u32::MAX } else { u32_of(q4) })
 }
 
@@ -134,7 +134,7 @@ impl<const L: usize> RampTable<L> {
         match cfg.shape {
             Shape::Trapezoid => ms,
             // The logistic's steepest slope is span/2 / norm of the mean slope.
-            Shape::SCurve => u64_of(ms as f64 * s_curve_stretch()) + 1,
+            Shape::SCurve => u64_of(f64_of_u64(ms) * s_curve_stretch()) + 1,
         }
     }
 
@@ -395,8 +395,8 @@ fn mean_millihz(cfg: &RampConfig, i: usize, n: usize) -> u64 {
                     return vmax;
                 }
                 // Ramp part of length f = (vmax-start)/a ms, then vmax for 1-f.
-                let f = (vmax - start) as f64 / a as f64;
-                let mean = f * (start as f64 + vmax as f64) / 2.0 + (1.0 - f) * vmax as f64;
+                let f = f64_of_u64(vmax - start) / f64_of_u64(a);
+                let mean = f * (f64_of_u64(start) + f64_of_u64(vmax)) / 2.0 + (1.0 - f) * f64_of_u64(vmax);
                 u64_of(mean).min(vmax)
             }
         }
@@ -404,7 +404,7 @@ fn mean_millihz(cfg: &RampConfig, i: usize, n: usize) -> u64 {
             // Midpoint of the millisecond on the logistic stretched over n ms (Simpson-free:
             // the curve is smooth enough that the midpoint is within 0.1 % of the mean here).
             let u = ((i as f64 + 0.5) / n as f64).min(1.0);
-            let v = v0 as f64 + (vmax - v0) as f64 * s_curve(u);
+            let v = f64_of_u64(v0) + f64_of_u64(vmax - v0) * s_curve(u);
             // max/min, not clamp: its panic message would link integer formatting.
             u64_of(v).max(v0.max(1)).min(vmax.max(1))
         }

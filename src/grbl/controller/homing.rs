@@ -25,6 +25,7 @@
 //! Success clears the alarm lock; a full `$H` then runs the startup lines.
 
 use super::Controller;
+use crate::num::f64_of;
 use crate::protocol::{Error, Out};
 use crate::queue::State;
 use crate::spindle::Power;
@@ -76,7 +77,7 @@ impl<const N: usize> Controller<'_, N> {
         };
         // Contradictory settings would give a wrong position: refuse them.
         let s = &self.settings;
-        if (0..3).any(|i| (group | next) & 1 << i != 0 && s.homing_pulloff as f64 >= s.max_travel[i] as f64) {
+        if (0..3).any(|i| (group | next) & 1 << i != 0 && f64_of(s.homing_pulloff) >= f64_of(s.max_travel[i])) {
             return Err(Error::InvalidStatement);
         }
         self.homing = Some(Homing {
