@@ -39,6 +39,18 @@ pub fn u64_of(x: f64) -> u64 {
     x as u64
 }
 
+/// `x as i32`.
+#[inline(never)]
+pub fn i32_of(x: f64) -> i32 {
+    x as i32
+}
+
+/// `libm::round(x) as i32`.
+#[inline(never)]
+pub fn round_i32(x: f64) -> i32 {
+    libm::round(x) as i32
+}
+
 /// `libm::round(x) as u32`.
 #[inline(never)]
 pub fn round_u32(x: f64) -> u32 {
@@ -55,6 +67,10 @@ mod tests {
             assert_eq!(u32_of(x), x as u32);
             assert_eq!(u64_of(x), x as u64);
             assert_eq!(round_u32(x), libm::round(x) as u32);
+            assert_eq!(i32_of(x), x as i32);
+            assert_eq!(i32_of(-x), -x as i32);
+            assert_eq!(round_i32(x), libm::round(x) as i32);
+            assert_eq!(round_i32(-x), libm::round(-x) as i32);
         }
         // Integers to f64: edges (ties to even at 2^53 and above) and random bit patterns.
         let mut r = 0x9E37_79B9_7F4A_7C15u64;

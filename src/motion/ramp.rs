@@ -23,7 +23,7 @@ use core::sync::atomic::{AtomicBool, Ordering};
 
 use fixed::types::U28F4;
 
-use crate::num::{f64_of_u64, u32_of, u64_of};
+use crate::num::{f64_of_u64, i32_of, u32_of, u64_of};
 use crate::timing::Timing;
 use crate::TIMER_HZ;
 
@@ -360,7 +360,7 @@ fn logistic(x: f64) -> f64 {
 fn exp_small(x: f64) -> f64 {
     const LN2: f64 = core::f64::consts::LN_2;
     let t = x / LN2;
-    let k = if t >= 0.0 { (t + 0.5) as i32 } else { (t - 0.5) as i32 };
+    let k = i32_of(if t >= 0.0 { t + 0.5 } else { t - 0.5 });
     let r = x - k as f64 * LN2;
     let mut term = 1.0;
     let mut sum = 1.0;

@@ -277,7 +277,7 @@ pub fn to_steps(mm: f64, steps_per_mm: f64) -> Result<i64, Error> {
     let s = libm::round(mm * steps_per_mm);
     if s.is_finite() && libm::fabs(s) <= i32::MAX as f64 {
         // Through i32 (the value fits): the f64-to-i64 routine costs ~140 bytes of flash.
-        Ok(s as i32 as i64)
+        Ok(crate::num::i32_of(s) as i64)
     } else {
         Err(Error::InvalidTarget)
     }

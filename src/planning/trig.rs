@@ -26,7 +26,7 @@ pub fn sin_cos(x: f64) -> (f64, f64) {
     let s = r * s;
     // (Through i32, not i64, which links ~140 bytes of f64-to-i64 conversion: the same
     // quadrant for every |k| below 2^31, far beyond the few turns this is for.)
-    match (k as i32).rem_euclid(4) {
+    match crate::num::i32_of(k).rem_euclid(4) {
         0 => (s, c),
         1 => (c, -s),
         2 => (-s, -c),
