@@ -708,7 +708,7 @@ fn set_coord_data<const N: usize>(
         Some(2.0) => false,
         _ => return Err(Error::UnsupportedCommand),
     };
-    let slot = if p > 0.0 { p as usize - 1 } else { active as usize };
+    let slot = if p > 0.0 { u32_of(p) as usize - 1 } else { active as usize };
     Ok((slot, off.g10(slot, l20, pos, words)))
 }
 
