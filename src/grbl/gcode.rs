@@ -49,11 +49,15 @@ pub fn parse_number(s: &[u8], i: &mut usize) -> Result<f64, Error> {
                         frac += zeros + 1;
                         zeros = 0;
                     }
-                    let scaled = match sig {
-                        0 => Some(0),
-                        _ => 10u64.checked_pow(shift).and_then(|k| sig.checked_mul(k)),
-                    };
-                    sig = scaled.and_then(|v| v.checked_add(d)).ok_or(Error::BadNumberFormat)?;
+                    // ×10 a step at a time: below the cap before each step, so no overflow (a
+                    // product over the cap is refused, as the sum after it would be).
+                    for _ in 0..shift {
+                        sig *= 10;
+                        if sig > MAX_SIGNIFICAND {
+                            return Err(Error::BadNumberFormat);
+                        }
+                    }
+                    sig += d;
                 }
                 if sig > MAX_SIGNIFICAND || frac > MAX_FRAC {
                     return Err(Error::BadNumberFormat);
@@ -727,4 +731,83 @@ fn arc<const N: usize>(b: &Block<N>, m: &Modal, pos: &[f64; N], target: [f64; N]
         None => Center::Offsets(b.ijk.map(|o| o.map(|v| v * unit))),
     };
     Arc::new(m.plane, *pos, target, m.motion == Motion::CwArc, center)
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+
+    /// The former reader (a table of powers of ten, checked 64-bit arithmetic), as the reference.
+    fn reference(s: &[u8], i: &mut usize) -> Result<f64, Error> {
+        const POW10: [f64; 23] = [
+            1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+            1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+        ];
+        let mut j = *i;
+        let neg = s.get(j) == Some(&b'-');
+        if matches!(s.get(j), Some(b'-' | b'+')) {
+            j += 1;
+        }
+        let (mut sig, mut frac, mut zeros, mut digits, mut point) = (0u64, 0usize, 0usize, 0, false);
+        while let Some(&c) = s.get(j) {
+            match c {
+                b'0'..=b'9' => {
+                    digits += 1;
+                    let d = (c - b'0') as u64;
+                    if point && d == 0 {
+                        zeros += 1;
+                    } else {
+                        let shift = if point { zeros as u32 + 1 } else { 1 };
+                        if point {
+                            frac += zeros + 1;
+                            zeros = 0;
+                        }
+                        let scaled = match sig {
+                            0 => Some(0),
+                            _ => 10u64.checked_pow(shift).and_then(|k| sig.checked_mul(k)),
+                        };
+                        sig = scaled.and_then(|v| v.checked_add(d)).ok_or(Error::BadNumberFormat)?;
+                    }
+                    if sig > MAX_SIGNIFICAND || frac >= POW10.len() {
+                        return Err(Error::BadNumberFormat);
+                    }
+                }
+                b'.' if !point => point = true,
+                _ => break,
+            }
+            j += 1;
+        }
+        if digits == 0 {
+            return Err(Error::BadNumberFormat);
+        }
+        *i = j;
+        let v = sig as f64 / POW10[frac];
+        Ok(if neg { -v } else { v })
+    }
+
+    #[test]
+    fn parse_number_matches_the_former_reader() {
+        let mut r = 0x2545_F491_4F6C_DD1Du64;
+        let mut next = |n: u64| {
+            r ^= r << 13;
+            r ^= r >> 7;
+            r ^= r << 17;
+            r % n
+        };
+        // Mostly digits and zeros (long runs of zeros after the point), some signs and points.
+        let alphabet = b"0000000123456789..-+X";
+        let edges = ["1.00000000000000000001", "9.0000000000000000000001", "0.0000000000000000000009", "99999.0000000001",
+            "999999999999999.1", "99999999999999.9", "1.000000000000000000000000007", "0.00000000000000000000001"];
+        let random = (0..300_000).map(|_| {
+            let len = next(32) as usize;
+            (0..len).map(|_| alphabet[next(alphabet.len() as u64) as usize]).collect::<std::vec::Vec<u8>>()
+        });
+        for s in edges.iter().map(|e| e.as_bytes().to_vec()).chain(random) {
+            let (mut i, mut k) = (0, 0);
+            let (a, b) = (parse_number(&s, &mut i), reference(&s, &mut k));
+            assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits), "{:?}", core::str::from_utf8(&s));
+            assert_eq!(i, k);
+        }
+    }
 }
