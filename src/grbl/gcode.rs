@@ -24,11 +24,8 @@ pub const MAX_LINE_NUMBER: f64 = 10_000_000.0;
 pub const MAX_DWELL_S: f64 = 1_000_000.0;
 /// Largest significand read: 15 decimal digits are exact in `f64`.
 const MAX_SIGNIFICAND: u64 = 999_999_999_999_999;
-/// Exact powers of ten in `f64`.
-const POW10: [f64; 23] = [
-    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
-    1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
-];
+/// Most digits after the point: 10^22 is the largest power of ten exact in `f64`.
+const MAX_FRAC: usize = 22;
 
 /// Reads a decimal number at `s[*i..]` (optional sign, digits, at most one point) and moves
 /// `*i` past it. No exponent, no `inf`/`nan`: anything else is [`Error::BadNumberFormat`].
@@ -52,13 +49,17 @@ pub fn parse_number(s: &[u8], i: &mut usize) -> Result<f64, Error> {
                         frac += zeros + 1;
                         zeros = 0;
                     }
-                    let scaled = match sig {
-                        0 => Some(0),
-                        _ => 10u64.checked_pow(shift).and_then(|k| sig.checked_mul(k)),
-                    };
-                    sig = scaled.and_then(|v| v.checked_add(d)).ok_or(Error::BadNumberFormat)?;
+                    // ×10 a step at a time: below the cap before each step, so no overflow (a
+                    // product over the cap is refused, as the sum after it would be).
+                    for _ in 0..shift {
+                        sig *= 10;
+                        if sig > MAX_SIGNIFICAND {
+                            return Err(Error::BadNumberFormat);
+                        }
+                    }
+                    sig += d;
                 }
-                if sig > MAX_SIGNIFICAND || frac >= POW10.len() {
+                if sig > MAX_SIGNIFICAND || frac > MAX_FRAC {
                     return Err(Error::BadNumberFormat);
                 }
             }
@@ -71,7 +72,13 @@ pub fn parse_number(s: &[u8], i: &mut usize) -> Result<f64, Error> {
         return Err(Error::BadNumberFormat);
     }
     *i = j;
-    let v = sig as f64 / POW10[frac];
+    // 10^frac by repeated ×10: every product up to 10^22 is exact, so this is the same value
+    // a table would hold, without its 184 bytes of flash.
+    let mut pow10 = 1.0;
+    for _ in 0..frac {
+        pow10 *= 10.0;
+    }
+    let v = crate::num::f64_of_u64(sig) / pow10;
     Ok(if neg { -v } else { v })
 }
 
@@ -705,7 +712,7 @@ fn set_coord_data<const N: usize>(
         Some(2.0) => false,
         _ => return Err(Error::UnsupportedCommand),
     };
-    let slot = if p > 0.0 { p as usize - 1 } else { active as usize };
+    let slot = if p > 0.0 { u32_of(p) as usize - 1 } else { active as usize };
     Ok((slot, off.g10(slot, l20, pos, words)))
 }
 
@@ -724,4 +731,83 @@ fn arc<const N: usize>(b: &Block<N>, m: &Modal, pos: &[f64; N], target: [f64; N]
         None => Center::Offsets(b.ijk.map(|o| o.map(|v| v * unit))),
     };
     Arc::new(m.plane, *pos, target, m.motion == Motion::CwArc, center)
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+
+    /// The former reader (a table of powers of ten, checked 64-bit arithmetic), as the reference.
+    fn reference(s: &[u8], i: &mut usize) -> Result<f64, Error> {
+        const POW10: [f64; 23] = [
+            1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+            1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+        ];
+        let mut j = *i;
+        let neg = s.get(j) == Some(&b'-');
+        if matches!(s.get(j), Some(b'-' | b'+')) {
+            j += 1;
+        }
+        let (mut sig, mut frac, mut zeros, mut digits, mut point) = (0u64, 0usize, 0usize, 0, false);
+        while let Some(&c) = s.get(j) {
+            match c {
+                b'0'..=b'9' => {
+                    digits += 1;
+                    let d = (c - b'0') as u64;
+                    if point && d == 0 {
+                        zeros += 1;
+                    } else {
+                        let shift = if point { zeros as u32 + 1 } else { 1 };
+                        if point {
+                            frac += zeros + 1;
+                            zeros = 0;
+                        }
+                        let scaled = match sig {
+                            0 => Some(0),
+                            _ => 10u64.checked_pow(shift).and_then(|k| sig.checked_mul(k)),
+                        };
+                        sig = scaled.and_then(|v| v.checked_add(d)).ok_or(Error::BadNumberFormat)?;
+                    }
+                    if sig > MAX_SIGNIFICAND || frac >= POW10.len() {
+                        return Err(Error::BadNumberFormat);
+                    }
+                }
+                b'.' if !point => point = true,
+                _ => break,
+            }
+            j += 1;
+        }
+        if digits == 0 {
+            return Err(Error::BadNumberFormat);
+        }
+        *i = j;
+        let v = sig as f64 / POW10[frac];
+        Ok(if neg { -v } else { v })
+    }
+
+    #[test]
+    fn parse_number_matches_the_former_reader() {
+        let mut r = 0x2545_F491_4F6C_DD1Du64;
+        let mut next = |n: u64| {
+            r ^= r << 13;
+            r ^= r >> 7;
+            r ^= r << 17;
+            r % n
+        };
+        // Mostly digits and zeros (long runs of zeros after the point), some signs and points.
+        let alphabet = b"0000000123456789..-+X";
+        let edges = ["1.00000000000000000001", "9.0000000000000000000001", "0.0000000000000000000009", "99999.0000000001",
+            "999999999999999.1", "99999999999999.9", "1.000000000000000000000000007", "0.00000000000000000000001"];
+        let random = (0..300_000).map(|_| {
+            let len = next(32) as usize;
+            (0..len).map(|_| alphabet[next(alphabet.len() as u64) as usize]).collect::<std::vec::Vec<u8>>()
+        });
+        for s in edges.iter().map(|e| e.as_bytes().to_vec()).chain(random) {
+            let (mut i, mut k) = (0, 0);
+            let (a, b) = (parse_number(&s, &mut i), reference(&s, &mut k));
+            assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits), "{:?}", core::str::from_utf8(&s));
+            assert_eq!(i, k);
+        }
+    }
 }

@@ -561,7 +561,7 @@ impl Settings {
                 // Too long for the table: a steeper table (every move walks it at its own
                 // fraction, so no move runs faster), down to a lower top only as a last resort.
                 Err(RampError::TooLong { .. }) if attempt < 4 => {
-                    let ms = RampTable::<L>::ramp_ms(&cfg) as f64;
+                    let ms = crate::num::f64_of_u64(RampTable::<L>::ramp_ms(&cfg));
                     cfg.accel = u32_of((cfg.accel as f64 * ms / (L as f64 - 2.0).max(1.0)).min(u32::MAX as f64 / 2.0)) + 1;
                 }
                 Err(RampError::TooLong { reachable_vmax }) => {

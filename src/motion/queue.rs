@@ -281,7 +281,9 @@ impl<const N: usize> Shared<N> {
         }
     }
 
-    /// Feed hold on (decelerate and pause) or off (resume).
+    /// Feed hold on (decelerate and pause) or off (resume). (Out of line: a dozen callers in
+    /// the controller and the shell, none on the step path.)
+    #[inline(never)]
     pub fn set_hold(&self, on: bool) {
         self.ctl.set_hold(on);
     }

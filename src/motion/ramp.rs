@@ -23,7 +23,7 @@ use core::sync::atomic::{AtomicBool, Ordering};
 
 use fixed::types::U28F4;
 
-use crate::num::{u32_of, u64_of};
+use crate::num::{f64_of_u64, i32_of, u32_of, u64_of};
 use crate::timing::Timing;
 use crate::TIMER_HZ;
 
@@ -84,7 +84,7 @@ const S_CURVE_SPAN: f64 = 4.0;
 /// Period of a rate given in milli-steps per second (rounded to the nearest 1/16 tick).
 /// (f64, exact here below 2^53: it keeps 64-bit integer division out of the firmware.)
 pub fn period_of_millihz(milli_hz: u64) -> Period {
-    let q4 = (TIMER_HZ as f64 * 16_000.0) / (milli_hz.max(1) as f64) + 0.5;
+    let q4 = (TIMER_HZ as f64 * 16_000.0) / f64_of_u64(milli_hz.max(1)) + 0.5;
     Period::from_bits(if q4 >= u32::MAX as f64 { u32::MAX } else { u32_of(q4) })
 }
 
@@ -134,7 +134,7 @@ impl<const L: usize> RampTable<L> {
         match cfg.shape {
             Shape::Trapezoid => ms,
             // The logistic's steepest slope is span/2 / norm of the mean slope.
-            Shape::SCurve => u64_of(ms as f64 * s_curve_stretch()) + 1,
+            Shape::SCurve => u64_of(f64_of_u64(ms) * s_curve_stretch()) + 1,
         }
     }
 
@@ -167,27 +167,35 @@ impl<const L: usize> RampTable<L> {
             *p = period_of_millihz(mean_millihz(&cfg, i, n));
         }
         // Rates must never fall along the table (rounding at the top could otherwise wobble).
-        for i in 1..n {
-            if self.periods[i] > self.periods[i - 1] {
-                self.periods[i] = self.periods[i - 1];
+        // (Carried along by value: no index, so no bounds-check panic path.)
+        let mut prev = Period::from_bits(u32::MAX);
+        for p in self.periods[..n].iter_mut() {
+            if *p > prev {
+                *p = prev;
             }
+            prev = *p;
         }
         // The last millisecond's mean is below `vmax` when the ramp ends inside it: one more
         // entry at `vmax` itself, so every cruise up to `vmax` has an index to walk to.
         let top = period_of_millihz(cfg.vmax as u64 * 1000);
         let mut n = n;
-        if n < L && self.periods[n - 1] > top {
-            self.periods[n] = top;
-            n += 1;
+        if prev > top {
+            if let Some(p) = self.periods.get_mut(n) {
+                *p = top;
+                n += 1;
+            }
         }
         // Distance walked: the rate is interpolated between entries, so integrate each
         // entry-to-entry stretch as a trapezoid (the last entry counts flat).
         let per_ms = |p: Period| (TIMER_HZ / 1000 * 16 * SUM_ONE) / p.to_bits().max(1);
         let mut sum = 0u32;
-        for i in 0..n {
-            self.sums[i] = sum;
-            let a = per_ms(self.periods[i]);
-            let b = if i + 1 < n { per_ms(self.periods[i + 1]) } else { a };
+        for (i, (s, p)) in self.sums.iter_mut().zip(&self.periods).take(n).enumerate() {
+            *s = sum;
+            let a = per_ms(*p);
+            let b = match self.periods.get(i + 1) {
+                Some(q) if i + 1 < n => per_ms(*q),
+                _ => a,
+            };
             // (72 MHz · 16 · 256 / 1000 fits in 32 bits: no 64-bit division in the firmware.)
             sum = sum.saturating_add((a + b) / 2);
         }
@@ -360,7 +368,7 @@ fn logistic(x: f64) -> f64 {
 fn exp_small(x: f64) -> f64 {
     const LN2: f64 = core::f64::consts::LN_2;
     let t = x / LN2;
-    let k = if t >= 0.0 { (t + 0.5) as i32 } else { (t - 0.5) as i32 };
+    let k = i32_of(if t >= 0.0 { t + 0.5 } else { t - 0.5 });
     let r = x - k as f64 * LN2;
     let mut term = 1.0;
     let mut sum = 1.0;
@@ -395,8 +403,8 @@ fn mean_millihz(cfg: &RampConfig, i: usize, n: usize) -> u64 {
                     return vmax;
                 }
                 // Ramp part of length f = (vmax-start)/a ms, then vmax for 1-f.
-                let f = (vmax - start) as f64 / a as f64;
-                let mean = f * (start as f64 + vmax as f64) / 2.0 + (1.0 - f) * vmax as f64;
+                let f = f64_of_u64(vmax - start) / f64_of_u64(a);
+                let mean = f * (f64_of_u64(start) + f64_of_u64(vmax)) / 2.0 + (1.0 - f) * f64_of_u64(vmax);
                 u64_of(mean).min(vmax)
             }
         }
@@ -404,7 +412,7 @@ fn mean_millihz(cfg: &RampConfig, i: usize, n: usize) -> u64 {
             // Midpoint of the millisecond on the logistic stretched over n ms (Simpson-free:
             // the curve is smooth enough that the midpoint is within 0.1 % of the mean here).
             let u = ((i as f64 + 0.5) / n as f64).min(1.0);
-            let v = v0 as f64 + (vmax - v0) as f64 * s_curve(u);
+            let v = f64_of_u64(v0) + f64_of_u64(vmax - v0) * s_curve(u);
             // max/min, not clamp: its panic message would link integer formatting.
             u64_of(v).max(v0.max(1)).min(vmax.max(1))
         }
@@ -524,6 +532,65 @@ impl<const L: usize> Drop for RampWriteGuard<'_, L> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The former fix-up and integration (indexed loops), as the reference for `build`.
+    fn reference<const L: usize>(cfg: RampConfig) -> ([Period; L], [u32; L], usize) {
+        let n = RampTable::<L>::ramp_ms(&cfg).max(1) as usize;
+        let mut periods = [Period::ZERO; L];
+        let mut sums = [0u32; L];
+        for (i, p) in periods[..n].iter_mut().enumerate() {
+            *p = period_of_millihz(mean_millihz(&cfg, i, n));
+        }
+        for i in 1..n {
+            if periods[i] > periods[i - 1] {
+                periods[i] = periods[i - 1];
+            }
+        }
+        let top = period_of_millihz(cfg.vmax as u64 * 1000);
+        let mut n = n;
+        if n < L && periods[n - 1] > top {
+            periods[n] = top;
+            n += 1;
+        }
+        let per_ms = |p: Period| (TIMER_HZ / 1000 * 16 * SUM_ONE) / p.to_bits().max(1);
+        let mut sum = 0u32;
+        for i in 0..n {
+            sums[i] = sum;
+            let a = per_ms(periods[i]);
+            let b = if i + 1 < n { per_ms(periods[i + 1]) } else { a };
+            sum = sum.saturating_add((a + b) / 2);
+        }
+        (periods, sums, n)
+    }
+
+    #[test]
+    fn build_matches_the_former_loops() {
+        let mut r = 0x9E37_79B9_7F4A_7C15u64;
+        let mut next = |n: u32| {
+            r ^= r << 13;
+            r ^= r >> 7;
+            r ^= r << 17;
+            (r % n as u64) as u32
+        };
+        let mut table = RampTable::<64>::new();
+        let mut built = 0;
+        for k in 0..20_000 {
+            let v0 = MIN_RATE_HZ + next(3_000);
+            let vmax = if k % 7 == 0 { v0 } else { v0 + next(200_000) };
+            let accel = 1 + next(if k % 2 == 0 { 5_000_000 } else { 100_000_000 });
+            let shape = if next(2) == 0 { Shape::Trapezoid } else { Shape::SCurve };
+            let cfg = RampConfig { v0, vmax, accel, shape };
+            if table.build(cfg).is_err() {
+                continue;
+            }
+            built += 1;
+            let (periods, sums, n) = reference::<64>(cfg);
+            assert_eq!(table.len as usize, n, "{cfg:?}");
+            assert_eq!(table.periods[..n], periods[..n], "{cfg:?}");
+            assert_eq!(table.sums[..n], sums[..n], "{cfg:?}");
+        }
+        assert!(built > 1_000, "{built}");
+    }
 
     #[test]
     fn ramp_ms_is_the_ceiling_of_the_exact_quotient() {

@@ -214,7 +214,7 @@ pub fn segment_count(radius: f64, travel: f64, tol: f64) -> u32 {
     let phi_max = if x >= 1.0 { PI } else { (4.0 * (x + x * x * x / 6.0)).min(PI) };
     let n = libm::ceil(libm::fabs(travel) / phi_max);
     if n >= 1.0 && n < u32::MAX as f64 {
-        n as u32
+        crate::num::u32_of(n)
     } else {
         1 // no travel (a zero radius), or NaN from a zero tolerance: one straight chord
     }

@@ -47,7 +47,7 @@ impl MasterRamp {
         let a = match cfg.shape {
             Shape::Trapezoid => cfg.accel as f64,
             Shape::SCurve => {
-                let ms = RampTable::<1>::ramp_ms(cfg).max(1) as f64;
+                let ms = crate::num::f64_of_u64(RampTable::<1>::ramp_ms(cfg).max(1));
                 (cfg.vmax as f64 - v0).max(1.0) * 1000.0 / ms
             }
         };

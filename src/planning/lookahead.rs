@@ -87,7 +87,8 @@ impl<const N: usize> Block<N> {
             }
             _ => (RampPlan::lone(0, mv.cruise), usable(total) * 256.0, 0),
         };
-        let budget = u32_of(budget.clamp(0.0, u32::MAX as f64));
+        // (`u32_of` saturates as a clamp to 0 ..= u32::MAX would, NaN to 0.)
+        let budget = u32_of(budget);
         let mut b = Block { mv, ramp, budget, junction_q, max_entry_q: 0, rev_entry_q: u32::MAX, entry_q: 0, exit_q: 0 };
         b.price(profile, o);
         b

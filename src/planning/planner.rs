@@ -16,6 +16,7 @@
 //! Each move also carries its junction speed with the move before it (junction deviation
 //! `$11`, Grbl's formula); the look-ahead ([`crate::lookahead`]) does the rest.
 
+use crate::num::{f64_of_i64, f64_of_u64};
 use crate::protocol::Error;
 use crate::queue::{Move, Ovr, Path};
 use crate::settings::Settings;
@@ -145,7 +146,7 @@ impl<const N: usize> Planner<N> {
         // Path length from the rounded steps; per-axis unit vector.
         // (Axes that do not move are skipped: soft float costs ~50–200 cycles an operation on
         // the M3 even for zeros. One division for the unit vector.)
-        let d: [f64; N] = core::array::from_fn(|i| if delta[i] == 0 { 0.0 } else { delta[i] as f64 / lim.steps_per_mm[i] });
+        let d: [f64; N] = core::array::from_fn(|i| if delta[i] == 0 { 0.0 } else { f64_of_i64(delta[i]) / lim.steps_per_mm[i] });
         let len = sqrt(d.iter().filter(|v| **v != 0.0).map(|v| v * v).sum());
         let inv_len = 1.0 / len;
         let unit: [f64; N] = core::array::from_fn(|i| if delta[i] == 0 { 0.0 } else { d[i] * inv_len });
@@ -164,7 +165,7 @@ impl<const N: usize> Planner<N> {
             Some(f) => (f / 60.0, Ovr::Feed),
             None => (vmax, Ovr::Rapid),
         };
-        let share = master_steps as f64 / len;
+        let share = f64_of_u64(master_steps) / len;
         let wanted_hz = asked.min(vmax) * share;
         // The step handler's ceiling for this many slave axes, and the ramp table's top.
         let slaves = delta.iter().filter(|d| **d != 0).count() as u32 - 1;
@@ -191,7 +192,7 @@ impl<const N: usize> Planner<N> {
         };
         self.mm = *target;
         self.steps = to;
-        Ok(Some(Planned { mv: mv.with_path(path), mm_per_step: (len / master_steps as f64) as f32, wanted_hz }))
+        Ok(Some(Planned { mv: mv.with_path(path), mm_per_step: (len / f64_of_u64(master_steps)) as f32, wanted_hz }))
     }
 }
 
@@ -275,7 +276,8 @@ pub(crate) fn sqrt(x: f64) -> f64 {
 pub fn to_steps(mm: f64, steps_per_mm: f64) -> Result<i64, Error> {
     let s = libm::round(mm * steps_per_mm);
     if s.is_finite() && libm::fabs(s) <= i32::MAX as f64 {
-        Ok(s as i64)
+        // Through i32 (the value fits): the f64-to-i64 routine costs ~140 bytes of flash.
+        Ok(crate::num::i32_of(s) as i64)
     } else {
         Err(Error::InvalidTarget)
     }

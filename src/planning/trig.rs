@@ -24,7 +24,9 @@ pub fn sin_cos(x: f64) -> (f64, f64) {
         c = 1.0 - r2 * c / ((2 * n - 1) * (2 * n)) as f64;
     }
     let s = r * s;
-    match (k as i64).rem_euclid(4) {
+    // (Through i32, not i64, which links ~140 bytes of f64-to-i64 conversion: the same
+    // quadrant for every |k| below 2^31, far beyond the few turns this is for.)
+    match crate::num::i32_of(k).rem_euclid(4) {
         0 => (s, c),
         1 => (c, -s),
         2 => (-s, -c),

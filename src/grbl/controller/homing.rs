@@ -25,6 +25,7 @@
 //! Success clears the alarm lock; a full `$H` then runs the startup lines.
 
 use super::Controller;
+use crate::num::{f64_of, round_i32};
 use crate::protocol::{Error, Out};
 use crate::queue::State;
 use crate::spindle::Power;
@@ -76,7 +77,7 @@ impl<const N: usize> Controller<'_, N> {
         };
         // Contradictory settings would give a wrong position: refuse them.
         let s = &self.settings;
-        if (0..3).any(|i| (group | next) & 1 << i != 0 && s.homing_pulloff as f64 >= s.max_travel[i] as f64) {
+        if (0..3).any(|i| (group | next) & 1 << i != 0 && f64_of(s.homing_pulloff) >= f64_of(s.max_travel[i])) {
             return Err(Error::InvalidStatement);
         }
         self.homing = Some(Homing {
@@ -170,7 +171,7 @@ impl<const N: usize> Controller<'_, N> {
             };
             for i in 0..3 {
                 let toward_max = s.homing_dir & 1 << i == 0;
-                let d = libm::round(dist * s.steps_per_mm[i] as f64) as i32;
+                let d = round_i32(dist * s.steps_per_mm[i] as f64);
                 h.target[i] = at[i] as i32 + if toward_max == approach { d } else { -d };
             }
         }
@@ -221,7 +222,7 @@ impl<const N: usize> Controller<'_, N> {
             if h.group & 1 << i != 0 {
                 let pulloff = s.homing_pulloff as f64;
                 let mm = if s.homing_dir & 1 << i != 0 { pulloff - s.max_travel[i] as f64 } else { -pulloff };
-                p[i] = libm::round(mm * s.steps_per_mm[i] as f64) as i32;
+                p[i] = round_i32(mm * s.steps_per_mm[i] as f64);
             }
         }
         self.feeder.set_positions(p);

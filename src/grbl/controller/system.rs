@@ -5,6 +5,7 @@
 use super::{Controller, Job, Listing};
 use crate::coords::Coords;
 use crate::gcode;
+use crate::num::u32_of;
 use crate::planner::Limits;
 use crate::protocol::{Error, Out};
 use crate::report::{self, PARAM_LINES, SETTING_LEN};
@@ -112,7 +113,7 @@ impl<const N: usize> Controller<'_, N> {
                     return Err(Error::InvalidStatement);
                 }
                 need_idle(idle)?;
-                let change = self.settings.set(id as u16, value, N)?;
+                let change = self.settings.set(u32_of(id) as u16, value, N)?;
                 self.settings_changed(change, out);
             }
             _ => return Err(Error::InvalidStatement),
@@ -144,7 +145,7 @@ impl<const N: usize> Controller<'_, N> {
         }
         let text = Text::new(line).ok_or(Error::LineLengthExceeded)?;
         self.gcode(line, out)?;
-        if let Some(s) = self.stored.startup.get_mut(slot as usize) {
+        if let Some(s) = self.stored.startup.get_mut(u32_of(slot) as usize) {
             *s = text;
         }
         self.save_later(out);

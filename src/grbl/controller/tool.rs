@@ -10,6 +10,7 @@
 
 use super::Controller;
 use crate::gcode::{Modal, Motion};
+use crate::num::f64_of;
 use crate::queue::State;
 use crate::spindle::{duty, Power, SpindleDir, SpindleOut, FLOOD, MIST};
 
@@ -101,7 +102,7 @@ impl<const N: usize> Controller<'_, N> {
         let ov = self.shared.overrides().spindle as f64 / 100.0;
         let arr = crate::spindle::PwmTiming::new(s.spindle_pwm_hz).arr;
         SpindleOut {
-            ccr: duty(speed * ov, s.spindle_min as f64, s.spindle_max as f64, arr),
+            ccr: duty(speed * ov, f64_of(s.spindle_min), f64_of(s.spindle_max), arr),
             enable: true,
             ccw: dir == SpindleDir::Ccw,
             mist: coolant & MIST != 0,
