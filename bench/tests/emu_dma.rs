@@ -163,6 +163,9 @@ fn timer_requests_drive_bsrr_and_arr_with_the_modeled_latency() {
     let bus = (n[1] + n[4]) * (AHB_ACCESS + bridge_cycles(1)) + n[0] * (AHB_ACCESS + bridge_cycles(2));
     assert_eq!(b.dma_bus_cycles(), bus);
     assert!(b.dma_stolen_cycles() <= 2 * (AHB_ACCESS + bridge_cycles(2)), "the CPU sleeps: {}", b.dma_stolen_cycles());
+    let r = b.report();
+    assert_eq!((r.dma.transfers, r.dma.bus_cycles, r.dma.overruns), (n, bus, 0));
+    assert!(r.to_string().contains("DMA1: transfers per channel 1..7"), "{r}");
 }
 
 #[test]
