@@ -163,6 +163,9 @@ fn timer_requests_drive_bsrr_and_arr_with_the_modeled_latency() {
     let bus = (n[1] + n[4]) * (AHB_ACCESS + bridge_cycles(1)) + n[0] * (AHB_ACCESS + bridge_cycles(2));
     assert_eq!(b.dma_bus_cycles(), bus);
     assert!(b.dma_stolen_cycles() <= 2 * (AHB_ACCESS + bridge_cycles(2)), "the CPU sleeps: {}", b.dma_stolen_cycles());
+    let r = b.report();
+    assert_eq!((r.dma.transfers, r.dma.bus_cycles, r.dma.overruns), (n, bus, 0));
+    assert!(r.to_string().contains("DMA1: transfers per channel 1..7"), "{r}");
 }
 
 #[test]
@@ -190,4 +193,48 @@ fn a_running_cpu_loses_the_bus_cycles() {
     assert_eq!(busy.dma_transfers(), sleeper.dma_transfers());
     assert!(pins(&busy).len() >= 10);
     assert_eq!(pins(&busy), pins(&sleeper), "the edges follow the timer, not the CPU");
+}
+
+// Peripheral to memory (DIR = 0), not circular: channel 2 copies TIM2 CNT into a half-word
+// array on each of the first three updates.
+const CNT_COPY: &str = r#"
+.thumb_func
+reset:
+  ldr r0, =0x40021004      @ RCC_CFGR: APB1 = HCLK / 2
+  ldr r1, =0x400
+  str r1, [r0]
+  ldr r0, =0x40020000      @ DMA1 channel 2
+  ldr r1, =0x40000024
+  str r1, [r0, #0x24]      @ CPAR2 = TIM2 CNT
+  ldr r1, =0x20000100
+  str r1, [r0, #0x28]      @ CMAR2
+  movs r1, #3
+  str r1, [r0, #0x20]      @ CNDTR2 = 3
+  ldr r1, =0x0681          @ CCR2: MSIZE 16, PSIZE 32, MINC, EN (DIR = 0, not circular)
+  str r1, [r0, #0x1C]
+  ldr r0, =0x40000000      @ TIM2
+  ldr r1, =999
+  str r1, [r0, #0x2C]
+  ldr r1, =0x100           @ DIER = UDE
+  str r1, [r0, #0x0C]
+  movs r1, #1
+  str r1, [r0]             @ CEN
+idle:
+  wfi
+  b idle
+"#;
+
+#[test]
+fn peripheral_to_memory_reads_at_the_landing_cycle_and_stops_when_done() {
+    let elf = asm::build("dma_cnt", &[(1, "reset")], CNT_COPY).expect("assemble");
+    let mut b = Board::from_elf_bytes(&elf).expect("load");
+    b.run_for(6_000).unwrap();
+    assert!(b.timer_updates().0 >= 5);
+    assert_eq!(b.dma_transfers()[1], 3, "not circular: three items, then the channel stops");
+    assert_eq!(b.dma_channel(2).cndtr, 0);
+    // CNT read through the APB1 bridge: the update at r, then 1 + 1 + 5 cycles to the read
+    // (the SRAM write follows it); CNT restarted at 0 at r. Truncated to 16 bits.
+    let cnt = ARBITRATION + ADDRESS + bridge_cycles(2);
+    let mem = b.read_mem(0x2000_0100, 8);
+    assert_eq!(mem, [cnt as u8, 0, cnt as u8, 0, cnt as u8, 0, 0xA5, 0xA5], "untouched RAM keeps its paint");
 }

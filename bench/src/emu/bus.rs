@@ -417,7 +417,10 @@ impl Machine {
             }
             TIM2..=0x4000_03FF => {
                 let v = if word == TIM2 + 0x10 { v | !mask } else { v };
-                self.tim2.write(word - TIM2, v, t)
+                self.tim2.write(word - TIM2, v, t);
+                if word == TIM2 + 0x0C {
+                    self.dma_requests_enabled();
+                }
             }
             TIM1..=0x4001_2FFF => {
                 let merged = (self.tim1.read(word - TIM1) & !mask) | v;

@@ -20,28 +20,14 @@
 //!
 //! Requests (RM0008 §13.3.1, request/acknowledge): a peripheral holds its request until the
 //! DMA acknowledges it, so a request that finds its channel disabled (or its count at 0)
-//! waits and is served when the channel is enabled. A request that arrives before the
+//! waits and is served when the channel is enabled (unless the peripheral withdraws it first:
+//! for TIM2, clearing the DIER enable). A request that arrives before the
 //! channel's previous one was acknowledged merges with it: it is lost, and counted.
 //! Overruns ([`Dma::overruns`], added to `Board::overruns()`): those merged requests, plus
 //! every HTIF/TCIF set again while still set with its interrupt enabled (the firmware did
 //! not serve the half-transfer in time).
 //!
-//! Timing (named constants below; `dma_run.rs` applies them). One transfer, memory to an APB
-//! peripheral with divider d, on an idle bus:
-//!   request → [ARBITRATION 1][ADDRESS 1][SRAM read AHB_ACCESS 2][bridge 1 + 2·d] → lands
-//! that is 7 cycles to a GPIO register (APB2, d = 1) and 9 to TIM2 (APB1, d = 2) at 72 MHz.
-//! The breakdown is AN2548 ("Using the STM32F0/F1/F3/Gx/Lx Series DMA controller") §4.1,
-//! DMA transfer timing: one AHB cycle of request arbitration, one of address computation,
-//! and per access the bus matrix plus the slave (two AHB cycles for SRAM; for an APB
-//! register the bridge and two APB cycles, which is the bench's `memory::bridge_cycles`,
-//! 1 + 2·d). The F1's DMA has a single AHB master: transfers of all channels are serialized.
-//! The peripheral side uses the same AHB-to-APB bridge as the CPU (`Machine::bridge_free`):
-//! CPU peripheral accesses and DMA transfers queue behind each other. Bus cost: the DMA holds
-//! the bus matrix for its SRAM access and its bridge transfer (AHB_ACCESS + 1 + 2·d cycles:
-//! 5 per GPIO write, 7 per TIM2 write); the bench charges all of them to the CPU when it is
-//! running (RM0008 §13.3.2: with round-robin the CPU keeps at least half the bus, so this is
-//! the pessimistic end: the CPU loses them only when it wants the same slave), none while it
-//! sleeps in WFI. Not checked against silicon.
+//! Timing and bus cost: the constants below, applied and explained in `dma_run.rs`.
 
 use std::collections::VecDeque;
 
@@ -49,12 +35,12 @@ use std::collections::VecDeque;
 pub const CHANNELS: usize = 7;
 /// IRQ of channel 1 (DMA1_Channel1); channel x raises IRQ 10 + x.
 pub const IRQ_CHANNEL1: u32 = 11;
-/// Request arbitration: one AHB cycle (AN2548 §4.1).
+/// Request arbitration: one AHB cycle (AN2548 §4.1; see `dma_run.rs`).
 pub const ARBITRATION: u64 = 1;
 /// Address computation: one AHB cycle (AN2548 §4.1).
 pub const ADDRESS: u64 = 1;
-/// One access to SRAM (or another AHB slave) through the bus matrix: two AHB cycles
-/// (bus matrix arbitration + data, AN2548 §4.1). APB accesses cost `memory::bridge_cycles`.
+/// One access to SRAM (or another AHB slave) through the bus matrix: bus-matrix arbitration
+/// 1 + the access 1 AHB cycle. APB registers cost `memory::bridge_cycles` instead.
 pub const AHB_ACCESS: u64 = 2;
 
 const EN: u32 = 1;
@@ -221,6 +207,11 @@ impl Dma {
         } else {
             self.ch[x].latched = true;
         }
+    }
+
+    // the peripheral no longer requests on channel `x`: a held request is dropped
+    pub fn withdraw(&mut self, x: usize) {
+        self.ch[x].latched = false;
     }
 
     // the waiting requests in service order: by cycle, then priority (PL, then channel number)

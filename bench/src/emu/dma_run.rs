@@ -16,7 +16,27 @@
 //! TIM2 writes go through `Timer::write` at that cycle. A landing that falls before the
 //! service (the run loop reached r late, e.g. after an exception entry) is applied at once,
 //! still stamped with its own cycle.
-
+//!
+//! Timing (constants in `dma.rs`). One transfer from memory to an APB register with APB
+//! divider d, on an idle bus:
+//!   request → [ARBITRATION 1][ADDRESS 1][SRAM read AHB_ACCESS 2][bridge 1 + 2·d] → lands,
+//! 7 cycles to a GPIO register (APB2, d = 1) and 9 to TIM2 (APB1, d = 2) at 72 MHz. The steps
+//! are those of AN2548 ("Using the STM32F0/F1/F3/Gx/Lx Series DMA controller") §4.1, DMA
+//! transfer timing, with the per-step costs ST gives for them (also tabulated in AN4031
+//! §3.1, tables 4 and 5): one AHB cycle of request arbitration, one of address computation,
+//! then per access one of bus-matrix arbitration plus the slave's (SRAM: one; an APB
+//! register: two APB cycles behind the bridge, which is the bench's `memory::bridge_cycles`,
+//! 1 + 2·d, as for CPU accesses). The F1's DMA has one AHB master, so arbitration and address
+//! are paid once per transfer and transfers of all channels are serialized. The bus-matrix
+//! arbitration cycle is counted even without a competing access (AN4031 counts 0 then): one
+//! cycle pessimistic. The peripheral side uses the bridge the CPU uses
+//! (`Machine::bridge_free`): CPU peripheral accesses and DMA transfers queue behind each
+//! other. Bus cost: the DMA holds the bus matrix for its SRAM access and its bridge transfer,
+//! AHB_ACCESS + 1 + 2·d cycles (5 per GPIO write, 7 per TIM2 write); the bench charges all of
+//! them to the CPU whenever it is running, none while it sleeps in WFI. That is the
+//! pessimistic end: the CPU waits only when it wants the same slave in those cycles, and the
+//! round-robin bus matrix keeps at least half the bandwidth for it (RM0008 §13.3). Not
+//! checked against silicon.
 use unicorn_engine::Unicorn;
 
 use super::bus::Machine;
@@ -61,6 +81,18 @@ impl Machine {
         for (t, source) in std::mem::take(&mut self.tim2.dma_requests) {
             if let Some(x) = tim2_channel(source) {
                 self.dma.request(x, t);
+            }
+        }
+    }
+
+    // TIM2's DIER was written: a held request whose enable (UDE, CCxDE) is now clear is
+    // withdrawn (assumed: the request line is the event latch AND the enable; TIM2_CH2 and
+    // CH4 share channel 7, either enable keeps it)
+    pub(super) fn dma_requests_enabled(&mut self) {
+        for x in 0..super::dma::CHANNELS {
+            let on = (0..=4u8).any(|s| tim2_channel(s) == Some(x) && self.tim2.dier & 1 << (8 + s) != 0);
+            if !on {
+                self.dma.withdraw(x);
             }
         }
     }
@@ -205,5 +237,26 @@ mod tests {
         assert_eq!(m.dma.bus_cycles, 7);
         m.sync(1000);
         assert_eq!(m.tim2.next_event(), Some(1500), "the preloaded ARR takes effect at the update");
+    }
+
+    #[test]
+    fn a_request_waits_for_its_disabled_channel_unless_the_timer_withdraws_it() {
+        for withdraw in [false, true] {
+            let mut m = machine(2, 0x4001_0C10, 4);
+            let ccr2 = 0x4002_001C;
+            let ccr = m.dma.read(ccr2 - 0x4002_0000);
+            m.write_reg(ccr2, ccr & !1, u32::MAX, 0, 0); // channel 2 off
+            m.write_reg(0x4000_002C, 99, u32::MAX, 0, 0);
+            m.write_reg(0x4000_000C, 1 << 8, u32::MAX, 0, 0); // UDE
+            m.write_reg(0x4000_0000, 1, u32::MAX, 0, 0); // CEN: update at 100
+            m.sync(150);
+            assert_eq!((m.tim2.updates, m.dma.next_event()), (1, None), "held, not served");
+            if withdraw {
+                m.write_reg(0x4000_000C, 0, u32::MAX, 150, 150);
+            }
+            m.write_reg(ccr2, ccr, u32::MAX, 200, 200); // enabled at 200
+            let served: Vec<_> = m.dma.take_requests();
+            assert_eq!(served, if withdraw { vec![] } else { vec![(200, 1)] });
+        }
     }
 }

@@ -46,5 +46,5 @@ pub use stats::IsrRun;
 pub use bus::{TIM2_IRQ, USART1_IRQ};
 pub use firmware::{firmware_elf, gcode_lines, repo_root, stream_gcode};
 pub use gpio::PinEdge;
-pub use report::{isr_profile, AxisReport, Report, SpindleReport, StepIsr, AXES, DIR_LOW_IS_POSITIVE, DIR_PINS, EN_PIN, STEP_PINS, TOOL_PINS};
+pub use report::{isr_profile, AxisReport, DmaReport, Report, SpindleReport, StepIsr, AXES, DIR_LOW_IS_POSITIVE, DIR_PINS, EN_PIN, STEP_PINS, TOOL_PINS};
 pub use unicorn_engine::RegisterARM;

@@ -91,6 +91,21 @@ pub struct Report {
     pub usart_rx_overruns: u64,
     pub unmodeled_registers: Vec<String>,
     pub spindle: SpindleReport,
+    pub dma: DmaReport,
+}
+
+/// DMA1 (`dma.rs`): what the step-output DMA mode moved and what it cost the bus.
+#[derive(Clone, Debug, Serialize)]
+pub struct DmaReport {
+    /// Data items moved per channel (index 0 = channel 1).
+    pub transfers: [u64; 7],
+    /// Bus-matrix cycles of all transfers, and the part charged to the running CPU.
+    pub bus_cycles: u64,
+    pub stolen_cycles: u64,
+    /// Bus-matrix cycles per simulated cycle.
+    pub bus_load: f64,
+    /// Included in `overruns`.
+    pub overruns: u64,
 }
 
 /// The spindle/laser PWM (TIM1 on PA8) and the tool pins.
@@ -164,6 +179,13 @@ impl Board {
             usart_rx_overruns: self.usart_rx_overruns(),
             unmodeled_registers: self.unmodeled().iter().map(|(a, pc)| format!("{a:#010x} (pc {pc:#010x})")).collect(),
             spindle: self.spindle_report(),
+            dma: DmaReport {
+                transfers: self.dma_transfers(),
+                bus_cycles: self.dma_bus_cycles(),
+                stolen_cycles: self.dma_stolen_cycles(),
+                bus_load: self.dma_bus_cycles() as f64 / self.cycles().max(1) as f64,
+                overruns: self.dma_overruns(),
+            },
         }
     }
 
@@ -273,6 +295,10 @@ impl std::fmt::Display for Report {
         let sp = &self.spindle;
         if sp.pwm_changes > 0 || sp.pin_rises.iter().any(|&n| n > 0) {
             writeln!(f, "spindle PWM (TIM1, PA8): {} changes, max duty {:.1} %, final {:.1} % at {:.0} Hz; rises EN/DIR/FLOOD/MIST {:?}", sp.pwm_changes, sp.max_duty * 100.0, sp.final_duty * 100.0, sp.pwm_hz, sp.pin_rises)?;
+        }
+        let d = &self.dma;
+        if d.transfers.iter().any(|&n| n > 0) {
+            writeln!(f, "DMA1: transfers per channel 1..7 {:?}, bus {:.2} % ({} cycles, {} taken from the running CPU), overruns {}", d.transfers, d.bus_load * 100.0, d.bus_cycles, d.stolen_cycles, d.overruns)?;
         }
         if !self.unmodeled_registers.is_empty() {
             writeln!(f, "unmodeled registers: {}", self.unmodeled_registers.join(", "))?;
