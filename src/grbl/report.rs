@@ -270,8 +270,9 @@ pub fn build_info(out: &mut impl Out, info: &[u8], queue_moves: usize, r: &Rampe
 
 /// `$I`'s step-interrupt line: the firmware's own DWT timing of the step path since the last
 /// `$I` (`steptime`): body cycles min/mean/max, average and peak 1 ms load.
-pub fn step_time(out: &mut impl Out, t: &crate::steptime::StepTimeReport) {
-    out.put(b"[MSG:step isr ");
+pub fn step_time(out: &mut impl Out, t: &crate::steptime::StepTimeReport, dma: bool) {
+    // (DMA burst mode: the step path is the fill of one buffer half per entry.)
+    out.put(if dma { b"[MSG:step fill " as &[u8] } else { b"[MSG:step isr " });
     put_u32(out, t.min);
     out.put(b"/");
     put_fixed(out, t.mean as f64, 1);
@@ -372,7 +373,8 @@ mod tests {
         );
         assert!(info.len() <= crate::protocol::REPLY_ROOM);
         let t = crate::steptime::StepTimeReport { entries: 9, min: 190, mean: 191.44, max: 1402, load: 0.0812, peak_load: 0.156 };
-        assert_eq!(text(|o| step_time(o, &t)), "[MSG:step isr 190/191.4/1402 cycles min/mean/max, load 8.1 % peak 15.6 %]\r\n");
+        assert_eq!(text(|o| step_time(o, &t, false)), "[MSG:step isr 190/191.4/1402 cycles min/mean/max, load 8.1 % peak 15.6 %]\r\n");
+        assert_eq!(text(|o| step_time(o, &t, true)), "[MSG:step fill 190/191.4/1402 cycles min/mean/max, load 8.1 % peak 15.6 %]\r\n");
         let worst = crate::steptime::StepTimeReport { entries: 1, min: u32::MAX, mean: u32::MAX as f32, max: u32::MAX, load: 1.0, peak_load: 1.0 };
         let dual = text(|o| build_info(o, b"", 15, &Ramped { dual: true, ..r }));
         assert!(dual.contains("[MSG:max step rate 166666 Hz dual-edge]\r\n"), "{dual}");
@@ -381,7 +383,7 @@ mod tests {
         let r = Ramped { table_limited: true, dual: true, dma: true, ..r };
         let all = text(|o| {
             build_info(o, &[b'x'; crate::grbl::store::TEXT_LEN], 15, &r);
-            step_time(o, &worst);
+            step_time(o, &worst, true);
             o.put(b"ok\r\n");
         });
         assert!(all.len() <= crate::protocol::REPLY_ROOM, "{}", all.len());

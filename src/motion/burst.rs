@@ -31,8 +31,8 @@ use crate::queue::Shared;
 use crate::ramp::RAMP_LEN;
 use crate::TICKS_PER_MS;
 
-/// Entries per buffer half, at most: 64 (both buffers 768 bytes).
-pub const HALF_MAX: usize = 64;
+/// Entries per buffer half, at most: 32 (both buffers 384 bytes).
+pub const HALF_MAX: usize = 32;
 
 /// Longest entry at the full half length: 1 ms over both halves.
 pub const ENTRY_TICKS: u32 = TICKS_PER_MS / (2 * HALF_MAX as u32);

@@ -53,7 +53,7 @@ impl<const N: usize> Controller<'_, N> {
                 need_idle(idle)?;
                 report::build_info(out, self.stored.build_info.as_bytes(), self.feeder.capacity(), &self.ramped);
                 if let Some(t) = crate::steptime::STEP_TIME.take() {
-                    report::step_time(out, &t);
+                    report::step_time(out, &t, self.ramped.dma);
                 }
             }
             [b'I', b'=', text @ ..] => {
