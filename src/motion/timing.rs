@@ -187,11 +187,11 @@ pub const DUAL_LONG_TICKS: u32 = 0;
 /// DMA burst mode: the buffer fill's cost per master step, timer ticks, plus
 /// [`DMA_PER_SLAVE_TICKS`] per slave, with DMA's bus cycles (three stores per step) counted:
 /// see bench/RESULTS.md (the sweep in DMA mode).
-pub const DMA_BASE_TICKS: u32 = 60;
+pub const DMA_BASE_TICKS: u32 = 40;
 /// The same in dual-edge DMA mode (two stores per step: no falling-edge store).
 pub const DMA_DUAL_BASE_TICKS: u32 = 150;
 /// Extra fill ticks per slave axis in DMA burst mode.
-pub const DMA_PER_SLAVE_TICKS: u32 = 6;
+pub const DMA_PER_SLAVE_TICKS: u32 = 10;
 /// Shortest period in DMA burst mode: 72 ticks, 1 MHz (the ramp tables' top rate).
 pub const DMA_FLOOR_TICKS: u32 = 72;
 /// DMA burst mode: the spread of a DMA store's latency after its timer event (arbitration,

@@ -53,8 +53,13 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
         let dual = self.dual;
         // One axis, full pulses, every gap within an entry: the lane of its own.
         let mut made = 0usize;
-        if room != 0 && self.extend == 0 && slaves.is_empty() && !dual && (period + 15) >> 4 <= max {
-            made = self.lane(words, periods, period, master_on, room);
+        if room != 0 && self.extend == 0 && (period + 15) >> 4 <= max {
+            // Every gap within an entry: the lanes, one axis with full pulses apart.
+            made = if slaves.is_empty() && !dual {
+                self.lane(words, periods, period, master_on, room)
+            } else {
+                self.lane_slaves(words, periods, period, master_on, room)
+            };
             room -= made as u32;
         }
         let mut steps = made as u32;
@@ -122,7 +127,8 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
         let (mut frac, mut ms_left, mut word) = (self.frac, self.ms_left, self.word);
         let mut gap = self.gap_in;
         let mut made = 0usize;
-        for (w, per) in words.iter_mut().zip(periods.iter_mut()).take(room as usize) {
+        let len = words.len().min(periods.len()).min(room as usize);
+        for (w, per) in words[..len].iter_mut().zip(periods[..len].iter_mut()) {
             let acc = frac + period;
             gap = acc >> 4;
             if ms_left <= gap as i32 {
@@ -137,6 +143,56 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
         }
         if made > 0 {
             (self.frac, self.ms_left, self.word, self.gap_in) = (frac, ms_left, word, gap);
+        }
+        made
+    }
+
+    /// Plain steps with slaves (or in dual-edge mode) at `period`, every gap within an entry: at
+    /// most `room` of them, until a ramp millisecond would end (the caller counts them).
+    #[inline(never)]
+    fn lane_slaves(&mut self, words: &mut [u32], periods: &mut [u16], period: u32, on: u32, room: u32) -> usize {
+        let p = self.cur;
+        // SAFETY: the running move's slot; plain fields and its slaves (see `step`).
+        let (total, n, slaves) = unsafe { ((*p).total, (*p).n_slaves as usize, &mut (*p).slaves) };
+        let (mut frac, mut ms_left, mut word, mut level) = (self.frac, self.ms_left, self.word, self.level);
+        let dual = self.dual;
+        let mut gap = self.gap_in;
+        let mut made = 0usize;
+        let len = words.len().min(periods.len()).min(room as usize);
+        for (w, per) in words[..len].iter_mut().zip(periods[..len].iter_mut()) {
+            let acc = frac + period;
+            gap = acc >> 4;
+            if ms_left <= gap as i32 {
+                break;
+            }
+            ms_left -= gap as i32;
+            frac = acc & 15;
+            let mut next = on;
+            // Unrolled as in `step` (no backward branch per slave).
+            macro_rules! slaves {
+                ($out:lifetime; $($i:literal)*) => {$(
+                    if $i + 1 >= N || $i >= n {
+                        break $out;
+                    }
+                    let s = &mut slaves[$i];
+                    next |= s.on & s.dda.step_mask(total);
+                )*};
+            }
+            'slaves: {
+                slaves!('slaves; 0 1 2 3 4 5);
+            }
+            if dual {
+                let old = level;
+                level ^= next;
+                next = (next & !old) | (next & old) << 16;
+            }
+            *w = word;
+            word = next;
+            *per = (gap - 1) as u16;
+            made += 1;
+        }
+        if made > 0 {
+            (self.frac, self.ms_left, self.word, self.level, self.gap_in) = (frac, ms_left, word, level, gap);
         }
         made
     }
