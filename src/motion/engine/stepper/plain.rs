@@ -53,16 +53,21 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
         let dual = self.dual;
         // One axis, full pulses, every gap within an entry: the lane of its own.
         let mut made = 0usize;
-        if room != 0 && self.extend == 0 && (period + 15) >> 4 <= max {
-            // Every gap within an entry: the lanes, one axis with full pulses apart.
+        let mut steps = 0u32;
+        if room != 0 && self.extend == 0 && (period + 15) >> 4 <= 2 * max {
+            // Every gap within two entries: the lanes, one axis with full pulses apart (they
+            // count their steps off `left` themselves).
+            let left = self.left;
             made = if slaves.is_empty() && !dual {
                 self.lane(words, periods, period, master_on, room)
             } else {
                 self.lane_slaves(words, periods, period, master_on, room)
             };
-            room -= made as u32;
+            room -= left - self.left;
+            if made > 0 {
+                self.shared.mv_done.store(total - self.left, Relaxed);
+            }
         }
-        let mut steps = made as u32;
         let (words, periods) = (&mut words[made..], &mut periods[made..]);
         let (mut frac, mut ms_left, mut word, mut level) = (self.frac, self.ms_left, self.word, self.level);
         let (mut extend, mut whole, mut gap_in) = (self.extend, self.whole, self.gap_in);
@@ -120,49 +125,66 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
         made
     }
 
-    /// Plain steps of one axis at `period` with full pulses, every gap within an entry: at most
-    /// `room` of them, until a ramp millisecond would end (the caller counts them as steps).
+    /// Plain steps of one axis at `period` with full pulses, each gap at most two entries: at
+    /// most `room` of them, until a ramp millisecond would end; counted off `left`.
     #[inline(never)]
     fn lane(&mut self, words: &mut [u32], periods: &mut [u16], period: u32, on: u32, room: u32) -> usize {
-        let (mut frac, mut ms_left, mut word) = (self.frac, self.ms_left, self.word);
-        let mut gap = self.gap_in;
-        let mut made = 0usize;
-        let len = words.len().min(periods.len()).min(room as usize);
-        for (w, per) in words[..len].iter_mut().zip(periods[..len].iter_mut()) {
+        let (mut frac, mut ms_left, mut word, mut gap_in) = (self.frac, self.ms_left, self.word, self.gap_in);
+        let max = self.max_tick;
+        let len = words.len().min(periods.len());
+        let (words, periods) = (&mut words[..len], &mut periods[..len]);
+        let (mut i, mut steps) = (0usize, 0u32);
+        while i < len && steps < room {
             let acc = frac + period;
-            gap = acc >> 4;
+            let gap = acc >> 4;
             if ms_left <= gap as i32 {
                 break;
             }
+            let first = piece(gap, max);
+            if first < gap && i + 1 >= len {
+                break; // its second piece would not fit: a whole tick splits it
+            }
             ms_left -= gap as i32;
             frac = acc & 15;
-            *w = word;
+            words[i] = word;
+            periods[i] = (first - 1) as u16;
             word = on;
-            *per = (gap - 1) as u16;
-            made += 1;
+            if first < gap {
+                // Split as `extended` and `filler` would: the step's edge is the filler's word.
+                i += 1;
+                words[i] = word;
+                periods[i] = (gap - first - 1) as u16;
+                word = 0;
+            }
+            gap_in = gap;
+            i += 1;
+            steps += 1;
         }
-        if made > 0 {
-            (self.frac, self.ms_left, self.word, self.gap_in) = (frac, ms_left, word, gap);
-        }
-        made
+        (self.frac, self.ms_left, self.word, self.gap_in) = (frac, ms_left, word, gap_in);
+        self.left -= steps;
+        i
     }
 
-    /// Plain steps with slaves (or in dual-edge mode) at `period`, every gap within an entry: at
-    /// most `room` of them, until a ramp millisecond would end (the caller counts them).
+    /// Plain steps with slaves (or in dual-edge mode) at `period`, each gap at most two entries:
+    /// as [`Self::lane`].
     #[inline(never)]
     fn lane_slaves(&mut self, words: &mut [u32], periods: &mut [u16], period: u32, on: u32, room: u32) -> usize {
         let p = self.cur;
         // SAFETY: the running move's slot; plain fields and its slaves (see `step`).
         let (total, n, slaves) = unsafe { ((*p).total, (*p).n_slaves as usize, &mut (*p).slaves) };
-        let (mut frac, mut ms_left, mut word, mut level) = (self.frac, self.ms_left, self.word, self.level);
-        let dual = self.dual;
-        let mut gap = self.gap_in;
-        let mut made = 0usize;
-        let len = words.len().min(periods.len()).min(room as usize);
-        for (w, per) in words[..len].iter_mut().zip(periods[..len].iter_mut()) {
+        let (mut frac, mut ms_left, mut word, mut level, mut gap_in) = (self.frac, self.ms_left, self.word, self.level, self.gap_in);
+        let (dual, max) = (self.dual, self.max_tick);
+        let len = words.len().min(periods.len());
+        let (words, periods) = (&mut words[..len], &mut periods[..len]);
+        let (mut i, mut steps) = (0usize, 0u32);
+        while i < len && steps < room {
             let acc = frac + period;
-            gap = acc >> 4;
+            let gap = acc >> 4;
             if ms_left <= gap as i32 {
+                break;
+            }
+            let first = piece(gap, max);
+            if first < gap && i + 1 >= len {
                 break;
             }
             ms_left -= gap as i32;
@@ -186,14 +208,21 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
                 level ^= next;
                 next = (next & !old) | (next & old) << 16;
             }
-            *w = word;
+            words[i] = word;
+            periods[i] = (first - 1) as u16;
             word = next;
-            *per = (gap - 1) as u16;
-            made += 1;
+            if first < gap {
+                i += 1;
+                words[i] = word;
+                periods[i] = (gap - first - 1) as u16;
+                word = 0;
+            }
+            gap_in = gap;
+            i += 1;
+            steps += 1;
         }
-        if made > 0 {
-            (self.frac, self.ms_left, self.word, self.level, self.gap_in) = (frac, ms_left, word, level, gap);
-        }
-        made
+        (self.frac, self.ms_left, self.word, self.level, self.gap_in) = (frac, ms_left, word, level, gap_in);
+        self.left -= steps;
+        i
     }
 }
