@@ -20,18 +20,55 @@ pub const HELP: &[u8] = b"[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $SLP $C $X
 pub const UNLOCK_HINT: &[u8] = b"[MSG:'$H'|'$X' to unlock]\r\n";
 /// `$X` in alarm state.
 pub const UNLOCKED: &[u8] = b"[MSG:Caution: Unlocked]\r\n";
-/// Soft reset during motion (Grbl's ALARM:3, "Reset while in motion").
-pub const ALARM_RESET: &[u8] = b"ALARM:3\r\n";
 /// Boot after an independent-watchdog reset (the controller starts in the alarm state).
 pub const WATCHDOG_RESET: &[u8] = b"[MSG:Reset by watchdog]\r\n";
-/// A limit switch hit with hard limits on (Grbl's ALARM:1), then the critical-event message.
-pub const ALARM_HARD_LIMIT: &[u8] = b"ALARM:1\r\n[MSG:Reset to continue]\r\n";
-/// A G-code target outside the travel box (Grbl's ALARM:2, "Soft limit"), then Grbl's
-/// critical-event message: nothing is read until Ctrl-X.
-pub const ALARM_SOFT_LIMIT: &[u8] = b"ALARM:2\r\n[MSG:Reset to continue]\r\n";
-/// Step loss with `$98=1` (grblHAL's ALARM:17, "motor fault"), then the critical-event
-/// message: nothing is read until Ctrl-X.
-pub const ALARM_STEP_LOSS: &[u8] = b"ALARM:17\r\n[MSG:Reset to continue]\r\n";
+/// Alarm codes (`ALARM:N`), Grbl's numbers. Hard limit (then the critical-event message).
+pub const ALARM_HARD_LIMIT: u8 = 1;
+/// A G-code target outside the travel box ("Soft limit"), then Grbl's critical-event message:
+/// nothing is read until Ctrl-X.
+pub const ALARM_SOFT_LIMIT: u8 = 2;
+/// Soft reset during motion ("Reset while in motion").
+pub const ALARM_RESET: u8 = 3;
+/// Probe fail: already in the state the cycle looks for.
+pub const ALARM_PROBE_INITIAL: u8 = 4;
+/// Probe fail: G38.2/G38.4 ended without contact.
+pub const ALARM_PROBE_CONTACT: u8 = 5;
+/// Reset during the homing cycle.
+pub const ALARM_HOMING_RESET: u8 = 6;
+/// The safety door opened during the homing cycle.
+pub const ALARM_HOMING_DOOR: u8 = 7;
+/// Homing: the pull-off did not clear the switch.
+pub const ALARM_PULLOFF: u8 = 8;
+/// Homing: the approach found no switch.
+pub const ALARM_APPROACH: u8 = 9;
+/// Step loss with `$98=1` (grblHAL's "motor fault"), then the critical-event message: nothing
+/// is read until Ctrl-X.
+pub const ALARM_STEP_LOSS: u8 = 17;
+/// Grbl's critical-event message, after the alarms that need a reset (1, 2, 17).
+const RESET_TO_CONTINUE: &[u8] = b"[MSG:Reset to continue]\r\n";
+
+/// Alarm `code`'s critical-event message, if it has one.
+const fn alarm_tail(code: u8) -> &'static [u8] {
+    match code {
+        ALARM_HARD_LIMIT | ALARM_SOFT_LIMIT | ALARM_STEP_LOSS => RESET_TO_CONTINUE,
+        _ => b"",
+    }
+}
+
+/// Bytes [`alarm`] writes for `code`.
+pub const fn alarm_len(code: u8) -> usize {
+    b"ALARM:\r\n".len() + if code >= 10 { 2 } else { 1 } + alarm_tail(code).len()
+}
+
+/// `ALARM:N`, then `[MSG:Reset to continue]` for the critical events (one copy of the text
+/// for every alarm).
+#[inline(never)]
+pub fn alarm(out: &mut impl Out, code: u8) {
+    out.put(b"ALARM:");
+    put_u32(out, code as u32);
+    out.put(b"\r\n");
+    out.put(alarm_tail(code));
+}
 /// M2 / M30.
 pub const PROGRAM_END: &[u8] = b"[MSG:Pgm End]\r\n";
 /// `$RST=`.
@@ -47,10 +84,6 @@ pub const SLEEPING: &[u8] = b"[MSG:Sleeping]\r\n";
 pub const PIN_PROBE: u8 = 0x80;
 /// `Pn:` bit of the safety door input (`D`, after the limits as in Grbl).
 pub const PIN_DOOR: u8 = 0x08;
-/// Probe fail: already in the state the cycle looks for (Grbl's ALARM:4).
-pub const ALARM_PROBE_INITIAL: &[u8] = b"ALARM:4\r\n";
-/// Probe fail: G38.2/G38.4 ended without contact (Grbl's ALARM:5).
-pub const ALARM_PROBE_CONTACT: &[u8] = b"ALARM:5\r\n";
 
 /// `|FS:1000000,1000000` + `|Pn:PXYZD` + `|WCO:` + 13 per axis + `|Ov:100,100,100|A:SFM` +
 /// `|Enc:` + two numbers of at most 17 and 16 characters (`put_fixed`'s 10^15 cap) + `>\r\n`.
@@ -385,6 +418,16 @@ mod tests {
             o.put(b"ok\r\n");
         });
         assert!(all.len() <= crate::protocol::REPLY_ROOM, "{}", all.len());
+    }
+
+    #[test]
+    fn alarms_are_grbls_lines() {
+        assert_eq!(text(|o| alarm(o, ALARM_RESET)), "ALARM:3\r\n");
+        assert_eq!(text(|o| alarm(o, ALARM_SOFT_LIMIT)), "ALARM:2\r\n[MSG:Reset to continue]\r\n");
+        assert_eq!(text(|o| alarm(o, ALARM_STEP_LOSS)), "ALARM:17\r\n[MSG:Reset to continue]\r\n");
+        for code in 1..=20 {
+            assert_eq!(text(|o| alarm(o, code)).len(), alarm_len(code), "ALARM:{code}");
+        }
     }
 
     #[test]
