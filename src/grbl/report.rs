@@ -228,17 +228,18 @@ pub fn setting(out: &mut impl Out, id: u16, value: f64, decimals: u32) {
 /// `$G`: `[GC:G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0]`.
 #[inline(never)]
 pub fn modes(out: &mut impl Out, m: &Modal) {
-    out.put(match m.motion {
-        Motion::Rapid => b"[GC:G0" as &[u8],
-        Motion::Linear => b"[GC:G1",
-        Motion::CwArc => b"[GC:G2",
-        Motion::CcwArc => b"[GC:G3",
-        Motion::Cancel => b"[GC:G80",
-        Motion::Probe(2) => b"[GC:G38.2",
-        Motion::Probe(3) => b"[GC:G38.3",
-        Motion::Probe(4) => b"[GC:G38.4",
-        Motion::Probe(_) => b"[GC:G38.5",
-    });
+    out.put(b"[GC:G");
+    match m.motion {
+        Motion::Rapid => out.put(b"0"),
+        Motion::Linear => out.put(b"1"),
+        Motion::CwArc => out.put(b"2"),
+        Motion::CcwArc => out.put(b"3"),
+        Motion::Cancel => out.put(b"80"),
+        Motion::Probe(k) => {
+            out.put(b"38.");
+            put_u32(out, if (2..=4).contains(&k) { k as u32 } else { 5 });
+        }
+    }
     out.put(b" G");
     put_u32(out, 54 + m.coord as u32);
     out.put(b" G");
@@ -283,12 +284,14 @@ pub fn build_info(out: &mut impl Out, info: &[u8], queue_moves: usize, r: &Rampe
     put_u32(out, RX_BUFFER_LEN as u32);
     out.put(b"]\r\n[MSG:max step rate ");
     put_u32(out, r.max_rate_hz);
-    out.put(match (r.dual, r.dma) {
-        (false, false) => b" Hz]\r\n[MSG:ramp " as &[u8],
-        (true, false) => b" Hz dual-edge]\r\n[MSG:ramp ",
-        (false, true) => b" Hz DMA]\r\n[MSG:ramp ",
-        (true, true) => b" Hz dual-edge DMA]\r\n[MSG:ramp ",
-    });
+    out.put(b" Hz");
+    if r.dual {
+        out.put(b" dual-edge");
+    }
+    if r.dma {
+        out.put(b" DMA");
+    }
+    out.put(b"]\r\n[MSG:ramp ");
     put_u32(out, r.cfg.v0);
     out.put(b"-");
     put_u32(out, r.cfg.vmax);
@@ -418,6 +421,29 @@ mod tests {
             o.put(b"ok\r\n");
         });
         assert!(all.len() <= crate::protocol::REPLY_ROOM, "{}", all.len());
+    }
+
+    #[test]
+    fn modes_name_every_motion() {
+        let cases = [
+            (Motion::Rapid, "G0"), (Motion::Linear, "G1"), (Motion::CwArc, "G2"), (Motion::CcwArc, "G3"),
+            (Motion::Cancel, "G80"), (Motion::Probe(2), "G38.2"), (Motion::Probe(3), "G38.3"),
+            (Motion::Probe(4), "G38.4"), (Motion::Probe(5), "G38.5"),
+        ];
+        for (motion, g) in cases {
+            let line = text(|o| modes(o, &Modal { motion, ..Modal::RESET }));
+            let rest = line.strip_prefix("[GC:").and_then(|l| l.strip_prefix(g));
+            assert_eq!(rest, Some(" G54 G17 G21 G90 G94 M5 M9 T0 F0 S0]\r\n"), "{line}");
+        }
+        let r = Ramped {
+            cfg: RampConfig { v0: 1, vmax: 2, accel: 3, shape: Shape::SCurve },
+            max_rate_hz: 4,
+            table_limited: true,
+            dual: true,
+            dma: true,
+        };
+        let all = text(|o| build_info(o, b"i", 5, &r));
+        assert!(all.ends_with("[MSG:max step rate 4 Hz dual-edge DMA]\r\n[MSG:ramp 1-2 Hz 3 Hz/s S-curve (table-limited)]\r\n"), "{all}");
     }
 
     #[test]
