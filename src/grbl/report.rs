@@ -326,21 +326,11 @@ pub const PARAM_LINES: usize = 11;
 /// Line `i` of `$#` (machine millimetres; `[PRB:…:1]` after a probe made contact).
 pub fn param<const N: usize>(out: &mut impl Out, i: usize, off: &Offsets<N>, axes_used: usize) {
     let n = axes_used.min(N);
-    let v: [f64; N] = match i {
-        0..=5 => {
-            out.put(b"[G");
-            put_u32(out, 54 + i as u32);
-            out.put(b":");
-            off.wcs(i as u8)
-        }
-        G28 | G30 => {
-            out.put(if i == G28 { b"[G28:" } else { b"[G30:" });
-            off.stored.get(i)
-        }
-        8 => {
-            out.put(b"[G92:");
-            off.g92
-        }
+    let (g, v): (u32, [f64; N]) = match i {
+        0..=5 => (54 + i as u32, off.wcs(i as u8)),
+        G28 => (28, off.stored.get(i)),
+        G30 => (30, off.stored.get(i)),
+        8 => (92, off.g92),
         9 => {
             out.put(b"[TLO:");
             put_fixed(out, off.tlo, 3);
@@ -354,6 +344,9 @@ pub fn param<const N: usize>(out: &mut impl Out, i: usize, off: &Offsets<N>, axe
             return;
         }
     };
+    out.put(b"[G");
+    put_u32(out, g);
+    out.put(b":");
     axes(out, v.get(..n).unwrap_or_default());
     out.put(b"]\r\n");
 }
@@ -391,6 +384,9 @@ mod tests {
         let off = Offsets::<3>::default();
         assert_eq!(text(|o| param::<3>(o, 0, &off, 3)), "[G54:0.000,0.000,0.000]\r\n");
         assert_eq!(text(|o| param::<3>(o, 7, &off, 3)), "[G30:0.000,0.000,0.000]\r\n");
+        assert_eq!(text(|o| param::<3>(o, 5, &off, 3)), "[G59:0.000,0.000,0.000]\r\n");
+        assert_eq!(text(|o| param::<3>(o, 6, &off, 3)), "[G28:0.000,0.000,0.000]\r\n");
+        assert_eq!(text(|o| param::<3>(o, 8, &off, 3)), "[G92:0.000,0.000,0.000]\r\n");
         assert_eq!(text(|o| param::<3>(o, 9, &off, 3)), "[TLO:0.000]\r\n");
         assert_eq!(text(|o| param::<3>(o, 10, &off, 2)), "[PRB:0.000,0.000:0]\r\n");
         let r = Ramped {
