@@ -154,7 +154,7 @@ impl<const N: usize> Controller<'_, N> {
         if arrived {
             return self.homing_fail(if approach { report::ALARM_APPROACH } else { report::ALARM_PULLOFF }, out);
         }
-        let s = self.settings;
+        let s = &self.settings;
         if !h.moved {
             let mut travel = 0.0;
             for i in 0..3 {
@@ -215,7 +215,7 @@ impl<const N: usize> Controller<'_, N> {
             return;
         }
         // The group is home: Grbl's machine position (see the module).
-        let s = self.settings;
+        let s = &self.settings;
         let mut p = self.shared.positions();
         for i in 0..3 {
             if h.group & 1 << i != 0 {
