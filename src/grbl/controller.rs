@@ -502,10 +502,10 @@ impl<'a, const N: usize> Controller<'a, N> {
         if self.homing.take().is_some() {
             // Grbl's ALARM:6: reset during the homing cycle.
             self.alarm = true;
-            out.put(b"ALARM:6\r\n");
+            report::alarm(out, report::ALARM_HOMING_RESET);
         } else if moving {
             self.alarm = true;
-            out.put(report::ALARM_RESET);
+            report::alarm(out, report::ALARM_RESET);
         }
         // Grbl wakes from `$SLP` into the alarm state.
         self.alarm |= core::mem::take(&mut self.sleep);

@@ -20,18 +20,55 @@ pub const HELP: &[u8] = b"[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $SLP $C $X
 pub const UNLOCK_HINT: &[u8] = b"[MSG:'$H'|'$X' to unlock]\r\n";
 /// `$X` in alarm state.
 pub const UNLOCKED: &[u8] = b"[MSG:Caution: Unlocked]\r\n";
-/// Soft reset during motion (Grbl's ALARM:3, "Reset while in motion").
-pub const ALARM_RESET: &[u8] = b"ALARM:3\r\n";
 /// Boot after an independent-watchdog reset (the controller starts in the alarm state).
 pub const WATCHDOG_RESET: &[u8] = b"[MSG:Reset by watchdog]\r\n";
-/// A limit switch hit with hard limits on (Grbl's ALARM:1), then the critical-event message.
-pub const ALARM_HARD_LIMIT: &[u8] = b"ALARM:1\r\n[MSG:Reset to continue]\r\n";
-/// A G-code target outside the travel box (Grbl's ALARM:2, "Soft limit"), then Grbl's
-/// critical-event message: nothing is read until Ctrl-X.
-pub const ALARM_SOFT_LIMIT: &[u8] = b"ALARM:2\r\n[MSG:Reset to continue]\r\n";
-/// Step loss with `$98=1` (grblHAL's ALARM:17, "motor fault"), then the critical-event
-/// message: nothing is read until Ctrl-X.
-pub const ALARM_STEP_LOSS: &[u8] = b"ALARM:17\r\n[MSG:Reset to continue]\r\n";
+/// Alarm codes (`ALARM:N`), Grbl's numbers. Hard limit (then the critical-event message).
+pub const ALARM_HARD_LIMIT: u8 = 1;
+/// A G-code target outside the travel box ("Soft limit"), then Grbl's critical-event message:
+/// nothing is read until Ctrl-X.
+pub const ALARM_SOFT_LIMIT: u8 = 2;
+/// Soft reset during motion ("Reset while in motion").
+pub const ALARM_RESET: u8 = 3;
+/// Probe fail: already in the state the cycle looks for.
+pub const ALARM_PROBE_INITIAL: u8 = 4;
+/// Probe fail: G38.2/G38.4 ended without contact.
+pub const ALARM_PROBE_CONTACT: u8 = 5;
+/// Reset during the homing cycle.
+pub const ALARM_HOMING_RESET: u8 = 6;
+/// The safety door opened during the homing cycle.
+pub const ALARM_HOMING_DOOR: u8 = 7;
+/// Homing: the pull-off did not clear the switch.
+pub const ALARM_PULLOFF: u8 = 8;
+/// Homing: the approach found no switch.
+pub const ALARM_APPROACH: u8 = 9;
+/// Step loss with `$98=1` (grblHAL's "motor fault"), then the critical-event message: nothing
+/// is read until Ctrl-X.
+pub const ALARM_STEP_LOSS: u8 = 17;
+/// Grbl's critical-event message, after the alarms that need a reset (1, 2, 17).
+const RESET_TO_CONTINUE: &[u8] = b"[MSG:Reset to continue]\r\n";
+
+/// Alarm `code`'s critical-event message, if it has one.
+const fn alarm_tail(code: u8) -> &'static [u8] {
+    match code {
+        ALARM_HARD_LIMIT | ALARM_SOFT_LIMIT | ALARM_STEP_LOSS => RESET_TO_CONTINUE,
+        _ => b"",
+    }
+}
+
+/// Bytes [`alarm`] writes for `code`.
+pub const fn alarm_len(code: u8) -> usize {
+    b"ALARM:\r\n".len() + if code >= 10 { 2 } else { 1 } + alarm_tail(code).len()
+}
+
+/// `ALARM:N`, then `[MSG:Reset to continue]` for the critical events (one copy of the text
+/// for every alarm).
+#[inline(never)]
+pub fn alarm(out: &mut impl Out, code: u8) {
+    out.put(b"ALARM:");
+    put_u32(out, code as u32);
+    out.put(b"\r\n");
+    out.put(alarm_tail(code));
+}
 /// M2 / M30.
 pub const PROGRAM_END: &[u8] = b"[MSG:Pgm End]\r\n";
 /// `$RST=`.
@@ -47,10 +84,6 @@ pub const SLEEPING: &[u8] = b"[MSG:Sleeping]\r\n";
 pub const PIN_PROBE: u8 = 0x80;
 /// `Pn:` bit of the safety door input (`D`, after the limits as in Grbl).
 pub const PIN_DOOR: u8 = 0x08;
-/// Probe fail: already in the state the cycle looks for (Grbl's ALARM:4).
-pub const ALARM_PROBE_INITIAL: &[u8] = b"ALARM:4\r\n";
-/// Probe fail: G38.2/G38.4 ended without contact (Grbl's ALARM:5).
-pub const ALARM_PROBE_CONTACT: &[u8] = b"ALARM:5\r\n";
 
 /// `|FS:1000000,1000000` + `|Pn:PXYZD` + `|WCO:` + 13 per axis + `|Ov:100,100,100|A:SFM` +
 /// `|Enc:` + two numbers of at most 17 and 16 characters (`put_fixed`'s 10^15 cap) + `>\r\n`.
@@ -195,17 +228,18 @@ pub fn setting(out: &mut impl Out, id: u16, value: f64, decimals: u32) {
 /// `$G`: `[GC:G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0]`.
 #[inline(never)]
 pub fn modes(out: &mut impl Out, m: &Modal) {
-    out.put(match m.motion {
-        Motion::Rapid => b"[GC:G0" as &[u8],
-        Motion::Linear => b"[GC:G1",
-        Motion::CwArc => b"[GC:G2",
-        Motion::CcwArc => b"[GC:G3",
-        Motion::Cancel => b"[GC:G80",
-        Motion::Probe(2) => b"[GC:G38.2",
-        Motion::Probe(3) => b"[GC:G38.3",
-        Motion::Probe(4) => b"[GC:G38.4",
-        Motion::Probe(_) => b"[GC:G38.5",
-    });
+    out.put(b"[GC:G");
+    match m.motion {
+        Motion::Rapid => out.put(b"0"),
+        Motion::Linear => out.put(b"1"),
+        Motion::CwArc => out.put(b"2"),
+        Motion::CcwArc => out.put(b"3"),
+        Motion::Cancel => out.put(b"80"),
+        Motion::Probe(k) => {
+            out.put(b"38.");
+            put_u32(out, if (2..=4).contains(&k) { k as u32 } else { 5 });
+        }
+    }
     out.put(b" G");
     put_u32(out, 54 + m.coord as u32);
     out.put(b" G");
@@ -250,12 +284,14 @@ pub fn build_info(out: &mut impl Out, info: &[u8], queue_moves: usize, r: &Rampe
     put_u32(out, RX_BUFFER_LEN as u32);
     out.put(b"]\r\n[MSG:max step rate ");
     put_u32(out, r.max_rate_hz);
-    out.put(match (r.dual, r.dma) {
-        (false, false) => b" Hz]\r\n[MSG:ramp " as &[u8],
-        (true, false) => b" Hz dual-edge]\r\n[MSG:ramp ",
-        (false, true) => b" Hz DMA]\r\n[MSG:ramp ",
-        (true, true) => b" Hz dual-edge DMA]\r\n[MSG:ramp ",
-    });
+    out.put(b" Hz");
+    if r.dual {
+        out.put(b" dual-edge");
+    }
+    if r.dma {
+        out.put(b" DMA");
+    }
+    out.put(b"]\r\n[MSG:ramp ");
     put_u32(out, r.cfg.v0);
     out.put(b"-");
     put_u32(out, r.cfg.vmax);
@@ -291,21 +327,11 @@ pub const PARAM_LINES: usize = 11;
 /// Line `i` of `$#` (machine millimetres; `[PRB:…:1]` after a probe made contact).
 pub fn param<const N: usize>(out: &mut impl Out, i: usize, off: &Offsets<N>, axes_used: usize) {
     let n = axes_used.min(N);
-    let v: [f64; N] = match i {
-        0..=5 => {
-            out.put(b"[G");
-            put_u32(out, 54 + i as u32);
-            out.put(b":");
-            off.wcs(i as u8)
-        }
-        G28 | G30 => {
-            out.put(if i == G28 { b"[G28:" } else { b"[G30:" });
-            off.stored.get(i)
-        }
-        8 => {
-            out.put(b"[G92:");
-            off.g92
-        }
+    let (g, v): (u32, [f64; N]) = match i {
+        0..=5 => (54 + i as u32, off.wcs(i as u8)),
+        G28 => (28, off.stored.get(i)),
+        G30 => (30, off.stored.get(i)),
+        8 => (92, off.g92),
         9 => {
             out.put(b"[TLO:");
             put_fixed(out, off.tlo, 3);
@@ -319,6 +345,9 @@ pub fn param<const N: usize>(out: &mut impl Out, i: usize, off: &Offsets<N>, axe
             return;
         }
     };
+    out.put(b"[G");
+    put_u32(out, g);
+    out.put(b":");
     axes(out, v.get(..n).unwrap_or_default());
     out.put(b"]\r\n");
 }
@@ -356,6 +385,9 @@ mod tests {
         let off = Offsets::<3>::default();
         assert_eq!(text(|o| param::<3>(o, 0, &off, 3)), "[G54:0.000,0.000,0.000]\r\n");
         assert_eq!(text(|o| param::<3>(o, 7, &off, 3)), "[G30:0.000,0.000,0.000]\r\n");
+        assert_eq!(text(|o| param::<3>(o, 5, &off, 3)), "[G59:0.000,0.000,0.000]\r\n");
+        assert_eq!(text(|o| param::<3>(o, 6, &off, 3)), "[G28:0.000,0.000,0.000]\r\n");
+        assert_eq!(text(|o| param::<3>(o, 8, &off, 3)), "[G92:0.000,0.000,0.000]\r\n");
         assert_eq!(text(|o| param::<3>(o, 9, &off, 3)), "[TLO:0.000]\r\n");
         assert_eq!(text(|o| param::<3>(o, 10, &off, 2)), "[PRB:0.000,0.000:0]\r\n");
         let r = Ramped {
@@ -387,6 +419,39 @@ mod tests {
             o.put(b"ok\r\n");
         });
         assert!(all.len() <= crate::protocol::REPLY_ROOM, "{}", all.len());
+    }
+
+    #[test]
+    fn modes_name_every_motion() {
+        let cases = [
+            (Motion::Rapid, "G0"), (Motion::Linear, "G1"), (Motion::CwArc, "G2"), (Motion::CcwArc, "G3"),
+            (Motion::Cancel, "G80"), (Motion::Probe(2), "G38.2"), (Motion::Probe(3), "G38.3"),
+            (Motion::Probe(4), "G38.4"), (Motion::Probe(5), "G38.5"),
+        ];
+        for (motion, g) in cases {
+            let line = text(|o| modes(o, &Modal { motion, ..Modal::RESET }));
+            let rest = line.strip_prefix("[GC:").and_then(|l| l.strip_prefix(g));
+            assert_eq!(rest, Some(" G54 G17 G21 G90 G94 M5 M9 T0 F0 S0]\r\n"), "{line}");
+        }
+        let r = Ramped {
+            cfg: RampConfig { v0: 1, vmax: 2, accel: 3, shape: Shape::SCurve },
+            max_rate_hz: 4,
+            table_limited: true,
+            dual: true,
+            dma: true,
+        };
+        let all = text(|o| build_info(o, b"i", 5, &r));
+        assert!(all.ends_with("[MSG:max step rate 4 Hz dual-edge DMA]\r\n[MSG:ramp 1-2 Hz 3 Hz/s S-curve (table-limited)]\r\n"), "{all}");
+    }
+
+    #[test]
+    fn alarms_are_grbls_lines() {
+        assert_eq!(text(|o| alarm(o, ALARM_RESET)), "ALARM:3\r\n");
+        assert_eq!(text(|o| alarm(o, ALARM_SOFT_LIMIT)), "ALARM:2\r\n[MSG:Reset to continue]\r\n");
+        assert_eq!(text(|o| alarm(o, ALARM_STEP_LOSS)), "ALARM:17\r\n[MSG:Reset to continue]\r\n");
+        for code in 1..=20 {
+            assert_eq!(text(|o| alarm(o, code)).len(), alarm_len(code), "ALARM:{code}");
+        }
     }
 
     #[test]

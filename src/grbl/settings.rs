@@ -647,8 +647,8 @@ impl Settings {
     }
 }
 
-/// Stores 4 bytes at `at` (one call instead of a slice index and copy at each field).
-#[inline(never)]
+/// Stores 4 bytes at `at`, if they fit. (Inlined: the callers' offsets are mostly constants,
+/// so the check and the copy fold to plain stores.)
 pub(crate) fn put4(b: &mut [u8], at: usize, v: [u8; 4]) {
     if let Some(w) = b.get_mut(at..at + 4) {
         w.copy_from_slice(&v);

@@ -68,10 +68,11 @@ fn exact_div_odd(n: u32, d: u32) -> u32 {
 
 /// Picks the master axis: the one with the most steps, ties to the lowest index.
 pub fn master_axis(counts: &[u32]) -> usize {
-    let mut best = 0;
+    // (The best count carried along, not indexed: no bounds-check panic path.)
+    let (mut best, mut most) = (0, 0);
     for (i, &c) in counts.iter().enumerate() {
-        if c > counts[best] {
-            best = i;
+        if c > most {
+            (best, most) = (i, c);
         }
     }
     best

@@ -126,7 +126,9 @@ impl<const N: usize> Prepared<N> {
         dir: &mut DirState,
         epoch: u32,
     ) -> Self {
-        let total = steps[master].unsigned_abs();
+        // (`get`, not indexing, here and below: `master` and the slave count stay below `N`,
+        // and the feeder's code then has no bounds-check panic path.)
+        let total = steps.get(master).map_or(0, |s| s.unsigned_abs());
         let mut slaves = [Slave { dda: Dda::new(0, 0), on: 0, axis: 0 }; N];
         let mut n = 0;
         let mut dir_word = 0;
@@ -141,7 +143,9 @@ impl<const N: usize> Prepared<N> {
                 dir.known |= 1 << i;
             }
             if i != master {
-                slaves[n] = Slave { dda: Dda::new(s.unsigned_abs(), total), on: pins.step_on[i], axis: i as u8 };
+                if let Some(slave) = slaves.get_mut(n) {
+                    *slave = Slave { dda: Dda::new(s.unsigned_abs(), total), on: pins.step_on[i], axis: i as u8 };
+                }
                 n += 1;
             }
         }
@@ -151,7 +155,7 @@ impl<const N: usize> Prepared<N> {
         };
         Prepared {
             total,
-            master_on: pins.step_on[master],
+            master_on: pins.step_on.get(master).copied().unwrap_or(0),
             n_slaves: n as u8,
             master: master as u8,
             slaves,

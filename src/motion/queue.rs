@@ -130,7 +130,7 @@ impl<const N: usize> Move<N> {
             counts[i] = s[i].unsigned_abs();
         }
         let master = master_axis(&counts);
-        if counts[master] == 0 {
+        if counts.get(master).is_none_or(|&c| c == 0) {
             return Err(MoveError::ZeroLength);
         }
         Ok(Move { steps: s, master: master as u8, ovr: Ovr::None, cruise: period_of_millihz(cruise_millihz), path: None })

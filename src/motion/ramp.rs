@@ -253,28 +253,31 @@ impl<const L: usize> RampTable<L> {
     /// The fractional index (Q20) whose interpolated rate is `hz` (clamped to the table; 0
     /// below its start). Binary search: planner side only.
     pub fn index_of_hz(&self, hz: f64) -> u32 {
-        if self.len == 0 || !(hz > 0.0) {
+        // (The entries in use as one slice: the searches below index it without panic paths.)
+        let periods = self.periods.get(..self.len as usize).unwrap_or_default();
+        let (Some(first), Some(last)) = (periods.first(), periods.last()) else { return 0 };
+        if !(hz > 0.0) {
             return 0;
         }
         let p = TIMER_HZ as f64 * 16.0 / hz;
-        let n = self.len as usize;
-        if p >= self.periods[0].to_bits() as f64 {
+        if p >= first.to_bits() as f64 {
             return 0;
         }
-        if p <= self.periods[n - 1].to_bits() as f64 {
+        if p <= last.to_bits() as f64 {
             return self.top_q();
         }
         // Last entry i with periods[i] > p (periods never rise along the table).
-        let (mut lo, mut hi) = (0usize, n - 1);
+        let bits = |i: usize| periods.get(i).map_or(0.0, |q| q.to_bits() as f64);
+        let (mut lo, mut hi) = (0usize, periods.len() - 1);
         while hi - lo > 1 {
             let mid = (lo + hi) / 2;
-            if self.periods[mid].to_bits() as f64 > p {
+            if bits(mid) > p {
                 lo = mid;
             } else {
                 hi = mid;
             }
         }
-        let (a, b) = (self.periods[lo].to_bits() as f64, self.periods[hi].to_bits() as f64);
+        let (a, b) = (bits(lo), bits(hi));
         let f = if a > b { (a - p) / (a - b) } else { 0.0 };
         ((lo as u32) << IDX_FRAC) + u32_of(f.max(0.0).min(1.0) * IDX_ONE as f64).min(IDX_MASK)
     }
@@ -282,23 +285,26 @@ impl<const L: usize> RampTable<L> {
     /// The highest fractional index (Q20) whose [`Self::sum_at`] is at most `sum` (clamped to
     /// the table). Integer binary search: planner side only.
     pub fn index_of_sum(&self, sum: u32) -> u32 {
-        let n = self.len as usize;
+        // (One slice of the entries in use, read with `get`: no panic paths.)
+        let sums = self.sums.get(..self.len as usize).unwrap_or_default();
+        let n = sums.len();
         if n <= 1 || sum == 0 {
             return 0;
         }
-        if sum >= self.sums[n - 1] {
+        let at = |i: usize| sums.get(i).copied().unwrap_or(0);
+        if sum >= at(n - 1) {
             return self.top_q();
         }
         let (mut lo, mut hi) = (0usize, n - 1);
         while hi - lo > 1 {
             let mid = (lo + hi) / 2;
-            if self.sums[mid] <= sum {
+            if at(mid) <= sum {
                 lo = mid;
             } else {
                 hi = mid;
             }
         }
-        let (a, b) = (self.sums[lo], self.sums[hi]);
+        let (a, b) = (at(lo), at(hi));
         // 12 fraction bits are plenty (an entry's sum is < 2^20, so this fits in 32 bits);
         // rounded down: the index never promises more distance than there is.
         let f = if b > a { ((sum - a) << 12) / (b - a) } else { 0 };
@@ -561,6 +567,83 @@ mod tests {
             sum = sum.saturating_add((a + b) / 2);
         }
         (periods, sums, n)
+    }
+
+    /// The former searches (indexing the arrays), as the reference.
+    fn index_of_hz_ref<const L: usize>(t: &RampTable<L>, hz: f64) -> u32 {
+        if t.len == 0 || !(hz > 0.0) {
+            return 0;
+        }
+        let p = TIMER_HZ as f64 * 16.0 / hz;
+        let n = t.len as usize;
+        if p >= t.periods[0].to_bits() as f64 {
+            return 0;
+        }
+        if p <= t.periods[n - 1].to_bits() as f64 {
+            return t.top_q();
+        }
+        let (mut lo, mut hi) = (0usize, n - 1);
+        while hi - lo > 1 {
+            let mid = (lo + hi) / 2;
+            if t.periods[mid].to_bits() as f64 > p {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        let (a, b) = (t.periods[lo].to_bits() as f64, t.periods[hi].to_bits() as f64);
+        let f = if a > b { (a - p) / (a - b) } else { 0.0 };
+        ((lo as u32) << IDX_FRAC) + u32_of(f.max(0.0).min(1.0) * IDX_ONE as f64).min(IDX_MASK)
+    }
+
+    fn index_of_sum_ref<const L: usize>(t: &RampTable<L>, sum: u32) -> u32 {
+        let n = t.len as usize;
+        if n <= 1 || sum == 0 {
+            return 0;
+        }
+        if sum >= t.sums[n - 1] {
+            return t.top_q();
+        }
+        let (mut lo, mut hi) = (0usize, n - 1);
+        while hi - lo > 1 {
+            let mid = (lo + hi) / 2;
+            if t.sums[mid] <= sum {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        let (a, b) = (t.sums[lo], t.sums[hi]);
+        let f = if b > a { ((sum - a) << 12) / (b - a) } else { 0 };
+        ((lo as u32) << IDX_FRAC) + (f.min(4095) << (IDX_FRAC - 12))
+    }
+
+    #[test]
+    fn searches_match_the_former_ones() {
+        let mut r = 0x2545_F491_4F6C_DD1Du64;
+        let mut next = |n: u32| {
+            r ^= r << 13;
+            r ^= r >> 7;
+            r ^= r << 17;
+            (r % n as u64) as u32
+        };
+        let mut table = RampTable::<256>::new();
+        assert_eq!((table.index_of_hz(1000.0), table.index_of_sum(5)), (0, 0));
+        for _ in 0..300 {
+            let v0 = MIN_RATE_HZ + next(3_000);
+            let vmax = v0 + next(100_000);
+            let shape = if next(2) == 0 { Shape::Trapezoid } else { Shape::SCurve };
+            if table.build(RampConfig { v0, vmax, accel: 100_000 + next(50_000_000), shape }).is_err() {
+                continue;
+            }
+            let top = *table.sums.get(table.len as usize - 1).unwrap_or(&0);
+            for _ in 0..200 {
+                let hz = next(vmax + 2_000) as f64 + next(1000) as f64 / 1000.0;
+                assert_eq!(table.index_of_hz(hz), index_of_hz_ref(&table, hz), "{hz}");
+                let sum = next(top.saturating_add(100).max(1));
+                assert_eq!(table.index_of_sum(sum), index_of_sum_ref(&table, sum), "{sum}");
+            }
+        }
     }
 
     #[test]

@@ -65,7 +65,9 @@ pub struct RingProducer<'a, const N: usize> {
 }
 
 impl<const N: usize> RingProducer<'_, N> {
-    /// Moves published and not yet finished (the running one included).
+    /// Moves published and not yet finished (the running one included). (Out of line: the
+    /// feeder asks in several places; the engine holds the consumer end.)
+    #[inline(never)]
     pub fn len(&self) -> usize {
         self.ring.tail.load(Relaxed).wrapping_sub(self.ring.head.load(Acquire)) as usize
     }

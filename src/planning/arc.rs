@@ -278,7 +278,9 @@ impl<const N: usize> Iterator for Segments<N> {
     }
 }
 
-/// `v[i]` of a plane axis (always below `N`): no bounds-check panic path.
+/// `v[i]` of a plane axis (always below `N`): no bounds-check panic path. (Out of line: six
+/// callers.)
+#[inline(never)]
 fn at<const N: usize>(v: &[f64; N], i: usize) -> f64 {
     v.get(i).copied().unwrap_or(0.0)
 }

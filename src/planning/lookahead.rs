@@ -159,7 +159,6 @@ fn cruise_index<const L: usize>(table: &RampTable<L>, scale: u32, cruise_bits: u
 
 /// Master steps a deceleration may plan on: the engine's trigger is conservative by
 /// [`DECEL_MARGIN`] steps and by the step a millisecond boundary falls in.
-#[inline(never)]
 fn usable(total: u32) -> f64 {
     total.saturating_sub(2 * DECEL_MARGIN + 1) as f64
 }

@@ -87,7 +87,7 @@ impl<const N: usize> Controller<'_, N> {
         let event = core::mem::take(&mut self.door_event) || self.door_pin;
         if event && self.homing.is_some() {
             // Grbl's ALARM:7: the door opened during the homing cycle.
-            return self.homing_fail(b"ALARM:7\r\n", out);
+            return self.homing_fail(crate::report::ALARM_HOMING_DOOR, out);
         }
         if self.alarm || self.check || self.sleep {
             self.door = Door::Off;

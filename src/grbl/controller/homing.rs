@@ -28,6 +28,7 @@ use super::Controller;
 use crate::num::{f64_of, round_i32};
 use crate::protocol::{Error, Out};
 use crate::queue::State;
+use crate::report;
 use crate::spindle::Power;
 
 /// One homing cycle in progress (kept small: the controller lives in a static slot).
@@ -54,8 +55,6 @@ pub(super) struct Homing {
     target: [i32; 3],
 }
 
-const ALARM_PULLOFF: &[u8] = b"ALARM:8\r\n";
-const ALARM_APPROACH: &[u8] = b"ALARM:9\r\n";
 
 impl<const N: usize> Controller<'_, N> {
     /// `$H` (`axis` `None`) or `$HX`/`$HY`/`$HZ`: checks and starts the cycle; the line's `ok`
@@ -153,9 +152,9 @@ impl<const N: usize> Controller<'_, N> {
             return self.homing_pass_done(h);
         }
         if arrived {
-            return self.homing_fail(if approach { ALARM_APPROACH } else { ALARM_PULLOFF }, out);
+            return self.homing_fail(if approach { report::ALARM_APPROACH } else { report::ALARM_PULLOFF }, out);
         }
-        let s = self.settings;
+        let s = &self.settings;
         if !h.moved {
             let mut travel = 0.0;
             for i in 0..3 {
@@ -199,7 +198,7 @@ impl<const N: usize> Controller<'_, N> {
             // Nothing to move (a zero distance): the pass ends where it is.
             Ok(None) => {}
             // A target the planner cannot reach (steps beyond i32): no switch can be found.
-            Err(_) => return self.homing_fail(ALARM_APPROACH, out),
+            Err(_) => return self.homing_fail(report::ALARM_APPROACH, out),
         }
         h.moved = true;
         self.homing = Some(h);
@@ -216,7 +215,7 @@ impl<const N: usize> Controller<'_, N> {
             return;
         }
         // The group is home: Grbl's machine position (see the module).
-        let s = self.settings;
+        let s = &self.settings;
         let mut p = self.shared.positions();
         for i in 0..3 {
             if h.group & 1 << i != 0 {
@@ -239,11 +238,11 @@ impl<const N: usize> Controller<'_, N> {
     }
 
     /// A failed cycle: stop, the alarm, then (after the line's `ok`) a reset into alarm.
-    pub(super) fn homing_fail(&mut self, alarm: &[u8], out: &mut impl Out) {
+    pub(super) fn homing_fail(&mut self, alarm: u8, out: &mut impl Out) {
         self.feeder.abort();
         self.homing = None;
         self.alarm = true;
-        out.put(alarm);
+        report::alarm(out, alarm);
         self.reset_after = true;
     }
 }

@@ -35,7 +35,7 @@ impl<const N: usize> Controller<'_, N> {
             }
             if self.probe_pin != away {
                 // Already in contact (or, away, already clear): ALARM:4, nothing moves.
-                out.put(report::ALARM_PROBE_INITIAL);
+                report::alarm(out, report::ALARM_PROBE_INITIAL);
                 self.alarm = true;
                 self.probe_done();
                 *probe = 0;
@@ -58,7 +58,7 @@ impl<const N: usize> Controller<'_, N> {
         }
         self.offsets.prb_ok = hit;
         if !hit && kind & 1 == 0 {
-            out.put(report::ALARM_PROBE_CONTACT);
+            report::alarm(out, report::ALARM_PROBE_CONTACT);
             self.alarm = true;
         }
         report::param(out, report::PARAM_LINES - 1, &self.offsets, self.axes);

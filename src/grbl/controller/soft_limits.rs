@@ -21,7 +21,7 @@ use crate::report;
 pub(super) enum SoftLimit {
     Off,
     /// Tripped: holding until the engine has stopped, then this alarm is reported.
-    Stopping(&'static [u8]),
+    Stopping(u8),
     /// ALARM:2 reported: waiting for Ctrl-X.
     Locked,
 }
@@ -39,7 +39,7 @@ impl<const N: usize> Controller<'_, N> {
 
     /// Stops everything as a soft-limit trip does, reporting `alarm` (its `ALARM:N` and
     /// `[MSG:Reset to continue]`) once the machine has stopped.
-    pub(super) fn trip(&mut self, alarm: &'static [u8]) {
+    pub(super) fn trip(&mut self, alarm: u8) {
         self.job = None;
         self.lines.clear();
         self.alarm = true;
@@ -56,7 +56,7 @@ impl<const N: usize> Controller<'_, N> {
         self.feeder.abort();
         self.pushed = self.shared.moves_done();
         self.planner.sync(self.shared.positions(), &self.limits);
-        out.put(report::ALARM_HARD_LIMIT);
+        report::alarm(out, report::ALARM_HARD_LIMIT);
         self.soft_limit = SoftLimit::Locked;
     }
 
@@ -71,14 +71,14 @@ impl<const N: usize> Controller<'_, N> {
         if matches!(self.shared.state(), State::Run | State::Holding) {
             return;
         }
-        if out.room() < alarm.len() {
+        if out.room() < report::alarm_len(alarm) {
             return;
         }
         self.feeder.abort();
         self.shared.set_hold(false);
         self.pushed = self.shared.moves_done();
         self.planner.sync(self.shared.positions(), &self.limits);
-        out.put(alarm);
+        report::alarm(out, alarm);
         self.soft_limit = SoftLimit::Locked;
     }
 }

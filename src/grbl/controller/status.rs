@@ -13,21 +13,22 @@ const WCO_REFRESH: (u8, u8) = (10, 30);
 const OVR_REFRESH: (u8, u8) = (10, 20);
 
 impl<const N: usize> Controller<'_, N> {
-    /// The state word of a status report.
-    fn state_name(&self) -> &'static [u8] {
+    /// The state word of a status report, and whether it counts as busy for the refresh
+    /// rates (all but Idle, Alarm, Check and Sleep).
+    fn state_name(&self) -> (&'static [u8], bool) {
         let moving = self.feeder.pending() > 0;
         match self.shared.state() {
-            _ if self.homing.is_some() => b"Home",
-            _ if self.alarm => b"Alarm",
-            _ if self.sleep => b"Sleep",
-            _ if self.check => b"Check",
-            _ if self.door_active() => self.door_state(),
-            _ if self.jog != Jogging::Off && (moving || self.shared.state() != State::Idle) => b"Jog",
-            State::Run => b"Run",
-            State::Holding => b"Hold:1",
-            State::Held => b"Hold:0",
-            State::Idle if moving => b"Run",
-            State::Idle => b"Idle",
+            _ if self.homing.is_some() => (b"Home", true),
+            _ if self.alarm => (b"Alarm", false),
+            _ if self.sleep => (b"Sleep", false),
+            _ if self.check => (b"Check", false),
+            _ if self.door_active() => (self.door_state(), true),
+            _ if self.jog != Jogging::Off && (moving || self.shared.state() != State::Idle) => (b"Jog", true),
+            State::Run => (b"Run", true),
+            State::Holding => (b"Hold:1", true),
+            State::Held => (b"Hold:0", true),
+            State::Idle if moving => (b"Run", true),
+            State::Idle => (b"Idle", false),
         }
     }
 
@@ -35,8 +36,7 @@ impl<const N: usize> Controller<'_, N> {
     /// mm/step; positions per `$10`.
     #[inline(never)]
     pub(super) fn status(&mut self, out: &mut impl Out) {
-        let state = self.state_name();
-        let busy = !matches!(state, b"Idle" | b"Alarm" | b"Check" | b"Sleep");
+        let (state, busy) = self.state_name();
         let pick = |r: (u8, u8)| if busy { r.1 - 1 } else { r.0 - 1 };
         let ov = self.shared.overrides();
         if ov != self.ov_seen {

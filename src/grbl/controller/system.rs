@@ -78,17 +78,17 @@ impl<const N: usize> Controller<'_, N> {
                 self.sleep = true;
                 self.drivers_on = false;
             }
-            b"RST=$" | b"RST=*" | b"RST=#" => {
+            &[b'R', b'S', b'T', b'=', what @ (b'$' | b'*' | b'#')] => {
                 need_idle(idle)?;
                 out.put(report::RESTORED);
-                if cmd != b"RST=$" {
+                if what != b'$' {
                     self.stored.coords = Coords::ZERO;
                 }
-                if cmd == b"RST=*" {
+                if what == b'*' {
                     self.stored.startup = [Text::EMPTY; STARTUP_LINES];
                     self.stored.build_info = Text::EMPTY;
                 }
-                if cmd != b"RST=#" {
+                if what != b'#' {
                     let pins = (self.settings.step_invert, self.settings.dir_invert);
                     self.settings = Settings::DEFAULT;
                     if pins != (self.settings.step_invert, self.settings.dir_invert) {
