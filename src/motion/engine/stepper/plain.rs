@@ -33,6 +33,37 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
     /// what it uses in registers.
     #[inline(never)]
     pub(crate) fn quick_entries(&mut self, words: &mut [u32], periods: &mut [u16]) -> usize {
+        // The rest of a period a whole tick split, first: then the lanes may take over.
+        let first = self.fillers(words, periods);
+        if self.extend != 0 {
+            return first;
+        }
+        first + self.plain(&mut words[first..], &mut periods[first..])
+    }
+
+    /// Fillers of the period being split, up to its end or a ramp millisecond's.
+    fn fillers(&mut self, words: &mut [u32], periods: &mut [u16]) -> usize {
+        let max = self.max_tick;
+        let mut made = 0;
+        for (w, per) in words.iter_mut().zip(periods.iter_mut()) {
+            let rem = self.extend;
+            let chunk = piece(rem, max);
+            if rem == 0 || self.ms_left <= chunk as i32 {
+                break;
+            }
+            *w = self.word;
+            self.word = 0;
+            self.extend = rem - chunk;
+            self.ms_left -= chunk as i32;
+            self.gap_in = if self.extend == 0 { self.whole } else { chunk };
+            *per = (chunk - 1) as u16;
+            made += 1;
+        }
+        made
+    }
+
+    /// Plain entries from a period boundary on (`extend` is 0): the lanes, then the general loop.
+    fn plain(&mut self, words: &mut [u32], periods: &mut [u16]) -> usize {
         let p = self.cur;
         // Steps may be plain: running, no control change, a period published.
         let stepping = self.phase == Phase::Run && self.shared.ctl.load() == self.ctl_seen;
@@ -58,10 +89,12 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
             // Every gap within two entries: the lanes, one axis with full pulses apart (they
             // count their steps off `left` themselves).
             let left = self.left;
-            made = if slaves.is_empty() && !dual {
-                self.lane(words, periods, period, master_on, room)
-            } else {
-                self.lane_slaves(words, periods, period, master_on, room)
+            // (Gaps that never need a second entry take the lanes without the split.)
+            made = match (slaves.is_empty() && !dual, (period + 15) >> 4 <= max) {
+                (true, true) => self.lane::<false>(words, periods, period, master_on, room),
+                (true, false) => self.lane::<true>(words, periods, period, master_on, room),
+                (false, true) => self.lane_slaves::<false>(words, periods, period, master_on, room),
+                (false, false) => self.lane_slaves::<true>(words, periods, period, master_on, room),
             };
             room -= left - self.left;
             if made > 0 {
@@ -125,66 +158,69 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
         made
     }
 
-    /// Plain steps of one axis at `period` with full pulses, each gap at most two entries: at
-    /// most `room` of them, until a ramp millisecond would end; counted off `left`.
+    /// Plain steps of one axis at `period` with full pulses, each gap at most two entries (one
+    /// unless `SPLIT`): at most `room` of them, until a ramp millisecond would end; counted off
+    /// `left`.
     #[inline(never)]
-    fn lane(&mut self, words: &mut [u32], periods: &mut [u16], period: u32, on: u32, room: u32) -> usize {
+    fn lane<const SPLIT: bool>(&mut self, words: &mut [u32], periods: &mut [u16], period: u32, on: u32, room: u32) -> usize {
         let (mut frac, mut ms_left, mut word, mut gap_in) = (self.frac, self.ms_left, self.word, self.gap_in);
         let max = self.max_tick;
-        let len = words.len().min(periods.len());
-        let (words, periods) = (&mut words[..len], &mut periods[..len]);
-        let (mut i, mut steps) = (0usize, 0u32);
-        while i < len && steps < room {
+        let mut it = words.iter_mut().zip(periods.iter_mut());
+        let (mut made, mut steps) = (0usize, 0u32);
+        while steps < room {
+            let Some((w, per)) = it.next() else { break };
             let acc = frac + period;
             let gap = acc >> 4;
             if ms_left <= gap as i32 {
                 break;
             }
-            let first = piece(gap, max);
-            if first < gap && i + 1 >= len {
+            let first = if SPLIT { piece(gap, max) } else { gap };
+            if SPLIT && first < gap && it.len() == 0 {
                 break; // its second piece would not fit: a whole tick splits it
             }
             ms_left -= gap as i32;
             frac = acc & 15;
-            words[i] = word;
-            periods[i] = (first - 1) as u16;
+            *w = word;
+            *per = (first - 1) as u16;
             word = on;
-            if first < gap {
+            made += 1;
+            if SPLIT && first < gap {
                 // Split as `extended` and `filler` would: the step's edge is the filler's word.
-                i += 1;
-                words[i] = word;
-                periods[i] = (gap - first - 1) as u16;
-                word = 0;
+                if let Some((w, per)) = it.next() {
+                    *w = word;
+                    *per = (gap - first - 1) as u16;
+                    word = 0;
+                    made += 1;
+                }
             }
             gap_in = gap;
-            i += 1;
             steps += 1;
         }
         (self.frac, self.ms_left, self.word, self.gap_in) = (frac, ms_left, word, gap_in);
         self.left -= steps;
-        i
+        made
     }
 
     /// Plain steps with slaves (or in dual-edge mode) at `period`, each gap at most two entries:
     /// as [`Self::lane`].
     #[inline(never)]
-    fn lane_slaves(&mut self, words: &mut [u32], periods: &mut [u16], period: u32, on: u32, room: u32) -> usize {
+    fn lane_slaves<const SPLIT: bool>(&mut self, words: &mut [u32], periods: &mut [u16], period: u32, on: u32, room: u32) -> usize {
         let p = self.cur;
         // SAFETY: the running move's slot; plain fields and its slaves (see `step`).
         let (total, n, slaves) = unsafe { ((*p).total, (*p).n_slaves as usize, &mut (*p).slaves) };
         let (mut frac, mut ms_left, mut word, mut level, mut gap_in) = (self.frac, self.ms_left, self.word, self.level, self.gap_in);
         let (dual, max) = (self.dual, self.max_tick);
-        let len = words.len().min(periods.len());
-        let (words, periods) = (&mut words[..len], &mut periods[..len]);
-        let (mut i, mut steps) = (0usize, 0u32);
-        while i < len && steps < room {
+        let mut it = words.iter_mut().zip(periods.iter_mut());
+        let (mut made, mut steps) = (0usize, 0u32);
+        while steps < room {
+            let Some((w, per)) = it.next() else { break };
             let acc = frac + period;
             let gap = acc >> 4;
             if ms_left <= gap as i32 {
                 break;
             }
-            let first = piece(gap, max);
-            if first < gap && i + 1 >= len {
+            let first = if SPLIT { piece(gap, max) } else { gap };
+            if SPLIT && first < gap && it.len() == 0 {
                 break;
             }
             ms_left -= gap as i32;
@@ -208,21 +244,23 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
                 level ^= next;
                 next = (next & !old) | (next & old) << 16;
             }
-            words[i] = word;
-            periods[i] = (first - 1) as u16;
+            *w = word;
+            *per = (first - 1) as u16;
             word = next;
-            if first < gap {
-                i += 1;
-                words[i] = word;
-                periods[i] = (gap - first - 1) as u16;
-                word = 0;
+            made += 1;
+            if SPLIT && first < gap {
+                if let Some((w, per)) = it.next() {
+                    *w = word;
+                    *per = (gap - first - 1) as u16;
+                    word = 0;
+                    made += 1;
+                }
             }
             gap_in = gap;
-            i += 1;
             steps += 1;
         }
         (self.frac, self.ms_left, self.word, self.level, self.gap_in) = (frac, ms_left, word, level, gap_in);
         self.left -= steps;
-        i
+        made
     }
 }
