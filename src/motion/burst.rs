@@ -31,8 +31,9 @@ use crate::queue::Shared;
 use crate::ramp::RAMP_LEN;
 use crate::TICKS_PER_MS;
 
-/// Entries per buffer half, at most: 32 (both buffers 384 bytes).
-pub const HALF_MAX: usize = 32;
+/// Entries per buffer half, at most: 24 (both buffers 288 bytes; entries up to 1500 ticks: one
+/// entry per step from 48 kHz up).
+pub const HALF_MAX: usize = 24;
 
 /// Longest entry at the full half length: 1 ms over both halves.
 pub const ENTRY_TICKS: u32 = TICKS_PER_MS / (2 * HALF_MAX as u32);
@@ -120,7 +121,7 @@ impl<'a, const N: usize, const L: usize> Burst<'a, N, L> {
         let mut i = 0;
         while i < len {
             if self.quick {
-                i += self.step.quick_entries(&mut words[i..], &mut periods[i..]);
+                i += self.step.quick_entries(tail(words, i), tail(periods, i));
                 if i >= len {
                     return;
                 }
@@ -148,4 +149,13 @@ impl<'a, const N: usize, const L: usize> Burst<'a, N, L> {
             self.ramp.run();
         }
     }
+}
+
+/// `s[i..]` without the call the slice index makes at `opt-level = "z"` (the fill runs it per
+/// half).
+#[inline(always)]
+pub(crate) fn tail<T>(s: &mut [T], i: usize) -> &mut [T] {
+    let i = i.min(s.len());
+    // SAFETY: `i ≤ s.len()`: the rest of the slice, borrowed from `s`.
+    unsafe { core::slice::from_raw_parts_mut(s.as_mut_ptr().add(i), s.len() - i) }
 }

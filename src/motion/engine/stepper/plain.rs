@@ -13,6 +13,7 @@
 use core::sync::atomic::Ordering::Relaxed;
 
 use super::{Phase, Stepper};
+use crate::burst::tail;
 
 /// The piece of a `rem`-tick period an event takes when events are at most `max` ticks: all
 /// of it, else `max`, else half of `max` (so the last piece is at least half of `max`).
@@ -38,7 +39,7 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
         if self.extend != 0 {
             return first;
         }
-        first + self.plain(&mut words[first..], &mut periods[first..])
+        first + self.plain(tail(words, first), tail(periods, first))
     }
 
     /// Fillers of the period being split, up to its end or a ramp millisecond's.
@@ -101,7 +102,7 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
                 self.shared.mv_done.store(total - self.left, Relaxed);
             }
         }
-        let (words, periods) = (&mut words[made..], &mut periods[made..]);
+        let (words, periods) = (tail(words, made), tail(periods, made));
         let (mut frac, mut ms_left, mut word, mut level) = (self.frac, self.ms_left, self.word, self.level);
         let (mut extend, mut whole, mut gap_in) = (self.extend, self.whole, self.gap_in);
         for (w, per) in words.iter_mut().zip(periods.iter_mut()) {
