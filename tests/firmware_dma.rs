@@ -197,3 +197,42 @@ fn switching_to_dma_restarts_and_keeps_working() {
         assert!(w[0].1 && !w[1].1 && w[1].0 - w[0].0 >= 20 * 72, "{x:?}");
     }
 }
+
+/// One axis at the DMA cap with full pulses (`$0=0.2`, a TMC driver's 100 ns with room: the
+/// fill's cost binds, not the pulse): every step, high and low ≥ 200 ns, no overrun, and the
+/// modeled CPU ≤ 95 % busy over the cruise (the fill's share printed).
+#[test]
+fn one_axis_runs_at_the_dma_cap() {
+    use ddastep_bench::emu::sweep::settings_lines;
+    let mut b = boot_dma(Settings::BENCH, false);
+    for l in settings_lines() {
+        ok(&mut b, &l);
+    }
+    ok(&mut b, "$0=0.2");
+    let info = reply(&mut b, "$I");
+    let mut s = Settings { dma_burst: true, ..Settings::BENCH };
+    s.set(0, 0.2, 3).unwrap();
+    let cap = s.timing().max_rate_hz();
+    assert!(info.contains(&format!("[MSG:max step rate {cap} Hz DMA]")), "{info}");
+    assert_eq!(cap, 1_000_000);
+    ok(&mut b, "G91");
+    ok(&mut b, &format!("G1 X400 F{:.3}", cap as f64 * 0.6));
+    // (No status polls during the move: `wait_idle` asks every 10 ms, a sender every 125+.)
+    b.run_seconds(0.06).unwrap();
+    wait_idle(&mut b, 1.0);
+    let st: Vec<Step> = steps(&b).into_iter().filter(|s| s.axis == 0).collect();
+    assert_eq!(net(&st)[0], 40_000);
+    let x: Vec<u64> = st.iter().map(|s| s.cycle).collect();
+    let mid = x.len() / 2;
+    let rate = 10_000.0 * HZ as f64 / (x[mid + 5_000] - x[mid - 5_000]) as f64;
+    let (w0, w1) = (x[mid - 5_000].div_ceil(72_000), x[mid + 5_000] / 72_000);
+    let cpu = b.window_loads(w0..w1).into_iter().fold(0.0, f64::max);
+    let fill = b.window_isr_loads(w0..w1).into_iter().fold(0.0, f64::max);
+    eprintln!("1 axis: cruise {rate:.0} Hz (cap {cap}), busiest ms: CPU {:.1} %, the fill {:.1} % (modeled, DMA bus cycles included)", cpu * 100.0, fill * 100.0);
+    assert!((rate - cap as f64).abs() < cap as f64 * 0.01, "cruise {rate} Hz");
+    assert!(cpu <= 0.95, "CPU {cpu}");
+    let r = b.report();
+    let a = &r.axes.0[0].1;
+    assert!(a.min_high_ns.unwrap() >= 200.0 && a.min_low_ns.unwrap() >= 200.0, "{a:?}");
+    assert_eq!(r.overruns, 0);
+}

@@ -100,17 +100,24 @@ fn DMA1_CHANNEL1() {
     let dma = hw::dma1();
     let flags = dma.isr().read().bits() & ISR_CH1;
     dma.ifcr().write(|w| unsafe { w.bits(flags) });
-    let half = HALF.load(Relaxed) as usize;
+    let half = (HALF.load(Relaxed) as usize).min(HALF_MAX);
     // SAFETY: installed before the interrupt was unmasked; this handler is its only user.
     let s = unsafe { &mut *STATE.0.get() };
     let burst = unsafe { s.burst.assume_init_mut() };
-    let (w0, w1) = s.words.split_at_mut(half);
-    let (p0, p1) = s.periods.split_at_mut(half);
-    if flags & HTIF1 != 0 {
-        burst.fill(w0, p0);
-    }
-    if flags & TCIF1 != 0 {
-        burst.fill(&mut w1[..half], &mut p1[..half]);
+    // The half just played: the first after a half transfer, the second after the transfer
+    // complete (both when this interrupt came late; DMA is then in the first again).
+    for (flag, at) in [(HTIF1, 0), (TCIF1, half)] {
+        if flags & flag != 0 {
+            // SAFETY: `at + half ≤ 2 · HALF_MAX`: one half of each buffer, which DMA is not
+            // reading now (it plays the other).
+            let (w, p) = unsafe {
+                (
+                    core::slice::from_raw_parts_mut(s.words.as_mut_ptr().add(at), half),
+                    core::slice::from_raw_parts_mut(s.periods.as_mut_ptr().add(at), half),
+                )
+            };
+            burst.fill(w, p);
+        }
     }
     STEP_TIME.record(hw::cycles().wrapping_sub(t0));
 }

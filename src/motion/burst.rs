@@ -117,7 +117,6 @@ impl<'a, const N: usize, const L: usize> Burst<'a, N, L> {
     /// a whole tick.
     pub fn fill(&mut self, words: &mut [u32], periods: &mut [u16]) {
         let len = words.len().min(periods.len());
-        let (words, periods) = (&mut words[..len], &mut periods[..len]);
         let mut i = 0;
         while i < len {
             if self.quick {

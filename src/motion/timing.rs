@@ -104,7 +104,7 @@ impl Timing {
     pub const fn min_period_for(&self, slaves: u32) -> u32 {
         if self.dma {
             // The fill's cost per step (CPU ≤ 95 %, the DMA's bus cycles counted).
-            let cpu = if self.dual { DMA_DUAL_BASE_TICKS } else { DMA_BASE_TICKS } + DMA_PER_SLAVE_TICKS * slaves;
+            let cpu = if slaves == 0 && !self.dual { DMA_LANE_TICKS } else { DMA_BASE_TICKS + DMA_PER_SLAVE_TICKS * slaves };
             return if cpu > self.min_period_ticks { cpu } else { self.min_period_ticks };
         }
         if self.dual {
@@ -184,14 +184,19 @@ pub const DUAL_BASE_TICKS: u32 = 291;
 /// moves at the cap (tests/firmware_dual_edge.rs) keep every step with the CPU rule alone.
 pub const DUAL_LONG_TICKS: u32 = 0;
 
-/// DMA burst mode: the buffer fill's cost per master step, timer ticks, plus
-/// [`DMA_PER_SLAVE_TICKS`] per slave, with DMA's bus cycles (three stores per step) counted:
-/// see bench/RESULTS.md (the sweep in DMA mode).
-pub const DMA_BASE_TICKS: u32 = 40;
-/// The same in dual-edge DMA mode (two stores per step: no falling-edge store).
-pub const DMA_DUAL_BASE_TICKS: u32 = 150;
+/// DMA burst mode: the buffer fill's cost per master step for a move with slaves (or in
+/// dual-edge mode), timer ticks, plus [`DMA_PER_SLAVE_TICKS`] per slave, DMA's own bus cycles
+/// (two or three stores per step) and `idle` counted: the sweep in DMA mode (bench/RESULTS.md)
+/// holds the CPU ≤ 95 % busy up to 507 kHz on 3 axes and 332 kHz on 7 (periods 142 and 217
+/// ticks); 104 + 19 per slave allows 507 and 330 kHz.
+pub const DMA_BASE_TICKS: u32 = 104;
+/// DMA burst mode, one axis with full pulses (the fill's lane of its own): at 1 MHz the busiest
+/// millisecond of the cruise has the CPU 91.6 % busy, the fill with DMA's stores 87.8 %
+/// (tests/firmware_dma.rs, `one_axis_runs_at_the_dma_cap`): the cost does not bind below the
+/// 1 MHz floor ([`DMA_FLOOR_TICKS`]).
+pub const DMA_LANE_TICKS: u32 = 72;
 /// Extra fill ticks per slave axis in DMA burst mode.
-pub const DMA_PER_SLAVE_TICKS: u32 = 10;
+pub const DMA_PER_SLAVE_TICKS: u32 = 19;
 /// Shortest period in DMA burst mode: 72 ticks, 1 MHz (the ramp tables' top rate).
 pub const DMA_FLOOR_TICKS: u32 = 72;
 /// DMA burst mode: the spread of a DMA store's latency after its timer event (arbitration,

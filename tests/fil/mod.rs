@@ -157,5 +157,6 @@ pub fn boot_machine(spec: &ddastep_bench::machine::MachineSpec, base: Settings) 
 pub fn boot_dma(base: Settings, dual: bool) -> Board {
     let mut b = boot_with(Some(Stored::from(Settings { dma_burst: true, dual_edge: dual, ..base })));
     b.dual_edge = dual;
+    b.step_irq = ddastep_bench::emu::dma::IRQ_CHANNEL1;
     b
 }
