@@ -579,7 +579,6 @@ impl Settings {
 
     /// The flash image: magic, version, fields (little-endian, where [`LOW`] and
     /// [`Self::spec`] put them), CRC-32.
-    #[inline(never)]
     pub fn to_bytes(&self) -> [u8; SETTINGS_LEN] {
         let mut b = [0u8; SETTINGS_LEN];
         copy_bytes(&mut b, &[MAGIC, VERSION, SETTINGS_LEN as u8, (SETTINGS_LEN >> 8) as u8]);

@@ -132,19 +132,21 @@ impl<const N: usize> Prepared<N> {
         let mut slaves = [Slave { dda: Dda::new(0, 0), on: 0, axis: 0 }; N];
         let mut n = 0;
         let mut dir_word = 0;
-        for (i, &s) in steps.iter().enumerate() {
+        // (Each axis's pin words zipped in, not indexed: no bounds-check paths.)
+        let words = pins.step_on.iter().zip(pins.dir_neg.iter().zip(&pins.dir_pos));
+        for (i, (&s, (&on, (&dir_neg, &dir_pos)))) in steps.iter().zip(words).enumerate() {
             if s == 0 {
                 continue;
             }
             let neg = (s < 0) as u32;
             if dir.known >> i & 1 == 0 || dir.neg >> i & 1 != neg {
-                dir_word |= if neg == 1 { pins.dir_neg[i] } else { pins.dir_pos[i] };
+                dir_word |= if neg == 1 { dir_neg } else { dir_pos };
                 dir.neg = (dir.neg & !(1 << i)) | neg << i;
                 dir.known |= 1 << i;
             }
             if i != master {
                 if let Some(slave) = slaves.get_mut(n) {
-                    *slave = Slave { dda: Dda::new(s.unsigned_abs(), total), on: pins.step_on[i], axis: i as u8 };
+                    *slave = Slave { dda: Dda::new(s.unsigned_abs(), total), on, axis: i as u8 };
                 }
                 n += 1;
             }

@@ -100,7 +100,6 @@ impl<const N: usize> Controller<'_, N> {
     /// While homing: the axes whose switch closing must stop the motion now (the approach
     /// passes' axes still searching, only while their move runs; the firmware's limit
     /// interrupt stops the engine for them, hard limits are off). `None` when not homing.
-    #[inline(never)]
     pub fn homing_watch(&self) -> Option<u8> {
         self.homing.map(|h| if h.moving && h.pass & 1 == 0 { h.group & !h.found } else { 0 })
     }
