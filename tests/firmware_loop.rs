@@ -17,21 +17,7 @@ fn paper_532_at_50_khz_exact_counts_pattern_and_cruise() {
     assert_eq!(net(&s), [5000, 3000, 2000, 0, 0, 0, 0]);
     assert!(s.iter().all(|s| s.positive));
     // Exact pattern: per five master steps, Y at 1,3,5 and Z at 2,4 (same edge as X).
-    let mut k = 0usize;
-    for (i, st) in s.iter().enumerate() {
-        if st.axis != 0 {
-            continue;
-        }
-        let same: Vec<usize> = s[i..].iter().take_while(|o| o.cycle == st.cycle).map(|o| o.axis).collect();
-        let mut all: Vec<usize> =
-            s[..i].iter().rev().take_while(|o| o.cycle == st.cycle).map(|o| o.axis).collect();
-        all.extend(same);
-        all.sort();
-        let want = if k % 5 % 2 == 0 { vec![0, 1] } else { vec![0, 2] };
-        assert_eq!(all, want, "master step {}", k + 1);
-        k += 1;
-    }
-    assert_eq!(k, 5000);
+    assert_eq!(assert_paper_pattern(&s), 5000);
     // Cruise: 1000 master steps in the middle at 50 kHz ± 0.5 %.
     let x: Vec<u64> = s.iter().filter(|s| s.axis == 0).map(|s| s.cycle).collect();
     let rate = 1000.0 * HZ as f64 / (x[3000] - x[2000]) as f64;

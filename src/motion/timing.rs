@@ -187,9 +187,10 @@ pub const DUAL_LONG_TICKS: u32 = 0;
 /// DMA burst mode: the buffer fill's cost per master step for a move with slaves (or in
 /// dual-edge mode), timer ticks, plus [`DMA_PER_SLAVE_TICKS`] per slave, DMA's own bus cycles
 /// (two or three stores per step) and `idle` counted: the sweep in DMA mode (bench/RESULTS.md)
-/// holds the CPU ≤ 95 % busy up to 507 kHz on 3 axes and 332 kHz on 7 (periods 142 and 217
-/// ticks); 104 + 19 per slave allows 507 and 330 kHz.
-pub const DMA_BASE_TICKS: u32 = 104;
+/// holds the CPU ≤ 95 % busy up to 591, 512, 446, 404, 365 and 333 kHz on 2 to 7 axes (periods
+/// 122 to 216 ticks); 106 + 19 per slave allows 576, 500, 442, 400, 362 and 327 kHz, at least
+/// 1 % under each.
+pub const DMA_BASE_TICKS: u32 = 106;
 /// DMA burst mode, one axis with full pulses (the fill's lane of its own): at 1 MHz the busiest
 /// millisecond of the cruise has the CPU 91.6 % busy, the fill with DMA's stores 87.8 %
 /// (tests/firmware_dma.rs, `one_axis_runs_at_the_dma_cap`): the cost does not bind below the

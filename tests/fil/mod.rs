@@ -160,3 +160,19 @@ pub fn boot_dma(base: Settings, dual: bool) -> Board {
     b.step_irq = ddastep_bench::emu::dma::IRQ_CHANNEL1;
     b
 }
+
+/// The seed paper's 5:3:2 pattern in `s` (every step of X, Y, Z, each a rising edge or, in
+/// dual-edge mode, a toggle): per five master steps Y steps with X at 1, 3, 5 and Z at 2, 4, the
+/// edges of one master step in one store (the same cycle). Returns how many master steps.
+pub fn assert_paper_pattern(s: &[Step]) -> usize {
+    let mut k = 0usize;
+    for (i, st) in s.iter().enumerate().filter(|(_, st)| st.axis == 0) {
+        let mut all: Vec<usize> = s[..i].iter().rev().take_while(|o| o.cycle == st.cycle).map(|o| o.axis).collect();
+        all.extend(s[i..].iter().take_while(|o| o.cycle == st.cycle).map(|o| o.axis));
+        all.sort();
+        let want = if k % 5 % 2 == 0 { vec![0, 1] } else { vec![0, 2] };
+        assert_eq!(all, want, "master step {}", k + 1);
+        k += 1;
+    }
+    k
+}

@@ -343,8 +343,10 @@ pub fn run_point(elf: &Path, axes: usize, target_hz: u32, cruise_ms: u64, max_lo
 fn measure(elf: &Path, axes: usize, target_hz: u32, cruise_ms: u64, max_load: f64, profile: bool, mode: Mode) -> Result<Point> {
     let dual_edge = mode.dual_edge;
     let Prepared { mut board, accel_hz_s, .. } = prepare(elf, mode)?;
-    // Ramp: whole table entries of 1 ms, from the 1 kHz start.
-    let ramp_ms = ((target_hz as u64).saturating_sub(1000) * 1000).div_ceil(accel_hz_s.max(1) as u64) + 1;
+    // Ramp: whole table entries of 1 ms, from the 1 kHz start, at the move's acceleration:
+    // `$I` gives the table's, which is twice the largest axis's (a move walks it at its own
+    // axes' share; with the sweep's equal `$120`s exactly half).
+    let ramp_ms = ((target_hz as u64).saturating_sub(1000) * 1000).div_ceil((accel_hz_s / 2).max(1) as u64) + 1;
     let cruise_total_ms = cruise_ms + ramp_ms + 6;
     let master = (target_hz as u64 * cruise_total_ms / 1000).div_ceil(10) * 10;
     let (steps, line) = move_line(axes, target_hz, master);

@@ -8,7 +8,7 @@ use core::sync::atomic::Ordering::Relaxed;
 use super::{Link, IDLE_TICKS, MAX_TICK, PRIME_TICKS};
 use crate::board::PinMap;
 use crate::control::Ctl;
-use crate::prepared::Prepared;
+use crate::prepared::{Prepared, Slave};
 use crate::queue::{Shared, State};
 use crate::ramp::{RampSlot, RAMP_LEN};
 use crate::ring::RingConsumer;
@@ -285,27 +285,10 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
         }
         // SAFETY: as above; plain fields nobody writes while the move is published.
         let (mut word, total, n) = unsafe { ((*p).master_on, (*p).total, (*p).n_slaves as usize) };
-        // Unrolled over the slots (N is a constant), stopping after the move's last slave: no
-        // loop counter, no bounds checks, no branch inside a slot.
         // SAFETY: as above; only the step half touches the slaves of the running move.
-        let slaves = unsafe { &mut (*p).slaves };
-        macro_rules! slaves {
-            ($out:lifetime; $($i:literal)*) => {$(
-                if $i + 1 >= N || $i >= n {
-                    break $out;
-                }
-                let s = &mut slaves[$i];
-                word |= s.on & s.dda.step_mask(total);
-            )*};
-        }
-        'slaves: {
-            slaves!('slaves; 0 1 2 3 4 5 6);
-        }
+        word |= slave_bits(unsafe { &mut (*p).slaves }, n, total);
         if self.dual {
-            // Toggle: set the pins that are low, reset those that are high.
-            let level = self.level;
-            self.level = level ^ word;
-            word = (word & !level) | (word & level) << 16;
+            word = toggle(word, &mut self.level);
         }
         self.left -= 1;
         self.shared.mv_done.store(total - self.left, Relaxed);
@@ -583,6 +566,36 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
     fn publish(&self, s: State) {
         self.shared.state.store(s as u8, Relaxed);
     }
+}
+
+/// The step bits of the slaves of a move with `n` slaves and `total` master steps, for one
+/// master step: unrolled over the slots (N is a constant), stopping after the move's last
+/// slave: no loop counter, no bounds checks, no branch inside a slot.
+#[inline(always)]
+fn slave_bits<const N: usize>(slaves: &mut [Slave; N], n: usize, total: u32) -> u32 {
+    let mut bits = 0;
+    macro_rules! slaves {
+        ($out:lifetime; $($i:literal)*) => {$(
+            if $i + 1 >= N || $i >= n {
+                break $out;
+            }
+            let s = &mut slaves[$i];
+            bits |= s.on & s.dda.step_mask(total);
+        )*};
+    }
+    'slaves: {
+        slaves!('slaves; 0 1 2 3 4 5);
+    }
+    bits
+}
+
+/// Dual-edge mode: the BSRR word that toggles the pins of `word`, given their `level` (set
+/// those that are low, reset those that are high); `level` follows.
+#[inline(always)]
+fn toggle(word: u32, level: &mut u32) -> u32 {
+    let old = *level;
+    *level = old ^ word;
+    (word & !old) | (word & old) << 16
 }
 
 /// One more on a counter only the step half writes (no read-modify-write race: every other

@@ -12,7 +12,7 @@
 
 use core::sync::atomic::Ordering::Relaxed;
 
-use super::{Phase, Stepper};
+use super::{slave_bits, toggle, Phase, Stepper};
 use crate::burst::tail;
 
 /// The piece of a `rem`-tick period an event takes when events are at most `max` ticks: all
@@ -63,109 +63,47 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
         made
     }
 
-    /// Plain entries from a period boundary on (`extend` is 0): the lanes, then the general loop.
+    /// Plain steps from a period boundary on (`extend` is 0), each gap at most two entries (from
+    /// 24 kHz up; slower steps are whole ticks, their fillers plain).
     fn plain(&mut self, words: &mut [u32], periods: &mut [u16]) -> usize {
+        // Steps may be plain: running, no control change.
+        if self.phase != Phase::Run || self.shared.ctl.load() != self.ctl_seen {
+            return 0;
+        }
         let p = self.cur;
-        // Steps may be plain: running, no control change, a period published.
-        let stepping = self.phase == Phase::Run && self.shared.ctl.load() == self.ctl_seen;
-        // SAFETY: the running move's slot while running (see `step`): atomics, plain fields and
-        // its slaves, which only the step half touches.
-        let (period, mut room, total, master_on, slaves) = if stepping {
-            unsafe {
-                let (period, at) = ((*p).period.load(Relaxed), (*p).decel_at.load(Relaxed));
-                let n = ((*p).n_slaves as usize).min(N.saturating_sub(1));
-                // A step is plain while the steps left after it stay above the trigger and 0.
-                let room = if period == 0 { 0 } else { self.left.saturating_sub(at + 1) };
-                (period, room, (*p).total, (*p).master_on, (*p).slaves.get_mut(..n).unwrap_or_default())
-            }
-        } else {
-            (0, 0, 0, 0, Default::default())
-        };
+        // SAFETY: the running move's slot (see `step`): atomics and plain fields.
+        let (period, at, master_on, n, total) =
+            unsafe { ((*p).period.load(Relaxed), (*p).decel_at.load(Relaxed), (*p).master_on, (*p).n_slaves, (*p).total) };
+        // A step is plain while the steps left after it stay above the trigger and 0.
+        let room = self.left.saturating_sub(at + 1);
         let max = self.max_tick;
-        let dual = self.dual;
-        // One axis, full pulses, every gap within an entry: the lane of its own.
-        let mut made = 0usize;
-        let mut steps = 0u32;
-        if room != 0 && self.extend == 0 && (period + 15) >> 4 <= 2 * max {
-            // Every gap within two entries: the lanes, one axis with full pulses apart (they
-            // count their steps off `left` themselves).
-            let left = self.left;
-            // (Gaps that never need a second entry take the lanes without the split.)
-            made = match (slaves.is_empty() && !dual, (period + 15) >> 4 <= max) {
-                (true, true) => self.lane::<false>(words, periods, period, master_on, room),
-                (true, false) => self.lane::<true>(words, periods, period, master_on, room),
-                (false, true) => self.lane_slaves::<false>(words, periods, period, master_on, room),
-                (false, false) => self.lane_slaves::<true>(words, periods, period, master_on, room),
-            };
-            room -= left - self.left;
-            if made > 0 {
-                self.shared.mv_done.store(total - self.left, Relaxed);
-            }
+        if period == 0 || room == 0 || (period + 15) >> 4 > 2 * max {
+            return 0;
         }
-        let (words, periods) = (tail(words, made), tail(periods, made));
-        let (mut frac, mut ms_left, mut word, mut level) = (self.frac, self.ms_left, self.word, self.level);
-        let (mut extend, mut whole, mut gap_in) = (self.extend, self.whole, self.gap_in);
-        for (w, per) in words.iter_mut().zip(periods.iter_mut()) {
-            let chunk;
-            if extend != 0 {
-                // A filler (`filler`, `filler_piece`).
-                chunk = piece(extend, max);
-                if ms_left <= chunk as i32 {
-                    break;
-                }
-                *w = word;
-                word = 0;
-                extend -= chunk;
-                gap_in = if extend == 0 { whole } else { chunk };
-            } else {
-                // A plain step (`step`, then `extended` when its gap is longer than an entry).
-                if room == 0 {
-                    break;
-                }
-                let acc = frac + period;
-                let gap = acc >> 4;
-                chunk = piece(gap, max);
-                if ms_left <= chunk as i32 {
-                    break;
-                }
-                frac = acc & 15;
-                let mut next = master_on;
-                for s in slaves.iter_mut() {
-                    next |= s.on & s.dda.step_mask(total);
-                }
-                if dual {
-                    let old = level;
-                    level ^= next;
-                    next = (next & !old) | (next & old) << 16;
-                }
-                *w = word;
-                word = next;
-                room -= 1;
-                steps += 1;
-                extend = gap - chunk;
-                whole = gap;
-                gap_in = chunk;
-            }
-            ms_left -= chunk as i32;
-            *per = (chunk - 1) as u16;
-            made += 1;
-        }
-        (self.frac, self.ms_left, self.word, self.level) = (frac, ms_left, word, level);
-        (self.extend, self.whole, self.gap_in) = (extend, whole, gap_in);
-        if steps > 0 {
-            self.left -= steps;
+        let left = self.left;
+        // Gaps that never need a second entry take the lanes without the split; one axis with
+        // full pulses the lanes without slaves.
+        let made = match (n == 0 && !self.dual, (period + 15) >> 4 <= max) {
+            (true, true) => self.lane::<false, false>(words, periods, period, master_on, room),
+            (true, false) => self.lane::<true, false>(words, periods, period, master_on, room),
+            (false, true) => self.lane::<false, true>(words, periods, period, master_on, room),
+            (false, false) => self.lane::<true, true>(words, periods, period, master_on, room),
+        };
+        if self.left != left {
             self.shared.mv_done.store(total - self.left, Relaxed);
         }
         made
     }
 
-    /// Plain steps of one axis at `period` with full pulses, each gap at most two entries (one
-    /// unless `SPLIT`): at most `room` of them, until a ramp millisecond would end; counted off
-    /// `left`.
+    /// Plain steps at `period`, each gap at most two entries (one unless `SPLIT`): at most
+    /// `room` of them, until a ramp millisecond would end; counted off `left`. `SLAVES`: the
+    /// move has slaves or runs dual-edge (without, one axis with full pulses, the loop keeps
+    /// fewer values).
     #[inline(never)]
-    fn lane<const SPLIT: bool>(&mut self, words: &mut [u32], periods: &mut [u16], period: u32, on: u32, room: u32) -> usize {
-        let (mut frac, mut ms_left, mut word, mut gap_in) = (self.frac, self.ms_left, self.word, self.gap_in);
-        let max = self.max_tick;
+    fn lane<const SPLIT: bool, const SLAVES: bool>(&mut self, words: &mut [u32], periods: &mut [u16], period: u32, on: u32, room: u32) -> usize {
+        let p = self.cur;
+        let (mut frac, mut ms_left, mut word, mut level, mut gap_in) = (self.frac, self.ms_left, self.word, self.level, self.gap_in);
+        let (dual, max) = (self.dual, self.max_tick);
         let mut it = words.iter_mut().zip(periods.iter_mut());
         let (mut made, mut steps) = (0usize, 0u32);
         while steps < room {
@@ -181,75 +119,20 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
             }
             ms_left -= gap as i32;
             frac = acc & 15;
-            *w = word;
-            *per = (first - 1) as u16;
-            word = on;
-            made += 1;
-            if SPLIT && first < gap {
-                // Split as `extended` and `filler` would: the step's edge is the filler's word.
-                if let Some((w, per)) = it.next() {
-                    *w = word;
-                    *per = (gap - first - 1) as u16;
-                    word = 0;
-                    made += 1;
-                }
-            }
-            gap_in = gap;
-            steps += 1;
-        }
-        (self.frac, self.ms_left, self.word, self.gap_in) = (frac, ms_left, word, gap_in);
-        self.left -= steps;
-        made
-    }
-
-    /// Plain steps with slaves (or in dual-edge mode) at `period`, each gap at most two entries:
-    /// as [`Self::lane`].
-    #[inline(never)]
-    fn lane_slaves<const SPLIT: bool>(&mut self, words: &mut [u32], periods: &mut [u16], period: u32, on: u32, room: u32) -> usize {
-        let p = self.cur;
-        // SAFETY: the running move's slot; plain fields and its slaves (see `step`).
-        let (total, n, slaves) = unsafe { ((*p).total, (*p).n_slaves as usize, &mut (*p).slaves) };
-        let (mut frac, mut ms_left, mut word, mut level, mut gap_in) = (self.frac, self.ms_left, self.word, self.level, self.gap_in);
-        let (dual, max) = (self.dual, self.max_tick);
-        let mut it = words.iter_mut().zip(periods.iter_mut());
-        let (mut made, mut steps) = (0usize, 0u32);
-        while steps < room {
-            let Some((w, per)) = it.next() else { break };
-            let acc = frac + period;
-            let gap = acc >> 4;
-            if ms_left <= gap as i32 {
-                break;
-            }
-            let first = if SPLIT { piece(gap, max) } else { gap };
-            if SPLIT && first < gap && it.len() == 0 {
-                break;
-            }
-            ms_left -= gap as i32;
-            frac = acc & 15;
             let mut next = on;
-            // Unrolled as in `step` (no backward branch per slave).
-            macro_rules! slaves {
-                ($out:lifetime; $($i:literal)*) => {$(
-                    if $i + 1 >= N || $i >= n {
-                        break $out;
-                    }
-                    let s = &mut slaves[$i];
-                    next |= s.on & s.dda.step_mask(total);
-                )*};
-            }
-            'slaves: {
-                slaves!('slaves; 0 1 2 3 4 5);
-            }
-            if dual {
-                let old = level;
-                level ^= next;
-                next = (next & !old) | (next & old) << 16;
+            if SLAVES {
+                // SAFETY: the running move's slot; plain fields and its slaves (see `step`).
+                next |= unsafe { slave_bits(&mut (*p).slaves, (*p).n_slaves as usize, (*p).total) };
+                if dual {
+                    next = toggle(next, &mut level);
+                }
             }
             *w = word;
             *per = (first - 1) as u16;
             word = next;
             made += 1;
             if SPLIT && first < gap {
+                // Split as `extended` and `filler` would: the step's edge is the filler's word.
                 if let Some((w, per)) = it.next() {
                     *w = word;
                     *per = (gap - first - 1) as u16;
