@@ -186,18 +186,18 @@ pub const DUAL_LONG_TICKS: u32 = 0;
 
 /// DMA burst mode: the buffer fill's cost per master step for a move with slaves (or in
 /// dual-edge mode), timer ticks, plus [`DMA_PER_SLAVE_TICKS`] per slave, DMA's own bus cycles
-/// (two or three stores per step) and `idle` counted: the sweep in DMA mode (bench/RESULTS.md)
-/// holds the CPU ≤ 95 % busy up to 591, 512, 446, 404, 365 and 333 kHz on 2 to 7 axes (periods
-/// 122 to 216 ticks); 106 + 19 per slave allows 576, 500, 442, 400, 362 and 327 kHz, at least
-/// 1 % under each.
-pub const DMA_BASE_TICKS: u32 = 106;
+/// (two or three stores per step) and `idle` counted: the sweep in DMA mode with the caps lifted
+/// (`cargo sim -- --sweep --dma`) holds the CPU ≤ 95 % busy up to 665, 564, 499, 447, 398 and
+/// 364 kHz on 2 to 7 axes (periods 108 to 198 ticks); 94 + 18 per slave allows 643, 554, 486,
+/// 434, 391 and 356 kHz, about 2 % under each.
+pub const DMA_BASE_TICKS: u32 = 94;
 /// DMA burst mode, one axis with full pulses (the fill's lane of its own): at 1 MHz the busiest
 /// millisecond of the cruise has the CPU 91.6 % busy, the fill with DMA's stores 87.8 %
 /// (tests/firmware_dma.rs, `one_axis_runs_at_the_dma_cap`): the cost does not bind below the
 /// 1 MHz floor ([`DMA_FLOOR_TICKS`]).
 pub const DMA_LANE_TICKS: u32 = 72;
 /// Extra fill ticks per slave axis in DMA burst mode.
-pub const DMA_PER_SLAVE_TICKS: u32 = 19;
+pub const DMA_PER_SLAVE_TICKS: u32 = 18;
 /// Shortest period in DMA burst mode: 72 ticks, 1 MHz (the ramp tables' top rate).
 pub const DMA_FLOOR_TICKS: u32 = 72;
 /// DMA burst mode: the spread of a DMA store's latency after its timer event (arbitration,
