@@ -94,6 +94,7 @@ fn plan(cmd: &str) -> Option<Plan> {
         "cargo sim -- --machine bench/demo/encoder_x.toml" => Run(&[]),
         "cargo sim -- --sweep" => Skip("the step-rate benchmark: about a minute of both cores"),
         "cargo sim -- --sweep --dual-edge" => Skip("the same benchmark in dual-edge mode: about a minute of both cores"),
+        "cargo sim -- --sweep --dma" => Skip("the same benchmark in DMA burst mode: several minutes of both cores"),
         "cargo sim -- --serve --pty-link /tmp/ttyBLUEPILL --tcp 127.0.0.1:23000 --max-seconds 2" => Run(&[]),
         "socat pty,raw,echo=0,link=/tmp/ttyGRBL tcp:127.0.0.1:23000" => {
             Skip("bridges to a running --serve until stopped; socat is optional (TCP is tested in serve_senders)")
