@@ -176,3 +176,19 @@ pub fn assert_paper_pattern(s: &[Step]) -> usize {
     }
     k
 }
+
+/// The paper move's cruise and counts as the checker sees them: 1000 master steps in the middle
+/// at 50 kHz ± 0.5 %; X, Y, Z made 5000, 3000, 2000 steps (rising edges and net; both edges with
+/// `Board::dual_edge`), each high and low for at least `min_ns`. Returns the checker's report.
+pub fn assert_paper_cruise(b: &Board, s: &[Step], min_ns: f64) -> ddastep_bench::emu::Report {
+    let x: Vec<u64> = s.iter().filter(|s| s.axis == 0).map(|s| s.cycle).collect();
+    let rate = 1000.0 * HZ as f64 / (x[3000] - x[2000]) as f64;
+    assert!((rate - 50_000.0).abs() < 250.0, "cruise {rate} Hz");
+    let r = b.report();
+    for (i, want) in [5000u64, 3000, 2000].into_iter().enumerate() {
+        let a = &r.axes.0[i].1;
+        assert_eq!((a.rising_edges, a.net_steps), (want, want as i64), "{}", r.axes.0[i].0);
+        assert!(a.min_high_ns.unwrap() >= min_ns && a.min_low_ns.unwrap() >= min_ns, "{a:?}");
+    }
+    r
+}
