@@ -17,6 +17,11 @@ fn gantry(hard: bool, pulse_us: f32) -> Board {
     boot_gantry(Settings { hard_limits: hard, pulse_us, ..Settings::BENCH })
 }
 
+/// The same in DMA burst mode (`$581=1`).
+fn gantry_dma(pulse_us: f32) -> Board {
+    boot_gantry(Settings { hard_limits: true, pulse_us, dma_burst: true, ..Settings::BENCH })
+}
+
 /// Rising edges of X's step pin.
 fn x_steps(b: &Board) -> Vec<u64> {
     b.edges().iter().filter(|e| e.port == 1 && e.pin == STEP_PINS[0] && e.level).map(|e| e.cycle).collect()
@@ -25,7 +30,17 @@ fn x_steps(b: &Board) -> Vec<u64> {
 #[test]
 fn a_switch_mid_move_stops_the_steps_within_a_period_then_alarm_1() {
     // 10 µs pulses, so step pins going low sooner than that are the limit interrupt's doing.
-    let mut b = gantry(true, 10.0);
+    switch_mid_move(gantry(true, 10.0));
+}
+
+/// DMA mode: the limit interrupt stops TIM2 and with it every DMA store at once (the buffered
+/// entries are dropped, not played), so the same bounds hold.
+#[test]
+fn in_dma_mode_a_switch_stops_the_steps_at_once_too() {
+    switch_mid_move(gantry_dma(10.0));
+}
+
+fn switch_mid_move(mut b: Board) {
     // 150 mm to the max switch at 300 mm, cruising at 16 kHz (12 000 mm/min × 80 steps/mm).
     ok(&mut b, "G91 G1 X200 Y10 F12000");
     let hit = b.run_until(2 * HZ, |b| VirtualMachine::of(b).unwrap().events().len() > 0).unwrap();
