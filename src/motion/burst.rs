@@ -23,8 +23,12 @@
 //! at most `2 × half × max_tick` ticks; [`Layout::for_pulse`] keeps that ≤ 1 ms. (A hard limit
 //! does not wait: its interrupt stops TIM2, and with it the DMA requests, at once.)
 //!
-//! Costs. The fill runs the step half's tick for every entry (no interrupt entry and exit,
-//! no register access); DMA moves two or three words per entry on the bus.
+//! Costs. Entries where nothing but a step (or a filler) happens take a fast path, the
+//! step half's lanes (`engine/stepper/plain.rs`: no per-tick checks, no shared load per step);
+//! every other entry is a whole tick plus the ramp half's work, as above. No interrupt entry or
+//! register access per entry; DMA moves two or three words per entry on the bus. Halves of 24
+//! entries balance the fill's cost per half against splitting: entries up to 1500 ticks keep a
+//! step one entry from 48 kHz up. Modeled figures: bench/RESULTS.md, "DMA burst mode".
 
 use crate::engine::{Engine, Ramper, Stepper};
 use crate::queue::Shared;
