@@ -18,9 +18,10 @@
 //! property tests check it entry by entry. Counts and ratios are the engine's.
 //!
 //! Latency. A feed hold, a stop or anything else the engine reacts to reaches the pins after
-//! the entries already buffered: at most two halves. Each entry is at most [`Burst::max_tick`]
-//! ticks long (longer periods are split into filler entries, word 0), so the buffered time is
-//! at most `2 × half × max_tick` ticks; [`Layout::for_pulse`] keeps that ≤ 1 ms. (A hard limit
+//! the entries already buffered: at most two halves. Each entry is at most the layout's
+//! `max_tick` ticks long (longer periods are split into filler entries, word 0), so the
+//! buffered time is at most `2 × half × max_tick` ticks; [`Layout::for_pulse`] keeps that
+//! ≤ 1 ms. (A hard limit
 //! does not wait: its interrupt stops TIM2, and with it the DMA requests, at once.)
 //!
 //! Costs. Entries where nothing but a step (or a filler) happens take a fast path, the
@@ -86,7 +87,6 @@ pub struct Burst<'a, const N: usize, const L: usize = RAMP_LEN> {
     /// The position record's sequence and the move being entered, as the ramp half last saw
     /// them (a move change the step half made without asking for the ramp half).
     seen: (u32, usize),
-    max_tick: u32,
     quick: bool,
 }
 
@@ -95,12 +95,7 @@ impl<'a, const N: usize, const L: usize> Burst<'a, N, L> {
     pub fn new(engine: Engine<'a, N, L>, shared: &'a Shared<N>, max_tick: u32) -> Self {
         let (mut step, ramp) = engine.split();
         step.set_max_tick(max_tick);
-        Burst { step, ramp, shared, seen: (shared.record_seq(), 0), max_tick, quick: true }
-    }
-
-    /// Longest entry, timer ticks.
-    pub fn max_tick(&self) -> u32 {
-        self.max_tick
+        Burst { step, ramp, shared, seen: (shared.record_seq(), 0), quick: true }
     }
 
     /// Whether the next entry is a filler piece of a longer period (for tests, as
