@@ -21,8 +21,8 @@
 //! the entries already buffered: at most two halves. Each entry is at most the layout's
 //! `max_tick` ticks long (longer periods are split into filler entries, word 0), so the
 //! buffered time is at most `2 × half × max_tick` ticks; [`Layout::for_pulse`] keeps that
-//! ≤ 1 ms. (A hard limit
-//! does not wait: its interrupt stops TIM2, and with it the DMA requests, at once.)
+//! ≤ 1 ms. (A hard limit does not wait: its interrupt stops TIM2, and with it the DMA
+//! requests, at once.)
 //!
 //! Costs. Entries where nothing but a step (or a filler) happens take a fast path, the
 //! step half's lanes (`engine/stepper/plain.rs`: no per-tick checks, no shared load per step);
