@@ -201,14 +201,7 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
     /// shorter than a real period, and a step's own first piece always holds its pulse.
     fn filler_piece(&mut self) -> u16 {
         let rem = self.extend;
-        let max = self.max_tick;
-        let chunk = if rem <= max {
-            rem
-        } else if rem >= max + max / 2 {
-            max
-        } else {
-            max / 2
-        };
+        let chunk = piece(rem, self.max_tick);
         self.extend = rem - chunk;
         let arr = self.elapse(chunk);
         if self.extend == 0 {
@@ -596,6 +589,19 @@ fn toggle(word: u32, level: &mut u32) -> u32 {
     let old = *level;
     *level = old ^ word;
     (word & !old) | (word & old) << 16
+}
+
+/// The piece of a `rem`-tick period an event takes when events are at most `max` ticks: all
+/// of it, else `max`, else half of `max` (so the last piece is at least half of `max`).
+#[inline(always)]
+fn piece(rem: u32, max: u32) -> u32 {
+    if rem <= max {
+        rem
+    } else if rem >= max + max / 2 {
+        max
+    } else {
+        max / 2
+    }
 }
 
 /// One more on a counter only the step half writes (no read-modify-write race: every other

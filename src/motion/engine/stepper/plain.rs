@@ -12,26 +12,12 @@
 
 use core::sync::atomic::Ordering::Relaxed;
 
-use super::{slave_bits, toggle, Phase, Stepper};
+use super::{piece, slave_bits, toggle, Phase, Stepper};
 use crate::burst::tail;
-
-/// The piece of a `rem`-tick period an event takes when events are at most `max` ticks: all
-/// of it, else `max`, else half of `max` (so the last piece is at least half of `max`).
-#[inline(always)]
-fn piece(rem: u32, max: u32) -> u32 {
-    if rem <= max {
-        rem
-    } else if rem >= max + max / 2 {
-        max
-    } else {
-        max / 2
-    }
-}
 
 impl<const N: usize, const L: usize> Stepper<'_, N, L> {
     /// Fills the front of `words` and `periods` with plain entries; returns how many (0 when
-    /// the next one needs a whole tick). Not inlined: in a function of its own the loop keeps
-    /// what it uses in registers.
+    /// the next one needs a whole tick). Not inlined: the fill's own loop stays small.
     #[inline(never)]
     pub(crate) fn quick_entries(&mut self, words: &mut [u32], periods: &mut [u16]) -> usize {
         // The rest of a period a whole tick split, first: then the lanes may take over.
