@@ -66,6 +66,7 @@ pub fn install(engine: Engine<'static, AXES>, nvic: &mut cortex_m::peripheral::N
 /// that leaves the ramp half work pends its interrupt). The body times itself with the DWT cycle
 /// counter (`$I` reports it, see `ddastep::steptime`).
 #[interrupt]
+#[link_section = ".data.ramfunc.tim2"]
 fn TIM2() {
     let t0 = hw::cycles();
     // SAFETY: installed before TIM2 was unmasked; this handler is its only user.
@@ -74,7 +75,7 @@ fn TIM2() {
     if sr & hw::SR_UIF != 0 {
         hw::gpiob().bsrr().write(|w| unsafe { w.bits(engine.word()) });
         hw::tim2().sr().write(|w| unsafe { w.bits(!hw::SR_UIF) });
-        let arr = engine.tick();
+        let arr = engine.tick_quick();
         hw::tim2().arr().write(|w| unsafe { w.bits(arr as u32) });
     }
     // The compare event ends the pulse; if it came while we computed, end it now.

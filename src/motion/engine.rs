@@ -115,13 +115,16 @@ pub struct Engine<'a, const N: usize, const L: usize = RAMP_LEN> {
     /// out of step, as when the step interrupt leaves the ramp interrupt little time).
     lag: u32,
     since: u32,
+    /// Ticks take the step interrupt's fast path ([`Stepper::tick_quick`]); off: every tick a
+    /// whole one (tests compare the two).
+    quick: bool,
 }
 
 impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
     /// An idle engine.
     pub fn new(shared: &'a Shared<N>, ring: RingConsumer<'a, N>, ramp: &'a RampSlot<L>, pins: PinMap<N>) -> Self {
         let peek = ring.peek();
-        Engine { step: Stepper::new(shared, ring, ramp, pins), ramp: Ramper::new(shared, peek, ramp), lag: 0, since: 0 }
+        Engine { step: Stepper::new(shared, ring, ramp, pins), ramp: Ramper::new(shared, peek, ramp), lag: 0, since: 0, quick: true }
     }
 
     /// The two halves, for the two interrupts.
@@ -141,9 +144,10 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
         self.step.step_off()
     }
 
-    /// One tick of the step half, then the ramp half's work it asked for; returns the ARR value.
+    /// One tick of the step half (as the step interrupt runs it), then the ramp half's work it
+    /// asked for; returns the ARR value.
     pub fn tick(&mut self) -> u16 {
-        let arr = self.step.tick();
+        let arr = if self.quick { self.step.tick_quick() } else { self.step.tick() };
         if self.since >= self.lag {
             self.since = 0;
             self.ramp.run();
@@ -151,6 +155,12 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
             self.since += 1;
         }
         arr
+    }
+
+    /// Turns the step interrupt's fast path off (every tick a whole one) or on, for tests that
+    /// compare them.
+    pub fn set_quick(&mut self, on: bool) {
+        self.quick = on;
     }
 
     /// Runs the ramp half only after every `lag + 1`-th tick from now on (0: every tick).

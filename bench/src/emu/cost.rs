@@ -155,7 +155,7 @@ pub fn decode_block(start: u32, code: &[u8], flash: FlashConfig) -> Block {
         prev_mem = d.single_mem;
         insns.push(Insn { addr, cost, flow: d.flow, wfi: hw1 == 0xBF30 });
         let size = if wide { 4 } else { 2 };
-        sizes.push((addr, size, cost));
+        sizes.push((addr, size, cost, d.data));
         off += size as usize;
     }
     // Fetch stalls count as part of the instruction that waited.
@@ -172,18 +172,25 @@ struct Decoded {
     cost: u64,
     flow: Flow,
     single_mem: bool,
+    /// Data transfers on the bus (words): what SRAM code's fetches share the System bus with.
+    data: u64,
 }
 
 fn alu() -> Decoded {
-    Decoded { cost: 1, flow: Flow::Next, single_mem: false }
+    Decoded { cost: 1, flow: Flow::Next, single_mem: false, data: 0 }
 }
 
 fn mem(cost: u64) -> Decoded {
-    Decoded { cost, flow: Flow::Next, single_mem: true }
+    Decoded { cost, flow: Flow::Next, single_mem: true, data: 1 }
 }
 
 fn branch(cost: u64, flow: Flow) -> Decoded {
-    Decoded { cost, flow, single_mem: false }
+    Decoded { cost, flow, single_mem: false, data: 0 }
+}
+
+// a transfer of `words` words (LDM/STM/PUSH/POP, LDRD/STRD): 1 + `words` cycles
+fn multi(words: u64, flow: Flow) -> Decoded {
+    Decoded { cost: 1 + words, flow, single_mem: false, data: words }
 }
 
 // 16-bit Thumb instruction
@@ -203,7 +210,7 @@ fn decode16(hw: u16, w: u64) -> Decoded {
         _ => match hw >> 12 {
             0b0101..=0b1001 => mem(2),
             0b1011 => misc16(hw),
-            0b1100 => branch(1 + (hw & 0xFF).count_ones() as u64, Flow::Next), // LDM/STM
+            0b1100 => multi((hw & 0xFF).count_ones() as u64, Flow::Next), // LDM/STM
             0b1101 => match (hw >> 8) & 0xF {
                 0xE | 0xF => alu(), // UDF, SVC
                 _ => branch(1, Flow::CondBranch),
@@ -219,9 +226,9 @@ fn misc16(hw: u16) -> Decoded {
     let regs = (hw & 0xFF).count_ones() as u64;
     match (hw >> 8) & 0xF {
         0x1 | 0x3 | 0x9 | 0xB => branch(1, Flow::CondBranch), // CBZ/CBNZ
-        0x4 | 0x5 => branch(1 + regs + ((hw >> 8) & 1) as u64, Flow::Next), // PUSH
-        0xC | 0xD if hw & 0x100 != 0 => branch(1 + regs + 1, Flow::Branch), // POP {.., pc}
-        0xC | 0xD => branch(1 + regs, Flow::Next), // POP
+        0x4 | 0x5 => multi(regs + ((hw >> 8) & 1) as u64, Flow::Next), // PUSH
+        0xC | 0xD if hw & 0x100 != 0 => multi(regs + 1, Flow::Branch), // POP {.., pc}
+        0xC | 0xD => multi(regs, Flow::Next), // POP
         _ => alu(),
     }
 }
@@ -235,11 +242,11 @@ fn decode32(hw1: u16, hw2: u16, addr: u32, flash: &FlashConfig, w: u64) -> Decod
                 let regs = hw2.count_ones() as u64;
                 let load = hw1 & 0x0010 != 0;
                 let flow = if load && hw2 & 0x8000 != 0 { Flow::Branch } else { Flow::Next };
-                branch(1 + regs, flow)
+                multi(regs, flow)
             } else if hw1 & 0xFFF0 == 0xE8D0 && hw2 & 0xFFE0 == 0xF000 {
-                branch(2 + w, Flow::Branch) // TBB/TBH
+                Decoded { data: 1, ..branch(2 + w, Flow::Branch) } // TBB/TBH
             } else if hw1 & 0x0120 != 0 || hw1 & 0x0080 != 0 {
-                branch(3, Flow::Next) // LDRD/STRD
+                multi(2, Flow::Next) // LDRD/STRD
             } else {
                 mem(2) // LDREX/STREX
             }
@@ -251,7 +258,7 @@ fn decode32(hw1: u16, hw2: u16, addr: u32, flash: &FlashConfig, w: u64) -> Decod
                 branch(1, Flow::CondBranch) // B<c>.W
             } else if hw1 == 0xF3BF && hw2 & 0xFFF0 == 0x8F60 {
                 // ISB: 1 + B, B at least a pipeline refill (TRM table 18-1).
-                Decoded { cost: 1 + flash.refill(addr + 4), flow: Flow::Next, single_mem: false }
+                Decoded { cost: 1 + flash.refill(addr + 4), ..alu() }
             } else {
                 alu() // MSR, MRS, hints, DSB/DMB (1 + B, B ≥ 0)
             }
@@ -262,7 +269,7 @@ fn decode32(hw1: u16, hw2: u16, addr: u32, flash: &FlashConfig, w: u64) -> Decod
                 let rt = hw2 >> 12;
                 let load = hw1 & 0x0010 != 0;
                 if load && rt == 15 {
-                    branch(2, Flow::Branch)
+                    Decoded { data: 1, ..branch(2, Flow::Branch) }
                 } else if rn == 15 {
                     mem(2 + w)
                 } else {
@@ -271,10 +278,10 @@ fn decode32(hw1: u16, hw2: u16, addr: u32, flash: &FlashConfig, w: u64) -> Decod
             }
             3 => match (hw1 >> 4) & 0xF {
                 0x0 if hw2 & 0xF0F0 == 0xF000 => alu(), // MUL
-                0x0 | 0x1 => Decoded { cost: 2, flow: Flow::Next, single_mem: false }, // MLA/MLS
-                0x8 | 0xA => Decoded { cost: 4, flow: Flow::Next, single_mem: false }, // SMULL/UMULL
-                0x9 | 0xB => Decoded { cost: 7, flow: Flow::Next, single_mem: false }, // SDIV/UDIV
-                0xC | 0xE => Decoded { cost: 5, flow: Flow::Next, single_mem: false }, // SMLAL/UMLAL
+                0x0 | 0x1 => Decoded { cost: 2, ..alu() }, // MLA/MLS
+                0x8 | 0xA => Decoded { cost: 4, ..alu() }, // SMULL/UMULL
+                0x9 | 0xB => Decoded { cost: 7, ..alu() }, // SDIV/UDIV
+                0xC | 0xE => Decoded { cost: 5, ..alu() }, // SMLAL/UMLAL
                 _ => alu(),
             },
             _ => alu(),

@@ -92,12 +92,12 @@ impl FlashConfig {
 /// The block's first line is taken as available when the block starts (a taken branch paid
 /// for it in `refill`); with prefetch on, each further line is read as soon as the previous
 /// one has arrived and a buffer is free (two lines), otherwise when the core starts on the
-/// previous line. `insns` are (address, size in bytes, execution cycles). SRAM code never
-/// stalls here (32-bit reads, one per cycle).
-pub fn fetch_stalls(cfg: &FlashConfig, insns: &[(u32, u32, u64)]) -> Vec<u64> {
-    let Some(&(start, _, _)) = insns.first() else { return Vec::new() };
+/// previous line. `insns` are (address, size in bytes, execution cycles, data transfers on
+/// the bus). SRAM code: see [`sram_fetch_stalls`].
+pub fn fetch_stalls(cfg: &FlashConfig, insns: &[(u32, u32, u64, u64)]) -> Vec<u64> {
+    let Some(&(start, _, _, _)) = insns.first() else { return Vec::new() };
     if start >= CODE_END {
-        return vec![0; insns.len()];
+        return sram_fetch_stalls(insns);
     }
     let first = start / LINE;
     let l = cfg.line_cycles();
@@ -107,7 +107,7 @@ pub fn fetch_stalls(cfg: &FlashConfig, insns: &[(u32, u32, u64)]) -> Vec<u64> {
     let mut last_issue: Vec<Option<u64>> = vec![None];
     let mut t = 0u64;
     let mut stalls = Vec::with_capacity(insns.len());
-    for &(addr, size, cost) in insns {
+    for &(addr, size, cost, _) in insns {
         let need = ((addr + size - 1) / LINE - first) as usize;
         while arrive.len() <= need {
             let k = arrive.len();
@@ -130,6 +130,51 @@ pub fn fetch_stalls(cfg: &FlashConfig, insns: &[(u32, u32, u64)]) -> Vec<u64> {
         last_issue[own] = Some(issue);
         stalls.push(issue - t);
         t = issue + cost;
+    }
+    stalls
+}
+
+/// Words the core's fetch unit may hold ahead of the instruction it executes (Cortex-M3 TRM
+/// §1.2: a three-word prefetch buffer).
+const FETCH_AHEAD: u64 = 3;
+
+/// Fetch stalls of straight-line code in SRAM. Instructions come over the System bus, 32 bits
+/// per bus cycle, and so does every data transfer (SRAM and peripherals): one bus, data first.
+/// A cycle-by-cycle schedule: the block's first word is there when it starts (the refill paid
+/// for it); each cycle the bus is not moving data, the fetch unit reads the next word if it is
+/// fewer than [`FETCH_AHEAD`] words ahead of the instruction executing (or waiting); an
+/// instruction's data transfers take the bus in its last cycles (one per word: a single
+/// load/store 1, LDRD/STRD 2, LDM/STM/PUSH/POP one per register); an instruction issues once
+/// its last halfword has arrived. Assumed from the TRM's bus description, not checked against
+/// silicon (the one silicon figure for SRAM code, a loop without data, has no contention).
+pub fn sram_fetch_stalls(insns: &[(u32, u32, u64, u64)]) -> Vec<u64> {
+    let Some(&(start, _, _, _)) = insns.first() else { return Vec::new() };
+    let base = start / 4;
+    let word = |addr: u32| (addr / 4 - base) as u64;
+    let mut fetched = 1u64; // words 0..fetched are in the buffer
+    let mut c = 0u64; // the current cycle
+    let mut free_at = 0u64; // the cycle the previous instruction's execution ends
+    let mut stalls = Vec::with_capacity(insns.len());
+    // Runs cycle `c`: a fetch unless `data` holds the bus, the fetch unit `ahead_of` a word.
+    let cycle = |c: &mut u64, fetched: &mut u64, data: bool, at: u64| {
+        if !data && *fetched < at + FETCH_AHEAD {
+            *fetched += 1;
+        }
+        *c += 1;
+    };
+    for &(addr, size, cost, data) in insns {
+        let (first, last) = (word(addr), word(addr + size - 1));
+        // Wait for the instruction's bytes.
+        while fetched <= last {
+            cycle(&mut c, &mut fetched, false, first);
+        }
+        stalls.push(c - free_at);
+        // Execute: the data transfers in the last cycles.
+        let data = data.min(cost);
+        for k in 0..cost {
+            cycle(&mut c, &mut fetched, k >= cost - data, first);
+        }
+        free_at = c;
     }
     stalls
 }
@@ -177,14 +222,14 @@ mod tests {
     #[test]
     fn sixteen_bit_code_keeps_up_with_the_prefetch_buffer() {
         // eight 1-cycle 16-bit instructions: 4 per line, a line every 3 cycles
-        let insns: Vec<_> = (0..8).map(|i| (0x0800_0000 + 2 * i, 2, 1)).collect();
+        let insns: Vec<_> = (0..8).map(|i| (0x0800_0000 + 2 * i, 2, 1, 0)).collect();
         assert_eq!(fetch_stalls(&WS2, &insns), vec![0; 8]);
     }
 
     #[test]
     fn thirty_two_bit_code_is_fetch_bound_at_two_wait_states() {
         // 1-cycle 32-bit instructions: 2 per line, a line every 3 cycles
-        let insns: Vec<_> = (0..6).map(|i| (0x0800_0000 + 4 * i, 4, 1)).collect();
+        let insns: Vec<_> = (0..6).map(|i| (0x0800_0000 + 4 * i, 4, 1, 0)).collect();
         let stalls = fetch_stalls(&WS2, &insns);
         let total: u64 = stalls.iter().sum::<u64>() + 6;
         assert_eq!(total, 2 * 3 + 2, "{stalls:?}"); // lines at 0, 3, 6; last insn ends at 8
@@ -195,9 +240,36 @@ mod tests {
     #[test]
     fn prefetch_off_fetches_on_demand() {
         // 16-bit code that keeps up with the prefetch buffer stalls without it
-        let insns: Vec<_> = (0..8).map(|i| (0x0800_0000 + 2 * i, 2, 1)).collect();
+        let insns: Vec<_> = (0..8).map(|i| (0x0800_0000 + 2 * i, 2, 1, 0)).collect();
         let off = FlashConfig::from_acr(0x02);
         assert_eq!(fetch_stalls(&off, &insns).iter().sum::<u64>(), 2, "line 1 asked for at cycle 3");
+    }
+
+    #[test]
+    fn sram_code_shares_the_system_bus_with_data() {
+        // 16-bit ALU code: a word (two instructions) per bus cycle keeps up
+        let alu: Vec<_> = (0..8).map(|i| (0x2000_0000 + 2 * i, 2, 1, 0)).collect();
+        assert_eq!(sram_fetch_stalls(&alu), vec![0; 8]);
+        // 32-bit ALU code: one word per instruction, one bus cycle each: keeps up
+        let wide: Vec<_> = (0..6).map(|i| (0x2000_0000 + 4 * i, 4, 1, 0)).collect();
+        assert_eq!(sram_fetch_stalls(&wide), vec![0; 6]);
+        // 32-bit loads (2 cycles, the second moving data) back to back: the fetch gets every
+        // other cycle, enough for one word per instruction
+        let loads: Vec<_> = (0..6).map(|i| (0x2000_0000 + 4 * i, 4, 2, 1)).collect();
+        assert_eq!(sram_fetch_stalls(&loads), vec![0; 6]);
+        // 32-bit pipelined stores (1 cycle, moving data): the bus never fetches, a stall each
+        let stores: Vec<_> = (0..4).map(|i| (0x2000_0000 + 4 * i, 4, 1, 1)).collect();
+        let s = sram_fetch_stalls(&stores);
+        assert_eq!(s[0], 0);
+        assert!(s[1..].iter().all(|&x| x == 1), "{s:?}");
+        // a push of five registers holds the bus five cycles; the fetch unit was already three
+        // words ahead, so the 16-bit code after it runs on
+        let mut push = vec![(0x2000_0000, 2, 6, 5)];
+        push.extend((1..7).map(|i| (0x2000_0000 + 2 * i, 2, 1, 0)));
+        assert_eq!(sram_fetch_stalls(&push).iter().sum::<u64>(), 0);
+        // the same in flash: no bus shared (instructions on I-Code)
+        let flash: Vec<_> = stores.iter().map(|&(a, s, c, d)| (a - 0x2000_0000 + 0x0800_0000, s, c, d)).collect();
+        assert_eq!(fetch_stalls(&FlashConfig::RESET, &flash), vec![0; 4]);
     }
 
     #[test]

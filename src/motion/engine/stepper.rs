@@ -79,6 +79,9 @@ pub struct Stepper<'a, const N: usize, const L: usize = RAMP_LEN> {
     /// Longest period one event may have: [`MAX_TICK`] (the timer's 16 bits), less in DMA burst
     /// mode, where it bounds the time the buffers hold (longer periods are split into fillers).
     max_tick: u32,
+    /// The next tick may be a plain step ([`Self::tick_quick`]): stepping (`phase` is `Run`)
+    /// and no period being split. Set by every whole tick; only ever conservative.
+    quick: bool,
 }
 
 // SAFETY: `cur` points into the ring the engine consumes; the step half is moved into the
@@ -108,6 +111,7 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
             pend: (core::ptr::null_mut(), 0),
             pended: false,
             max_tick: MAX_TICK,
+            quick: false,
         }
     }
 
@@ -169,7 +173,15 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
     /// Period extension stays off this path: only a period over 65 536 ticks (< 1.1 kHz) or
     /// its filler events take the out-of-line branch.
     #[inline(never)]
+    #[cfg_attr(target_os = "none", link_section = ".data.ramfunc.tick")]
     pub fn tick(&mut self) -> u16 {
+        let arr = self.whole_tick();
+        self.quick = self.phase == Phase::Run && self.extend == 0;
+        arr
+    }
+
+    #[inline(always)]
+    fn whole_tick(&mut self) -> u16 {
         if self.extend != 0 {
             return self.filler();
         }
@@ -179,6 +191,55 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
             return self.extended(ticks);
         }
         self.elapse(ticks)
+    }
+
+    /// [`Self::tick`] with a fast path for the step interrupt: a plain step (running, no control
+    /// change, neither the deceleration trigger nor the move's last step, no ramp millisecond
+    /// ending, one event) is computed inline with only those checks; every other tick is a
+    /// whole one. The same words and periods as `tick` (the property tests compare them).
+    #[inline(never)]
+    #[cfg_attr(target_os = "none", link_section = ".data.ramfunc.tick_quick")]
+    pub fn tick_quick(&mut self) -> u16 {
+        match self.plain_step() {
+            Some(arr) => arr,
+            None => self.tick(),
+        }
+    }
+
+    /// A plain step, if the next tick is one (see [`Self::tick_quick`]).
+    #[inline(always)]
+    fn plain_step(&mut self) -> Option<u16> {
+        if !self.quick || self.shared.ctl.load() != self.ctl_seen {
+            return None;
+        }
+        let p = self.cur;
+        // SAFETY: `quick` is only set while a move runs (`cur` is its slot, see `step`).
+        let (period, at) = unsafe { ((*p).period.load(Relaxed), (*p).decel_at.load(Relaxed)) };
+        let left = self.left.wrapping_sub(1);
+        // Past the trigger or at the last step (left ≤ at, at ≥ 0), or held to rest: a whole tick.
+        if period == 0 || left <= at {
+            return None;
+        }
+        let acc = self.frac + period;
+        let gap = acc >> 4;
+        let ms_left = self.ms_left - gap as i32;
+        if ms_left <= 0 || gap > self.max_tick {
+            return None;
+        }
+        // SAFETY: as above; plain fields, and the slaves only the step half touches.
+        let (mut word, total, n) = unsafe { ((*p).master_on, (*p).total, (*p).n_slaves as usize) };
+        // SAFETY: as above.
+        word |= slave_bits(unsafe { &mut (*p).slaves }, n, total);
+        if self.dual {
+            word = toggle(word, &mut self.level);
+        }
+        self.word = word;
+        self.left = left;
+        self.shared.mv_done.store(total - left, Relaxed);
+        self.frac = acc & 15;
+        self.ms_left = ms_left;
+        self.gap_in = gap;
+        Some((gap - 1) as u16)
     }
 
     /// A period longer than the timer holds: its first piece now, fillers for the rest.
