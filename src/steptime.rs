@@ -43,6 +43,10 @@ pub struct StepTime {
     read_ms: AtomicU32,
     read_count: [AtomicU32; 2],
     read_busy: [AtomicU32; 2],
+    /// DMA burst mode: fills that ended after DMA had entered their half (the fill interrupt
+    /// writes, wrapping), and the count the last report saw.
+    late: AtomicU32,
+    read_late: AtomicU32,
 }
 
 /// What one report covers: the step interrupt since the previous report.
@@ -56,6 +60,8 @@ pub struct StepTimeReport {
     pub load: f32,
     /// Busiest whole millisecond of the window.
     pub peak_load: f32,
+    /// DMA burst mode: late fills since the previous report (see [`StepTime::note_late`]).
+    pub late: u32,
 }
 
 const CYCLES_PER_MS: u32 = crate::TIMER_HZ / 1000;
@@ -86,7 +92,15 @@ impl StepTime {
             read_ms: Z,
             read_count: [Z, Z],
             read_busy: [Z, Z],
+            late: Z,
+            read_late: Z,
         }
+    }
+
+    /// DMA burst mode: a fill ended after DMA had started reading its half (the fill
+    /// interrupt only): entries may have played stale.
+    pub fn note_late(&self) {
+        self.late.store(self.late.load(Relaxed).wrapping_add(1), Relaxed);
     }
 
     /// One step-interrupt body took `cycles` (step interrupt only: plain loads and stores).
@@ -165,6 +179,10 @@ impl StepTime {
             max,
             load: (crate::num::f64_of_u64(d_busy) / elapsed) as f32,
             peak_load: (peak as f64 / CYCLES_PER_MS as f64) as f32,
+            late: {
+                let late = self.late.load(Relaxed);
+                late.wrapping_sub(self.read_late.swap(late, Relaxed))
+            },
         })
     }
 }

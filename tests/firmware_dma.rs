@@ -220,4 +220,37 @@ fn one_axis_runs_at_the_dma_cap() {
     let a = &r.axes.0[0].1;
     assert!(a.min_high_ns.unwrap() >= 200.0 && a.min_low_ns.unwrap() >= 200.0, "{a:?}");
     assert_eq!(r.overruns, 0);
+    // The firmware's own count of late fills agrees: none.
+    let info = reply(&mut b, "$I");
+    assert!(info.contains(", late 0]"), "{info}");
+}
+
+/// A fill that comes late (its interrupt held back longer than a half plays) is counted by the
+/// firmware and reported by `$I`; on time, none is.
+#[test]
+fn a_late_fill_is_counted_and_reported() {
+    use ddastep_bench::emu::dma::IRQ_CHANNEL1;
+    for held_us in [0u64, 1200] {
+        let mut b = boot_dma(Settings::BENCH, false);
+        ok(&mut b, "$110=60000");
+        ok(&mut b, "$120=100000");
+        ok(&mut b, "G91");
+        // One axis at 1000 mm/s · 100 steps/mm = 100 kHz cruise from 5 mm on; both halves
+        // play in at most 1 ms at any rate, so a fill held 1.2 ms is late.
+        ok(&mut b, "G1 X100 F60000");
+        b.run_seconds(0.05).unwrap();
+        b.hold_irq(IRQ_CHANNEL1, true);
+        b.run_for(held_us * HZ / 1_000_000).unwrap();
+        b.hold_irq(IRQ_CHANNEL1, false);
+        wait_idle(&mut b, 1.0);
+        let info = reply(&mut b, "$I");
+        let late: u32 = info.split(", late ").nth(1).and_then(|t| t.split(']').next()).and_then(|n| n.parse().ok())
+            .unwrap_or_else(|| panic!("no late count: {info}"));
+        eprintln!("fill interrupt held {held_us} µs: late {late}, the bench's DMA overruns {}", b.dma_overruns());
+        if held_us == 0 {
+            assert_eq!(late, 0, "{info}");
+        } else {
+            assert!(late >= 1, "{info}");
+        }
+    }
 }

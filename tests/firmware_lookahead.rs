@@ -87,24 +87,33 @@ fn streamed_short_segments_never_starve() {
 /// measure, `ddastep_bench::emu::changes`).
 #[test]
 fn back_to_back_moves_at_the_rate_cap_keep_every_step() {
-    for axes in [1usize, 3, 7] {
+    // The sweep's 0.5 µs pulses, and 2 µs ones (where the low time after a long handler's
+    // falling edge binds the cap).
+    for (axes, pulse_us) in [(1usize, 0.5), (3, 0.5), (7, 0.5), (1, 2.0), (3, 2.0)] {
         let mut b = boot();
         // The cap for this move's slaves, from the firmware's own timing (as `$I` prints the
         // single-axis one).
         let mut s = ddastep::settings::Settings::BENCH;
-        s.set(0, ddastep_bench::emu::sweep::PULSE_US, 3).unwrap();
+        s.set(0, pulse_us, 3).unwrap();
         let cap = s.timing().max_rate_for(axes as u32 - 1);
-        let r = ddastep_bench::emu::changes::back_to_back(&mut b, axes, cap as f64 * 0.995).unwrap();
+        let r = ddastep_bench::emu::changes::back_to_back_at(&mut b, axes, cap as f64 * 0.995, pulse_us).unwrap();
         let info = reply(&mut b, "$I");
         assert!(info.contains(&format!("[MSG:max step rate {} Hz]", s.timing().max_rate_hz())), "{info}");
         wait_idle(&mut b, 1.0);
         eprintln!(
-            "{axes} axes at {:.0} Hz (cap {cap}): step ISR mean {:.1} / max {} (a move change: {} on its last step, {} on the next move's first; not at speed {}, the end {}) modeled cycles ({} runs), overruns {}",
+            "{axes} axes, $0={pulse_us}, at {:.0} Hz (cap {cap}): step ISR mean {:.1} / max {} (a move change: {} on its last step, {} on the next move's first; not at speed {}, the end {}) modeled cycles ({} runs), overruns {}",
             r.hz, r.mean, r.max, r.max_last, r.max_first, r.max_start, r.max_end, r.runs, b.report().overruns
         );
         assert!(r.max_change > 0 && r.runs > 1000, "{r:?}");
         assert_eq!(net(&steps(&b)), r.want, "{axes} axes");
         assert_eq!(steps(&b).len() as i64, r.rising, "{axes} axes: rising edges");
         assert_eq!(b.report().overruns, 0, "{axes} axes");
+        // Every pulse and every low time at least `$0`, on every axis that stepped.
+        for (name, a) in &b.report().axes.0 {
+            if let (Some(hi), Some(lo)) = (a.min_high_ns, a.min_low_ns) {
+                eprintln!("  {name}: high ≥ {hi:.0} ns, low ≥ {lo:.0} ns");
+                assert!(hi >= pulse_us * 1e3 && lo >= pulse_us * 1e3, "{axes} axes, {name}: high {hi} ns, low {lo} ns");
+            }
+        }
     }
 }

@@ -117,7 +117,15 @@ fn DMA1_CHANNEL1() {
                 )
             };
             burst.fill(w, p);
+            // Late: DMA's word channel (the first to read an entry) is in this half already.
+            if ddastep::burst::dma_in_half(dma.ch2().ndtr().read().bits(), 2 * half, at, half) {
+                STEP_TIME.note_late();
+            }
         }
+    }
+    // Both halves played before this interrupt ran: at least a half's fill came late.
+    if flags & (HTIF1 | TCIF1) == HTIF1 | TCIF1 {
+        STEP_TIME.note_late();
     }
     STEP_TIME.record(hw::cycles().wrapping_sub(t0));
 }

@@ -139,9 +139,9 @@ pub trait Out {
 }
 
 /// Free TX bytes needed before a line byte is taken: the longest single reply (`$I` with its
-/// build-info string, the dual-edge cap and the step interrupt's self-measurement line, or `$N` with two stored
+/// build-info string, the DMA cap and the step path's self-measurement line with its late fills, or `$N` with two stored
 /// lines).
-pub const REPLY_ROOM: usize = 336;
+pub const REPLY_ROOM: usize = 352;
 
 impl<const C: usize> Out for heapless::Vec<u8, C> {
     fn put(&mut self, bytes: &[u8]) {

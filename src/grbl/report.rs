@@ -318,7 +318,14 @@ pub fn step_time(out: &mut impl Out, t: &crate::steptime::StepTimeReport, dma: b
     put_fixed(out, t.load as f64 * 100.0, 1);
     out.put(b" % peak ");
     put_fixed(out, t.peak_load as f64 * 100.0, 1);
-    out.put(b" %]\r\n");
+    if dma {
+        // Fills that ended after DMA had entered their half (0 unless the fill fell behind).
+        out.put(b" %, late ");
+        put_u32(out, t.late);
+        out.put(b"]\r\n");
+    } else {
+        out.put(b" %]\r\n");
+    }
 }
 
 /// Lines `$#` prints: G54..G59, G28, G30, G92, TLO, PRB.
@@ -404,10 +411,10 @@ mod tests {
              [MSG:ramp 1000-60000 Hz 1000000 Hz/s trapezoid]\r\n"
         );
         assert!(info.len() <= crate::protocol::REPLY_ROOM);
-        let t = crate::steptime::StepTimeReport { entries: 9, min: 190, mean: 191.44, max: 1402, load: 0.0812, peak_load: 0.156 };
+        let t = crate::steptime::StepTimeReport { entries: 9, min: 190, mean: 191.44, max: 1402, load: 0.0812, peak_load: 0.156, late: 2 };
         assert_eq!(text(|o| step_time(o, &t, false)), "[MSG:step isr 190/191.4/1402 cycles min/mean/max, load 8.1 % peak 15.6 %]\r\n");
-        assert_eq!(text(|o| step_time(o, &t, true)), "[MSG:step fill 190/191.4/1402 cycles min/mean/max, load 8.1 % peak 15.6 %]\r\n");
-        let worst = crate::steptime::StepTimeReport { entries: 1, min: u32::MAX, mean: u32::MAX as f32, max: u32::MAX, load: 1.0, peak_load: 1.0 };
+        assert_eq!(text(|o| step_time(o, &t, true)), "[MSG:step fill 190/191.4/1402 cycles min/mean/max, load 8.1 % peak 15.6 %, late 2]\r\n");
+        let worst = crate::steptime::StepTimeReport { entries: 1, min: u32::MAX, mean: u32::MAX as f32, max: u32::MAX, load: 1.0, peak_load: 1.0, late: u32::MAX };
         let dual = text(|o| build_info(o, b"", 15, &Ramped { dual: true, ..r }));
         assert!(dual.contains("[MSG:max step rate 166666 Hz dual-edge]\r\n"), "{dual}");
         let dma = text(|o| build_info(o, b"", 15, &Ramped { dma: true, ..r }));

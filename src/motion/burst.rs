@@ -149,6 +149,15 @@ impl<'a, const N: usize, const L: usize> Burst<'a, N, L> {
     }
 }
 
+/// Whether DMA is inside the half `at..at + half` of a circular buffer of `n` entries, its
+/// channel's remaining count being `cndtr` (n..=1: the next entry it reads is `n − cndtr`; it
+/// reloads to n after the last): a fill of that half that ends now ended late (DMA may have
+/// read entries of it before the fill wrote them).
+pub fn dma_in_half(cndtr: u32, n: usize, at: usize, half: usize) -> bool {
+    let next = n.wrapping_sub(cndtr as usize) % n.max(1);
+    next >= at && next < at + half
+}
+
 /// `s[i..]` without the call the slice index makes at `opt-level = "z"` (the fill runs it per
 /// half).
 #[inline(always)]
@@ -156,4 +165,19 @@ pub(crate) fn tail<T>(s: &mut [T], i: usize) -> &mut [T] {
     let i = i.min(s.len());
     // SAFETY: `i ≤ s.len()`: the rest of the slice, borrowed from `s`.
     unsafe { core::slice::from_raw_parts_mut(s.as_mut_ptr().add(i), s.len() - i) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::dma_in_half;
+
+    #[test]
+    fn dma_position_against_the_half_filled() {
+        // 2 halves of 4: next entry 8 - cndtr (8 after a reload: entry 0)
+        let inside = |cndtr| (dma_in_half(cndtr, 8, 0, 4), dma_in_half(cndtr, 8, 4, 4));
+        assert_eq!(inside(8), (true, false), "reloaded: entry 0 next");
+        assert_eq!(inside(5), (true, false), "entry 3 next");
+        assert_eq!(inside(4), (false, true), "entry 4 next: the second half");
+        assert_eq!(inside(1), (false, true), "entry 7 next");
+    }
 }

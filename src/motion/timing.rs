@@ -115,7 +115,13 @@ impl Timing {
             return if long > p { long } else { p };
         }
         let cpu = HANDLER_BASE_TICKS + HANDLER_PER_SLAVE_TICKS * slaves;
-        let low = HANDLER_FALL_TICKS + HANDLER_PER_SLAVE_TICKS * slaves + self.pulse_ticks;
+        // (A pulse within the gap handlers keep between a falling and the next rising store
+        // needs no room of its own.)
+        let low = if self.pulse_ticks > HANDLER_GAP_TICKS {
+            HANDLER_FALL_TICKS + HANDLER_PER_SLAVE_TICKS * slaves + self.pulse_ticks
+        } else {
+            0
+        };
         // A long tick (ramp work, a move change) must check for the compare event before the
         // next period's compare event comes, or it takes that one too and a pulse runs into
         // the next step.
@@ -145,38 +151,46 @@ impl Timing {
     }
 }
 
-/// Step-handler cost per master step, timer ticks: the virtual bench's step-rate sweep
-/// (bench/RESULTS.md, one long move per point, modeled with the silicon-checked memory model;
-/// the ramp interrupt and `idle` counted in the CPU) holds the CPU ≤ 95 % busy up to 227 kHz
-/// on three axes and 187 kHz on seven (periods 317 and 385 ticks; one axis reaches the cap the
-/// low time sets at 0.5 µs pulses, 252 kHz); builds that differ only in code placement moved
-/// these by up to 2 %, so 288 + 17 per slave, about 1.5 % to spare.
-pub const HANDLER_BASE_TICKS: u32 = 288;
+/// Step-handler cost per master step, timer ticks: the virtual bench's step-rate sweep with
+/// the caps lifted (one long move per point, modeled with the silicon-checked memory model and
+/// the step interrupt in SRAM; the ramp interrupt and `idle` counted in the CPU) holds the CPU
+/// ≤ 95 % busy up to 299, 263 and 210 kHz on 1, 3 and 7 axes (periods 241, 274 and 343 ticks:
+/// 241 + 17 per slave); 245 + 17 per slave leaves about 1.5 % for code placement.
+pub const HANDLER_BASE_TICKS: u32 = 245;
 /// Extra handler ticks per slave axis (see [`HANDLER_BASE_TICKS`]).
 pub const HANDLER_PER_SLAVE_TICKS: u32 = 17;
 /// The longest step-handler run at speed, timer ticks (plus [`HANDLER_PER_SLAVE_TICKS`] per
 /// slave): a move change (the ramp work runs in its own interrupt); the bench's back-to-back
-/// moves at the cap (`ddastep_bench::emu::changes`, per-entry log) measured at most 313
-/// modeled cycles on one axis, 345 on three and 404 on seven.
+/// moves at the cap (`ddastep_bench::emu::changes`, per-entry log) measured at most 319
+/// modeled cycles on one axis, 342 on three and 401 on seven.
 pub const HANDLER_LONG_TICKS: u32 = 330;
 /// From a handler's compare-flag check to its end (the self-measurement), less a margin.
 pub const HANDLER_TAIL_TICKS: u32 = 10;
-/// Where a falling edge lands after its rising edge at the latest (plus
-/// [`HANDLER_PER_SLAVE_TICKS`] per slave), when the compare event comes during the update
-/// handler and the handler stores the edge at its end: in the longest handler at speed (a move
-/// change or a trigger), on the bench's per-entry log the falling store up to 317 cycles after
-/// its update on three axes, the next rising store at least 46 after the next update. A low
-/// time of at least the pulse then needs the period to be this plus the pulse.
+/// Where a falling edge lands at the latest after the next update event's rising store would
+/// (plus [`HANDLER_PER_SLAVE_TICKS`] per slave), for pulses longer than [`HANDLER_GAP_TICKS`]:
+/// the longest handler at speed (a move's last step, which finds its successor) stores it at
+/// its end when the compare event came during it. A low time of at least the pulse then needs
+/// the period to be this plus the pulse. The bench's back-to-back moves at the cap with 2 µs
+/// pulses (`tests/firmware_lookahead.rs`) put it at 241 ticks on one axis (the lowest low time,
+/// 2.19 µs at a 404-tick period) and 212 + 17 per slave on three; 250 leaves a margin.
 pub const HANDLER_FALL_TICKS: u32 = 250;
+
+/// The shortest time from a step handler's falling store to the next handler's rising store
+/// when a long handler delays the next update's (they run back to back: the rest of the first
+/// handler after its falling store, a tail-chain, the second's entry and its code before the
+/// store), timer ticks: the bench's back-to-back moves at the cap (`tests/firmware_lookahead.rs`)
+/// measure lows of at least 68 ticks (944 ns) there; 48 leaves a margin. A pulse up to this
+/// needs no room for a low time after a long handler's late falling edge
+/// ([`HANDLER_FALL_TICKS`]).
+pub const HANDLER_GAP_TICKS: u32 = 48;
 
 /// Step-handler cost per master step in dual-edge mode (one update event per step, no compare
 /// event), timer ticks, plus [`HANDLER_PER_SLAVE_TICKS`] per slave: the sweep in dual-edge mode
-/// (bench/RESULTS.md; 20 ms cruise, 0.5 µs pulses, the ramp interrupt and `idle` counted) holds
-/// the CPU ≤ 95 % busy up to 253, 225 and 186 kHz on 1, 3 and 7 axes (periods 285, 320 and
-/// 387 ticks; the toggle costs a few cycles more than full pulses' one entry per step): 291 +
-/// 17 per slave, about 1.5 % to spare for code placement. Dual-edge mode gains where the
-/// full-pulse rule binds (from 1 µs: the low time after the latest falling edge).
-pub const DUAL_BASE_TICKS: u32 = 291;
+/// with the caps lifted holds the CPU ≤ 95 % busy up to 300, 264 and 211 kHz on 1, 3 and 7 axes
+/// (the toggle costs about what the compare check saves): the same 245 + 17 per slave as full
+/// pulses. Dual-edge mode gains where the full-pulse rule binds (from 1 µs: the low time after
+/// the latest falling edge).
+pub const DUAL_BASE_TICKS: u32 = 245;
 /// Dual-edge mode: the shortest period a long tick (ramp work, a move change) leaves without a
 /// missed update event, timer ticks (plus [`HANDLER_PER_SLAVE_TICKS`] per slave). A long tick
 /// may overrun one period (the next update then waits for it, its store comes late by at most

@@ -330,6 +330,12 @@ impl Board {
         self.cpu.get_data().usart1.rx_overruns
     }
 
+    /// Holds IRQ `irq` back (it stays pending, not taken) until called again with `false`:
+    /// for tests of an interrupt that comes late (the firmware's own NVIC settings unchanged).
+    pub fn hold_irq(&mut self, irq: u32, held: bool) {
+        self.cpu.get_data_mut().nvic.held[(IRQ0 + irq) as usize] = held;
+    }
+
     // TIM2 events that found their flag still set, plus the DMA's overruns (`dma_overruns`)
     pub fn overruns(&self) -> u64 {
         let m = self.cpu.get_data();

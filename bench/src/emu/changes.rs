@@ -55,10 +55,17 @@ impl ChangeResult {
 /// `axes` axes (steps in the sweep's ratio; on 2 and more axes Y reverses at every junction:
 /// a direction change at speed). Runs until idle.
 pub fn back_to_back(b: &mut Board, axes: usize, hz: f64) -> Result<ChangeResult> {
+    back_to_back_at(b, axes, hz, super::sweep::PULSE_US)
+}
+
+/// [`back_to_back`] with pulses of `pulse_us` (`$0`) instead of the sweep's.
+pub fn back_to_back_at(b: &mut Board, axes: usize, hz: f64, pulse_us: f64) -> Result<ChangeResult> {
     for l in settings_lines() {
         let r = b.send_line_wait_ok(&l)?;
         ensure!(r.contains("ok"), "{l}: {r}");
     }
+    let r = b.send_line_wait_ok(&format!("$0={pulse_us}"))?;
+    ensure!(r.contains("ok"), "$0: {r}");
     ensure!(b.send_line_wait_ok("G91")?.contains("ok"));
     let mut want = [0i64; 7];
     let mut rising = 0i64;

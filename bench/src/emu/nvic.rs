@@ -27,6 +27,9 @@ pub struct Nvic {
     /// Peripheral interrupt request lines (level).
     pub level: [bool; COUNT],
     pub active: [bool; COUNT],
+    /// Held back by the bench (`Board::hold_irq`), whatever the firmware enabled: for tests of
+    /// what the firmware does when an interrupt comes late.
+    pub held: [bool; COUNT],
     pub priority: [u8; COUNT],
     /// Active exceptions, innermost last.
     pub stack: Vec<u32>,
@@ -43,6 +46,7 @@ impl Default for Nvic {
             pending: [false; COUNT],
             level: [false; COUNT],
             active: [false; COUNT],
+            held: [false; COUNT],
             priority: [0; COUNT],
             stack: Vec::new(),
             vtor: 0,
@@ -66,7 +70,7 @@ impl Nvic {
 
     // is exception `n` enabled (system exceptions always are)?
     fn is_enabled(&self, n: usize) -> bool {
-        n < IRQ0 as usize || self.enabled[n]
+        n < IRQ0 as usize || (self.enabled[n] && !self.held[n])
     }
 
     // group priority of exception `n` (lower = more urgent); fixed ones are negative

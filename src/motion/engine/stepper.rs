@@ -195,22 +195,13 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
 
     /// [`Self::tick`] with a fast path for the step interrupt: a plain step (running, no control
     /// change, neither the deceleration trigger nor the move's last step, no ramp millisecond
-    /// ending, one event) is computed inline with only those checks; every other tick is a
-    /// whole one. The same words and periods as `tick` (the property tests compare them).
-    #[inline(never)]
-    #[cfg_attr(target_os = "none", link_section = ".data.ramfunc.tick_quick")]
-    pub fn tick_quick(&mut self) -> u16 {
-        match self.plain_step() {
-            Some(arr) => arr,
-            None => self.tick(),
-        }
-    }
-
-    /// A plain step, if the next tick is one (see [`Self::tick_quick`]).
+    /// ending, one event) takes only those checks, inline in the handler, and a call that
+    /// computes it; every other tick is a whole one (no second prologue on its way). The same
+    /// words and periods as `tick` (the property tests compare them).
     #[inline(always)]
-    fn plain_step(&mut self) -> Option<u16> {
+    pub fn tick_quick(&mut self) -> u16 {
         if !self.quick || self.shared.ctl.load() != self.ctl_seen {
-            return None;
+            return self.tick();
         }
         let p = self.cur;
         // SAFETY: `quick` is only set while a move runs (`cur` is its slot, see `step`).
@@ -218,15 +209,24 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
         let left = self.left.wrapping_sub(1);
         // Past the trigger or at the last step (left ≤ at, at ≥ 0), or held to rest: a whole tick.
         if period == 0 || left <= at {
-            return None;
+            return self.tick();
         }
         let acc = self.frac + period;
-        let gap = acc >> 4;
-        let ms_left = self.ms_left - gap as i32;
-        if ms_left <= 0 || gap > self.max_tick {
-            return None;
+        let ms_left = self.ms_left - (acc >> 4) as i32;
+        if ms_left <= 0 || acc >> 4 > self.max_tick {
+            return self.tick();
         }
-        // SAFETY: as above; plain fields, and the slaves only the step half touches.
+        self.plain_step(left, acc, ms_left)
+    }
+
+    /// The plain step [`Self::tick_quick`] found: `left` steps after it, `acc` the period's
+    /// sum with the fraction, `ms_left` the millisecond's ticks after its gap.
+    #[inline(never)]
+    #[cfg_attr(target_os = "none", link_section = ".data.ramfunc.plain_step")]
+    fn plain_step(&mut self, left: u32, acc: u32, ms_left: i32) -> u16 {
+        let p = self.cur;
+        let gap = acc >> 4;
+        // SAFETY: as in `tick_quick`; plain fields, and the slaves only the step half touches.
         let (mut word, total, n) = unsafe { ((*p).master_on, (*p).total, (*p).n_slaves as usize) };
         // SAFETY: as above.
         word |= slave_bits(unsafe { &mut (*p).slaves }, n, total);
@@ -239,7 +239,7 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
         self.frac = acc & 15;
         self.ms_left = ms_left;
         self.gap_in = gap;
-        Some((gap - 1) as u16)
+        (gap - 1) as u16
     }
 
     /// A period longer than the timer holds: its first piece now, fillers for the rest.
