@@ -173,14 +173,15 @@ fn dual_edge_is_a_pin_setting_with_its_own_rate_rule() {
     assert_eq!(Settings::decode(&b), Some(s));
     s.dual_edge = false;
     assert_eq!(Settings::decode(&s.to_bytes()).map(|d| d.dual_edge), Some(false));
-    // One event per step: the handler's cost binds, not twice the pulse; every pulse from
-    // 0.2 µs up to the period the cost allows runs at the same cap, above the full-pulse one
-    // where the pulse binds full pulses (from 2 µs; at 0.5 µs both are the handler's cost).
+    // One event per step: the handler's cost binds, not twice the pulse, up to the pulse where
+    // two toggles a long tick brings closer bind (half of the long tick's term plus the pulse);
+    // above the full-pulse cap where the pulse binds full pulses (from 2 µs; at 0.5 µs both are
+    // the handler's cost).
     for (pulse, slaves) in [(0.2, 0u32), (0.5, 0), (0.5, 2), (2.0, 0), (2.0, 6), (3.0, 0), (3.0, 6)] {
         let mut d = Settings { dual_edge: true, ..Settings::BENCH };
         d.set(0, pulse, 3).unwrap();
         let t = d.timing();
-        let want = (BASE + SLAVE * slaves).max(LONG + SLAVE * slaves).max(t.pulse_ticks + JIT);
+        let want = (BASE + SLAVE * slaves).max((LONG + SLAVE * slaves + t.pulse_ticks).div_ceil(2)).max(t.pulse_ticks + JIT);
         assert_eq!(t.min_period_for(slaves), want, "{pulse} µs, {slaves} slaves");
         d.dual_edge = false;
         let full = d.timing();
@@ -196,6 +197,7 @@ fn dual_edge_is_a_pin_setting_with_its_own_rate_rule() {
     let mut d = Settings { dual_edge: true, ..Settings::BENCH };
     d.set(0, 10.0, 3).unwrap();
     assert_eq!(d.timing().min_period_for(0), 720 + JIT);
+    assert!(720 + JIT > (LONG + 720).div_ceil(2));
 }
 
 #[test]

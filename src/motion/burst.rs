@@ -115,20 +115,36 @@ impl<'a, const N: usize, const L: usize> Burst<'a, N, L> {
     /// periods without the per-tick checks, see `engine::stepper::plain`); every other entry is
     /// a whole tick.
     pub fn fill(&mut self, words: &mut [u32], periods: &mut [u16]) {
+        self.fill_watched(words, periods, || 0);
+    }
+
+    /// [`Self::fill`] for buffers DMA is playing: `played` says how many entries of this half DMA
+    /// has read so far (more than its length once it played all of it). Returns whether DMA
+    /// read an entry before the fill wrote it (late), as far as the checks see: after every
+    /// entry that ran the ramp half's work (the long ones; other entries take less time than
+    /// DMA plays one at the rate caps, so DMA cannot catch up on them). The caller checks the
+    /// fill's start and end itself (`played` before and after: more than 0, more than the
+    /// half).
+    pub fn fill_watched(&mut self, words: &mut [u32], periods: &mut [u16], mut played: impl FnMut() -> usize) -> bool {
         let len = words.len().min(periods.len());
+        let mut late = false;
         let mut i = 0;
         while i < len {
             if self.quick {
                 i += self.step.quick_entries(tail(words, i), tail(periods, i));
                 if i >= len {
-                    return;
+                    break;
                 }
             }
             words[i] = self.step.word();
             periods[i] = self.step.tick();
-            self.ramp_work();
             i += 1;
+            if self.ramp_work() {
+                // (The long entries: the ramp half's work.)
+                late |= played() > i;
+            }
         }
+        late
     }
 
     /// Turns the fast path off (every entry a whole tick) or on, for tests that compare them.
@@ -138,24 +154,36 @@ impl<'a, const N: usize, const L: usize> Burst<'a, N, L> {
 
     /// The ramp half's work, when a tick asked for it or changed moves (what the host engine
     /// does after every tick: its ramp half returns at once when nothing changed).
+    /// Whether it ran.
     #[inline(always)]
-    fn ramp_work(&mut self) {
+    fn ramp_work(&mut self) -> bool {
         let link = &self.shared.link;
         let now = (self.shared.record_seq(), link.next.load(core::sync::atomic::Ordering::Relaxed));
         if self.step.take_pended() || now != self.seen {
             self.seen = now;
             self.ramp.run();
+            return true;
         }
+        false
     }
 }
 
-/// Whether DMA is inside the half `at..at + half` of a circular buffer of `n` entries, its
+/// Entries DMA has read of the half `at..at + half` of a circular buffer of `n` entries, its
 /// channel's remaining count being `cndtr` (n..=1: the next entry it reads is `n − cndtr`; it
-/// reloads to n after the last): a fill of that half that ends now ended late (DMA may have
-/// read entries of it before the fill wrote them).
-pub fn dma_in_half(cndtr: u32, n: usize, at: usize, half: usize) -> bool {
-    let next = n.wrapping_sub(cndtr as usize) % n.max(1);
-    next >= at && next < at + half
+/// reloads to n after the last), `done` when the half's own completion flag is set (it played
+/// all of it: more than `half`); 0 while it plays the other half. For
+/// [`Burst::fill_watched`].
+pub fn dma_played(cndtr: u32, n: usize, at: usize, half: usize, done: bool) -> usize {
+    if done {
+        return half + 1;
+    }
+    // (cndtr is 1..=n: no remainder needed, and none taken on this path.)
+    let next = n.wrapping_sub(cndtr as usize);
+    if next >= at && next < at + half {
+        next - at
+    } else {
+        0
+    }
 }
 
 /// `s[i..]` without the call the slice index makes at `opt-level = "z"` (the fill runs it per
@@ -169,15 +197,16 @@ pub(crate) fn tail<T>(s: &mut [T], i: usize) -> &mut [T] {
 
 #[cfg(test)]
 mod tests {
-    use super::dma_in_half;
+    use super::dma_played;
 
     #[test]
     fn dma_position_against_the_half_filled() {
         // 2 halves of 4: next entry 8 - cndtr (8 after a reload: entry 0)
-        let inside = |cndtr| (dma_in_half(cndtr, 8, 0, 4), dma_in_half(cndtr, 8, 4, 4));
-        assert_eq!(inside(8), (true, false), "reloaded: entry 0 next");
-        assert_eq!(inside(5), (true, false), "entry 3 next");
-        assert_eq!(inside(4), (false, true), "entry 4 next: the second half");
-        assert_eq!(inside(1), (false, true), "entry 7 next");
+        let played = |cndtr| (dma_played(cndtr, 8, 0, 4, false), dma_played(cndtr, 8, 4, 4, false));
+        assert_eq!(played(8), (0, 0), "reloaded: entry 0 next, none of the first half read");
+        assert_eq!(played(5), (3, 0), "entry 3 next");
+        assert_eq!(played(4), (0, 0), "entry 4 next: the second half");
+        assert_eq!(played(1), (0, 3), "entry 7 next");
+        assert_eq!(dma_played(8, 8, 0, 4, true), 5, "the half's flag: all of it played");
     }
 }

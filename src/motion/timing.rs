@@ -108,9 +108,10 @@ impl Timing {
             return if cpu > self.min_period_ticks { cpu } else { self.min_period_ticks };
         }
         if self.dual {
-            // One event per step: the handler's cost (CPU ≤ 95 %) and its longest run at speed.
+            // One event per step: the handler's cost (CPU ≤ 95 %), and two toggles of a pin a
+            // pulse apart when a long tick delays the second's store.
             let cpu = DUAL_BASE_TICKS + HANDLER_PER_SLAVE_TICKS * slaves;
-            let long = DUAL_LONG_TICKS + HANDLER_PER_SLAVE_TICKS * slaves;
+            let long = (DUAL_LONG_TICKS + HANDLER_PER_SLAVE_TICKS * slaves + self.pulse_ticks).div_ceil(2);
             let p = if cpu > self.min_period_ticks { cpu } else { self.min_period_ticks };
             return if long > p { long } else { p };
         }
@@ -191,12 +192,13 @@ pub const HANDLER_GAP_TICKS: u32 = 48;
 /// pulses. Dual-edge mode gains where the full-pulse rule binds (from 1 µs: the low time after
 /// the latest falling edge).
 pub const DUAL_BASE_TICKS: u32 = 245;
-/// Dual-edge mode: the shortest period a long tick (ramp work, a move change) leaves without a
-/// missed update event, timer ticks (plus [`HANDLER_PER_SLAVE_TICKS`] per slave). A long tick
-/// may overrun one period (the next update then waits for it, its store comes late by at most
-/// the overrun); two updates inside one run would be an overrun. The bench's back-to-back
-/// moves at the cap (tests/firmware_dual_edge.rs) keep every step with the CPU rule alone.
-pub const DUAL_LONG_TICKS: u32 = 0;
+/// Dual-edge mode: a long tick (a move change) delays the next update's toggle by what it runs
+/// over the period, so two toggles of a pin come `2 × period − this` apart at the least (plus
+/// [`HANDLER_PER_SLAVE_TICKS`] per slave), and the period is at least half of this plus the
+/// pulse. The bench's back-to-back moves at 293.9 kHz with 3 µs pulses
+/// (tests/firmware_dual_edge.rs) measured toggles 192 cycles apart at a 246-tick period: 300
+/// on one axis; 320 leaves a margin.
+pub const DUAL_LONG_TICKS: u32 = 320;
 
 /// DMA burst mode: the buffer fill's cost per master step for a move with slaves (or in
 /// dual-edge mode), timer ticks, plus [`DMA_PER_SLAVE_TICKS`] per slave, DMA's own bus cycles
