@@ -64,7 +64,9 @@ pub fn install(engine: Engine<'static, AXES>, nvic: &mut cortex_m::peripheral::N
 
 /// The step interrupt: store the precomputed word first, then compute the next one (a tick
 /// that leaves the ramp half work pends its interrupt). The body times itself with the DWT cycle
-/// counter (`$I` reports it, see `ddastep::steptime`).
+/// counter (`$I` reports it, see `ddastep::steptime`). It runs from SRAM (`.data.ramfunc.*`,
+/// copied there with `.data` at boot), as do `Stepper::tick` and the plain step: no flash wait
+/// states or refills on the step path (SRAM fetches share the System bus with data instead).
 #[interrupt]
 #[link_section = ".data.ramfunc.tim2"]
 fn TIM2() {

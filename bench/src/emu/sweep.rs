@@ -738,8 +738,8 @@ pub fn results_markdown(s: &Sweep, others: &[Sweep], command: &str, firmware: &s
         writeln!(m, "The same sweep with `$580=1` first (the MCU restarts): every step toggles its pin, one update")?;
         writeln!(m, "event per step and no compare event. Steps are counted on both edges; the X high time column")?;
         writeln!(m, "is then the shortest time between two toggles of X. `$I` reports {} Hz with these settings", d.cap_hz)?;
-        writeln!(m, "(`Timing::min_period_for`, dual-edge rule: the handler's measured cost per step and its longest")?;
-        writeln!(m, "run at speed, above the pulse plus the store jitter). A \"fails\" just above a row's cap is the")?;
+        writeln!(m, "(`Timing::min_period_for`, dual-edge rule: the handler's measured cost per step, two toggles a")?;
+        writeln!(m, "long tick brings closer still a pulse apart, the pulse plus the store jitter). A \"fails\" just above a row's cap is the")?;
         writeln!(m, "planner's clamp (the move cruises at the cap, not at the target: \"no cruise\" in the point list).\n")?;
         m += &d.table();
         writeln!(m, "\nSide by side (CPU ≤ 95 %; `$I`, one axis: {:.1} kHz single-edge, {:.1} kHz dual-edge):\n", s.cap_hz as f64 / 1000.0, d.cap_hz as f64 / 1000.0)?;
@@ -786,7 +786,9 @@ pub fn results_markdown(s: &Sweep, others: &[Sweep], command: &str, firmware: &s
         writeln!(m, "per step: with a short pulse the compare event is already pending when the update handler")?;
         writeln!(m, "checks it, so the falling edge costs no entry of its own). The step ISR alone saturates the core")?;
         writeln!(m, "at 72 MHz / cycles: ≈ {:.0} kHz for 1 axis, ≈ {:.0} kHz for 7. 500 kHz needs", 72e3 / a, 72e3 / (a + 6.0 * b))?;
-        writeln!(m, "≤ 144 cycles per step including entry and return (26).\n")?;
+        writeln!(m, "≤ 144 cycles per step including entry and return (26). The step interrupt's code (the TIM2")?;
+        writeln!(m, "handler, `Stepper::tick`, the plain step of `Stepper::tick_quick`) runs from SRAM, where the")?;
+        writeln!(m, "bench charges its fetches sharing the System bus with data (bench/README.md, \"Model\").\n")?;
     }
     let mut thread_per_entry = 0.0f64;
     for (axes, hz) in [(7usize, 50_000u32), (1, 50_000)] {
