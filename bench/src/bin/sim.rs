@@ -224,7 +224,7 @@ fn run_sweep(args: &Args, elf: &std::path::Path) -> Result<()> {
     println!("{} points in {:.1} s wall", s.points, s.wall_s);
     if let Some(p) = &args.results {
         let mut others = Vec::new();
-        for m in [sweep::Mode { dual_edge: true, dma: false }, sweep::Mode { dual_edge: false, dma: true }] {
+        for m in [sweep::Mode { dual_edge: true, dma: false }, sweep::Mode { dual_edge: false, dma: true }, sweep::Mode { dual_edge: true, dma: true }] {
             let o = sweep::sweep(elf, &sweep::Options { mode: m, ..opts.clone() })?;
             println!("{} mode: max step rate {} Hz", m.label(), o.cap_hz);
             print!("{}", o.table());

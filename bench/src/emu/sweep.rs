@@ -648,6 +648,7 @@ fn change_rates(s: &Sweep) -> Vec<(usize, f64)> {
 pub fn results_markdown(s: &Sweep, others: &[Sweep], command: &str, firmware: &str, elf: &Path) -> Result<String> {
     let dual = others.iter().find(|o| o.mode == Mode { dual_edge: true, dma: false });
     let dma = others.iter().find(|o| o.mode == Mode { dual_edge: false, dma: true });
+    let dma_dual = others.iter().find(|o| o.mode == Mode { dual_edge: true, dma: true });
     use std::fmt::Write as _;
     let mut m = String::new();
     let (date, commit, flash) = (utc_date(), firmware, flash_bytes(elf));
@@ -760,6 +761,14 @@ pub fn results_markdown(s: &Sweep, others: &[Sweep], command: &str, firmware: &s
         writeln!(m, "bus-matrix share stolen from a running core). `$I` reports {} Hz with these settings", d.cap_hz)?;
         writeln!(m, "(`Timing::min_period_for`, DMA rule: the fill's measured cost per step, above the pulse and low")?;
         writeln!(m, "time plus the stores' latency margin). A \"fails\" just above a row's cap is the planner's clamp.\n")?;
+        m += &d.table();
+        writeln!(m)?;
+    }
+    if let Some(d) = dma_dual {
+        writeln!(m, "### DMA burst mode, dual-edge (`$581=1`, `$580=1`)\n")?;
+        writeln!(m, "The same with every step toggling its pin: no compare event, no falling-edge store (two DMA")?;
+        writeln!(m, "stores per entry). Steps are counted on both edges; the X high time column is the shortest time")?;
+        writeln!(m, "between two toggles of X. `$I` reports {} Hz with these settings.\n", d.cap_hz)?;
         m += &d.table();
         writeln!(m)?;
     }
