@@ -13,6 +13,7 @@
 use core::sync::atomic::Ordering::Relaxed;
 
 use super::{piece, slave_bits, toggle, Phase, Stepper};
+use crate::prepared::Slave;
 use crate::burst::tail;
 
 impl<const N: usize, const L: usize> Stepper<'_, N, L> {
@@ -72,7 +73,9 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
         let made = match (n == 0 && !self.dual, (period + 15) >> 4 <= max) {
             (true, true) => self.lane::<false, false>(words, periods, period, master_on, room),
             (true, false) => self.lane::<true, false>(words, periods, period, master_on, room),
-            (false, true) => self.lane::<false, true>(words, periods, period, master_on, room),
+            // Dual-edge toggles each word as a whole: the step-major lane (its split never splits).
+            (false, true) if self.dual => self.lane::<true, true>(words, periods, period, master_on, room),
+            (false, true) => self.slave_lane(words, periods, period, master_on, room),
             (false, false) => self.lane::<true, true>(words, periods, period, master_on, room),
         };
         if self.left != left {
@@ -133,4 +136,98 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
         self.left -= steps;
         made
     }
+
+    /// [`Self::lane`] without the split, single-edge, for a move with slaves, slave-major: the
+    /// master's pass writes the periods; then the slaves, two at a time with their
+    /// accumulators in registers, walk the steps and write the words (the first pair stores,
+    /// the others OR in). The step made last stays the edge about to happen (`word`), as in
+    /// the lane.
+    #[inline(never)]
+    fn slave_lane(&mut self, words: &mut [u32], periods: &mut [u16], period: u32, on: u32, room: u32) -> usize {
+        let len = words.len().min(periods.len()).min(room as usize);
+        let (mut frac, mut ms_left, mut gap_in) = (self.frac, self.ms_left, self.gap_in);
+        let per = periods.as_mut_ptr();
+        let mut made = 0;
+        while made < len {
+            let acc = frac + period;
+            let gap = acc >> 4;
+            if ms_left <= gap as i32 {
+                break;
+            }
+            ms_left -= gap as i32;
+            frac = acc & 15;
+            // SAFETY: made < len ≤ periods.len().
+            unsafe { *per.add(made) = (gap - 1) as u16 };
+            gap_in = gap;
+            made += 1;
+        }
+        if made == 0 {
+            return 0;
+        }
+        (self.frac, self.ms_left, self.gap_in) = (frac, ms_left, gap_in);
+        self.left -= made as u32;
+        let w = words.as_mut_ptr();
+        // SAFETY: 0 < made ≤ words.len(): entry 0 takes the edge that was about to happen,
+        // entries 1..made the steps but the last, which becomes the edge about to happen.
+        // The running move's slot: plain fields and its slaves, which only the step half
+        // touches (see `step`).
+        unsafe {
+            *w = self.word;
+            let (first, end) = (w.add(1), w.add(made));
+            let p = self.cur;
+            let (n, total) = ((*p).n_slaves as usize, (*p).total);
+            let s = (*p).slaves.as_mut_ptr();
+            let mut last = on;
+            let mut none = Slave { dda: crate::interp::Dda::new(0, 0), on: 0, axis: 0 };
+            let none: *mut Slave = &mut none;
+            let pair = |i: usize| if i + 1 < n { s.add(i + 1) } else { none };
+            walk::<true>(first, end, &mut last, on, s, pair(0), total);
+            let mut i = 2;
+            while i < n {
+                walk::<false>(first, end, &mut last, 0, s.add(i), pair(i), total);
+                i += 2;
+            }
+            self.word = last;
+        }
+        made
+    }
 }
+
+/// Walks slaves `a` and `b` over the steps whose words are `first..end` and then `last`
+/// (the words the steps put on the pins after `on`; `FIRST`: stores them, else ORs into
+/// them). In registers each accumulator runs less `total` (so its sign is the step test).
+#[inline(always)]
+unsafe fn walk<const FIRST: bool>(first: *mut u32, end: *mut u32, last: &mut u32, on: u32, a: *mut Slave, b: *mut Slave, total: u32) {
+    // SAFETY: the caller's slaves, distinct.
+    let (a, b) = unsafe { (&mut *a, &mut *b) };
+    let t = total as i32;
+    let (ca, oa, cb, ob) = (a.dda.count() as i32, a.on, b.dda.count() as i32, b.on);
+    let (mut da, mut db) = (a.dda.acc() as i32 - t, b.dda.acc() as i32 - t);
+    // One step: the word `x` with the pair's bits.
+    macro_rules! step {
+        ($x:expr) => {{
+            let mut x = $x;
+            da += ca;
+            if da >= 0 {
+                da -= t;
+                x |= oa;
+            }
+            db += cb;
+            if db >= 0 {
+                db -= t;
+                x |= ob;
+            }
+            x
+        }};
+    }
+    let mut w = first;
+    while w != end {
+        // SAFETY: first..end lies in the caller's words.
+        unsafe { *w = step!(if FIRST { on } else { *w }) };
+        w = unsafe { w.add(1) };
+    }
+    *last = step!(if FIRST { on } else { *last });
+    a.dda.set_acc((da + t) as u32);
+    b.dda.set_acc((db + t) as u32);
+}
+
