@@ -137,97 +137,107 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
         made
     }
 
-    /// [`Self::lane`] without the split, single-edge, for a move with slaves, slave-major: the
-    /// master's pass writes the periods; then the slaves, two at a time with their
-    /// accumulators in registers, walk the steps and write the words (the first pair stores,
-    /// the others OR in). The step made last stays the edge about to happen (`word`), as in
-    /// the lane.
+    /// [`Self::lane`] without the split, single-edge, for a move with slaves (the hot path of
+    /// 2 to 7 axes), slave-major: the master walks the steps (periods, and its own bit in the
+    /// words); then the slaves, three (or fewer) at a time with their accumulators in
+    /// registers, walk the same steps and OR their bits into the words.
     #[inline(never)]
     fn slave_lane(&mut self, words: &mut [u32], periods: &mut [u16], period: u32, on: u32, room: u32) -> usize {
         let len = words.len().min(periods.len()).min(room as usize);
-        let (mut frac, mut ms_left, mut gap_in) = (self.frac, self.ms_left, self.gap_in);
-        let per = periods.as_mut_ptr();
-        let mut made = 0;
-        while made < len {
-            let acc = frac + period;
-            let gap = acc >> 4;
-            if ms_left <= gap as i32 {
-                break;
-            }
-            ms_left -= gap as i32;
-            frac = acc & 15;
-            // SAFETY: made < len ≤ periods.len().
-            unsafe { *per.add(made) = (gap - 1) as u16 };
-            gap_in = gap;
-            made += 1;
+        let (frac, ms_left) = (self.frac, self.ms_left);
+        // As many steps as the ramp millisecond leaves room for: the gaps of `k` steps add up
+        // to `(frac + k·period) >> 4` (at most 48 · 2^20: periods are below 2^21).
+        let mut k = len;
+        while k > 0 && ((frac + k as u32 * period) >> 4) as i32 >= ms_left {
+            k -= 1;
         }
-        if made == 0 {
+        if k == 0 {
             return 0;
         }
-        (self.frac, self.ms_left, self.gap_in) = (frac, ms_left, gap_in);
+        let made = k;
+        let sum = frac + made as u32 * period;
+        let (w, mut per) = (words.as_mut_ptr(), periods.as_mut_ptr());
+        let (mut acc, mut ws) = (frac, w);
+        // SAFETY: made ≤ len ≤ both lengths.
+        unsafe {
+            loop {
+                acc = (acc & 15) + period;
+                *per = ((acc >> 4) - 1) as u16;
+                *ws = on;
+                (per, ws) = (per.add(1), ws.add(1));
+                k -= 1;
+                if k == 0 {
+                    break;
+                }
+            }
+        }
+        (self.frac, self.ms_left, self.gap_in) = (sum & 15, ms_left - (sum >> 4) as i32, acc >> 4);
         self.left -= made as u32;
-        let w = words.as_mut_ptr();
-        // SAFETY: 0 < made ≤ words.len(): entry 0 takes the edge that was about to happen,
-        // entries 1..made the steps but the last, which becomes the edge about to happen.
-        // The running move's slot: plain fields and its slaves, which only the step half
-        // touches (see `step`).
+        let mut last = on;
+        // Entry 0 is the edge that was about to happen; the steps' words but the last are
+        // entries 1..made, the last becomes the edge about to happen.
+        // SAFETY: 0 < made ≤ words.len(); the running move's slot: plain fields and its
+        // slaves, which only the step half touches (see `step`).
         unsafe {
             *w = self.word;
             let (first, end) = (w.add(1), w.add(made));
             let p = self.cur;
-            let (n, total) = ((*p).n_slaves as usize, (*p).total);
-            let s = (*p).slaves.as_mut_ptr();
-            let mut last = on;
-            let mut none = Slave { dda: crate::interp::Dda::new(0, 0), on: 0, axis: 0 };
-            let none: *mut Slave = &mut none;
-            let pair = |i: usize| if i + 1 < n { s.add(i + 1) } else { none };
-            walk::<true>(first, end, &mut last, on, s, pair(0), total);
-            let mut i = 2;
-            while i < n {
-                walk::<false>(first, end, &mut last, 0, s.add(i), pair(i), total);
-                i += 2;
+            let (n, t, s) = ((*p).n_slaves as usize, (*p).total, (*p).slaves.as_mut_ptr());
+            let mut i = 0;
+            while i + 3 <= n {
+                walk3(first, end, &mut last, s.add(i), t);
+                i += 3;
             }
-            self.word = last;
+            if i + 2 == n {
+                walk2(first, end, &mut last, s.add(i), t);
+            } else if i + 1 == n {
+                walk1(first, end, &mut last, s.add(i), t);
+            }
         }
+        self.word = last;
         made
     }
 }
 
-/// Walks slaves `a` and `b` over the steps whose words are `first..end` and then `last`
-/// (the words the steps put on the pins after `on`; `FIRST`: stores them, else ORs into
-/// them). In registers each accumulator runs less `total` (so its sign is the step test).
-#[inline(always)]
-unsafe fn walk<const FIRST: bool>(first: *mut u32, end: *mut u32, last: &mut u32, on: u32, a: *mut Slave, b: *mut Slave, total: u32) {
-    // SAFETY: the caller's slaves, distinct.
-    let (a, b) = unsafe { (&mut *a, &mut *b) };
-    let t = total as i32;
-    let (ca, oa, cb, ob) = (a.dda.count() as i32, a.on, b.dda.count() as i32, b.on);
-    let (mut da, mut db) = (a.dda.acc() as i32 - t, b.dda.acc() as i32 - t);
-    // One step: the word `x` with the pair's bits.
-    macro_rules! step {
-        ($x:expr) => {{
-            let mut x = $x;
-            da += ca;
-            if da >= 0 {
-                da -= t;
-                x |= oa;
+/// Slave-major walks: `walkK` runs the K slaves from `s` on over the steps whose words are `first..end` and
+/// then `last`, ORing their bits in. In registers each accumulator runs less `total` (its
+/// sign the step test).
+macro_rules! walks {
+    ($($name:ident: $($j:literal $s:ident $d:ident $c:ident $o:ident),*;)*) => {$(
+        #[inline(never)]
+        unsafe fn $name(first: *mut u32, end: *mut u32, last: &mut u32, s: *mut Slave, total: u32) {
+            let t = total as i32;
+            // SAFETY: the caller's slaves, from `s` on.
+            $(let $s = unsafe { &mut *s.add($j) };
+            let ($c, $o) = ($s.dda.count() as i32, $s.on);
+            let mut $d = $s.dda.acc().wrapping_sub(total) as i32;)*
+            macro_rules! step {
+                ($x:expr) => {{
+                    let mut x: u32 = $x;
+                    $($d += $c;
+                    if $d >= 0 {
+                        $d -= t;
+                        x |= $o;
+                    })*
+                    x
+                }};
             }
-            db += cb;
-            if db >= 0 {
-                db -= t;
-                x |= ob;
+            let mut w = first;
+            while w != end {
+                // SAFETY: first..end lies in the caller's words.
+                unsafe {
+                    *w = step!(*w);
+                    w = w.add(1);
+                }
             }
-            x
-        }};
-    }
-    let mut w = first;
-    while w != end {
-        // SAFETY: first..end lies in the caller's words.
-        unsafe { *w = step!(if FIRST { on } else { *w }) };
-        w = unsafe { w.add(1) };
-    }
-    *last = step!(if FIRST { on } else { *last });
-    a.dda.set_acc((da + t) as u32);
-    b.dda.set_acc((db + t) as u32);
+            *last = step!(*last);
+            $($s.dda.set_acc(($d as u32).wrapping_add(total));)*
+        }
+    )*};
 }
 
+walks! {
+    walk1: 0 s0 d0 c0 o0;
+    walk2: 0 s0 d0 c0 o0, 1 s1 d1 c1 o1;
+    walk3: 0 s0 d0 c0 o0, 1 s1 d1 c1 o1, 2 s2 d2 c2 o2;
+}
