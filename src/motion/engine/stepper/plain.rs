@@ -200,8 +200,8 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
 }
 
 /// Slave-major walks: `walkK` runs the K slaves from `s` on over the steps whose words are `first..end` and
-/// then `last`, ORing their bits in. In registers each accumulator runs less `total` (its
-/// sign the step test).
+/// then `last`, ORing their bits in. In registers each accumulator runs as `total − 1 − acc`
+/// (in `0..total`, as `total` < 2^31), counted down: the slave steps when it goes below 0.
 macro_rules! walks {
     ($($name:ident: $($j:literal $s:ident $d:ident $c:ident $o:ident),*;)*) => {$(
         #[inline(never)]
@@ -210,28 +210,35 @@ macro_rules! walks {
             // SAFETY: the caller's slaves, from `s` on.
             $(let $s = unsafe { &mut *s.add($j) };
             let ($c, $o) = ($s.dda.count() as i32, $s.on);
-            let mut $d = $s.dda.acc().wrapping_sub(total) as i32;)*
+            let mut $d = (total - 1 - $s.dda.acc()) as i32;)*
             macro_rules! step {
                 ($x:expr) => {{
                     let mut x: u32 = $x;
-                    $($d += $c;
-                    if $d >= 0 {
-                        $d -= t;
+                    $($d -= $c;
+                    if $d < 0 {
+                        $d += t;
                         x |= $o;
                     })*
                     x
                 }};
             }
             let mut w = first;
-            while w != end {
-                // SAFETY: first..end lies in the caller's words.
-                unsafe {
-                    *w = step!(*w);
-                    w = w.add(1);
+            // (Tested at the bottom: at opt-level "z" a loop tested at the top keeps fewer
+            // values in registers.)
+            if w != end {
+                loop {
+                    // SAFETY: first..end lies in the caller's words.
+                    unsafe {
+                        *w = step!(*w);
+                        w = w.add(1);
+                    }
+                    if w == end {
+                        break;
+                    }
                 }
             }
             *last = step!(*last);
-            $($s.dda.set_acc(($d as u32).wrapping_add(total));)*
+            $($s.dda.set_acc(total - 1 - $d as u32);)*
         }
     )*};
 }
