@@ -160,15 +160,23 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
         let (mut acc, mut ws) = (frac, w);
         // SAFETY: made ≤ len ≤ both lengths.
         unsafe {
-            loop {
-                acc = (acc & 15) + period;
-                *per = ((acc >> 4) - 1) as u16;
-                *ws = on;
-                (per, ws) = (per.add(1), ws.add(1));
+            macro_rules! step {
+                () => {
+                    acc = (acc & 15) + period;
+                    *per = ((acc >> 4) - 1) as u16;
+                    *ws = on;
+                    (per, ws) = (per.add(1), ws.add(1));
+                };
+            }
+            // Two at a time (the loop's branch costs as much as a step's work).
+            if k & 1 != 0 {
+                step!();
+            }
+            k >>= 1;
+            while k != 0 {
+                step!();
+                step!();
                 k -= 1;
-                if k == 0 {
-                    break;
-                }
             }
         }
         (self.frac, self.ms_left, self.gap_in) = (sum & 15, ms_left - (sum >> 4) as i32, acc >> 4);
