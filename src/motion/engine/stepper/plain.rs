@@ -230,17 +230,18 @@ macro_rules! walks {
                     x
                 }};
             }
-            let mut w = first;
-            // (Tested at the bottom: at opt-level "z" a loop tested at the top keeps fewer
-            // values in registers.)
-            if w != end {
+            let (mut w, mut k) = (first, end as usize - first as usize);
+            // (Counted down and tested at the bottom: at opt-level "z" a loop tested at the top
+            // keeps fewer values in registers.)
+            if k != 0 {
                 loop {
                     // SAFETY: first..end lies in the caller's words.
                     unsafe {
                         *w = step!(*w);
                         w = w.add(1);
                     }
-                    if w == end {
+                    k -= 4;
+                    if k == 0 {
                         break;
                     }
                 }
