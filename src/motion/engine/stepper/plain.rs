@@ -73,8 +73,6 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
         let made = match (n == 0 && !self.dual, (period + 15) >> 4 <= max) {
             (true, true) => self.lane::<false, false>(words, periods, period, master_on, room),
             (true, false) => self.lane::<true, false>(words, periods, period, master_on, room),
-            // Dual-edge toggles each word as a whole: the step-major lane (its split never splits).
-            (false, true) if self.dual => self.lane::<true, true>(words, periods, period, master_on, room),
             (false, true) => self.slave_lane(words, periods, period, master_on, room),
             (false, false) => self.lane::<true, true>(words, periods, period, master_on, room),
         };
@@ -137,10 +135,11 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
         made
     }
 
-    /// [`Self::lane`] without the split, single-edge, for a move with slaves (the hot path of
-    /// 2 to 7 axes), slave-major: the master walks the steps (periods, and its own bit in the
+    /// [`Self::lane`] without the split, for a move with slaves or in dual-edge mode (the hot
+    /// path of 2 to 7 axes), slave-major: the master walks the steps (periods, and its own bit in the
     /// words); then the slaves, three (or fewer) at a time with their accumulators in
-    /// registers, walk the same steps and OR their bits into the words.
+    /// registers, walk the same steps and OR their bits into the words; in dual-edge mode a
+    /// last pass toggles them.
     #[inline(never)]
     fn slave_lane(&mut self, words: &mut [u32], periods: &mut [u16], period: u32, on: u32, room: u32) -> usize {
         let len = words.len().min(periods.len()).min(room as usize);
@@ -191,15 +190,26 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
             let (first, end) = (w.add(1), w.add(made));
             let p = self.cur;
             let (n, t, s) = ((*p).n_slaves as usize, (*p).total, (*p).slaves.as_mut_ptr());
+            // Threes, then twos: the last two may take slot `n`, unused (its count 0: it never
+            // steps; `n < N`, the master is no slave).
             let mut i = 0;
-            while i + 3 <= n {
+            while n - i >= 3 && n - i != 4 {
                 walk3(first, end, &mut last, s.add(i), t);
                 i += 3;
             }
-            if i + 2 == n {
+            while i < n {
                 walk2(first, end, &mut last, s.add(i), t);
-            } else if i + 1 == n {
-                walk1(first, end, &mut last, s.add(i), t);
+                i += 2;
+            }
+            if self.dual {
+                // Each word toggles its pins, in step order (entry 0 already did).
+                let (mut w, mut level) = (first, self.level);
+                while w != end {
+                    *w = toggle(*w, &mut level);
+                    w = w.add(1);
+                }
+                last = toggle(last, &mut level);
+                self.level = level;
             }
         }
         self.word = last;
@@ -253,7 +263,6 @@ macro_rules! walks {
 }
 
 walks! {
-    walk1: 0 s0 d0 c0 o0;
     walk2: 0 s0 d0 c0 o0, 1 s1 d1 c1 o1;
     walk3: 0 s0 d0 c0 o0, 1 s1 d1 c1 o1, 2 s2 d2 c2 o2;
 }
