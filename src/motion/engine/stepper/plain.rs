@@ -9,12 +9,18 @@
 //! last published (only the ramp half writes it, and in DMA mode it runs inside the fill,
 //! between runs), so a run needs no shared load per entry. The first entry that is not plain
 //! is left to [`Stepper::tick`].
+//!
+//! Moves with slaves (and dual-edge moves) run slave-major ([`Stepper::slave_lane`]): the
+//! master's pass writes the periods and the master's bit, then each group of slaves walks the
+//! same steps with its accumulators in registers and ORs its bits in. The slaves' [`Slave`]
+//! state is read at a walk's start and written back at its end, so between fills it is
+//! exactly what [`Stepper::tick`] would have left.
 
 use core::sync::atomic::Ordering::Relaxed;
 
 use super::{piece, slave_bits, toggle, Phase, Stepper};
-use crate::prepared::Slave;
 use crate::burst::tail;
+use crate::prepared::Slave;
 
 impl<const N: usize, const L: usize> Stepper<'_, N, L> {
     /// Fills the front of `words` and `periods` with plain entries; returns how many (0 when
@@ -136,8 +142,8 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
     }
 
     /// [`Self::lane`] without the split, for a move with slaves or in dual-edge mode (the hot
-    /// path of 2 to 7 axes), slave-major: the master walks the steps (periods, and its own bit in the
-    /// words); then the slaves, three (or fewer) at a time with their accumulators in
+    /// path of 2 to 7 axes), slave-major: the master walks the steps (the periods, and its own
+    /// bit in the words); then the slaves, three or two at a time with their accumulators in
     /// registers, walk the same steps and OR their bits into the words; in dual-edge mode a
     /// last pass toggles them.
     #[inline(never)]
@@ -217,9 +223,11 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
     }
 }
 
-/// Slave-major walks: `walkK` runs the K slaves from `s` on over the steps whose words are `first..end` and
-/// then `last`, ORing their bits in. In registers each accumulator runs as `total − 1 − acc`
-/// (in `0..total`, as `total` < 2^31), counted down: the slave steps when it goes below 0.
+/// Slave-major walks: `walkK` runs the K slaves from `s` on over the steps whose words are
+/// `first..end` and then `last`, ORing their bits in. In registers each accumulator runs as
+/// `total − 1 − acc` (in `0..total`, `total` < 2^31), counted down: the slave steps when it
+/// goes below 0 (one subtraction and its sign, where [`crate::interp::Dda::step_mask`] adds
+/// and compares). Out of line: each gets all the registers (a walk of three keeps 13 values).
 macro_rules! walks {
     ($($name:ident: $($j:literal $s:ident $d:ident $c:ident $o:ident),*;)*) => {$(
         #[inline(never)]
