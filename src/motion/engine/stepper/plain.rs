@@ -27,6 +27,9 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
     /// the next one needs a whole tick). Not inlined: the fill's own loop stays small.
     #[inline(never)]
     pub(crate) fn quick_entries(&mut self, words: &mut [u32], periods: &mut [u16]) -> usize {
+        if self.extend == 0 {
+            return self.plain(words, periods);
+        }
         // The rest of a period a whole tick split, first: then the lanes may take over.
         let first = self.fillers(words, periods);
         if self.extend != 0 {
