@@ -152,9 +152,11 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
     #[inline(never)]
     fn slave_lane(&mut self, words: &mut [u32], periods: &mut [u16], period: u32, on: u32, room: u32) -> usize {
         let len = words.len().min(periods.len()).min(room as usize);
+        // (Buffers are halves, at most HALF_MAX entries: `k·period` below stays far from 2^32.)
+        debug_assert!(len <= 1 << 11);
         let (frac, ms_left) = (self.frac, self.ms_left);
         // As many steps as the ramp millisecond leaves room for: the gaps of `k` steps add up
-        // to `(frac + k·period) >> 4` (at most 48 · 2^20: periods are below 2^21).
+        // to `(frac + k·period) >> 4` (`period` < 2^20: its gaps fit one entry).
         let mut k = len;
         while k > 0 && ((frac + k as u32 * period) >> 4) as i32 >= ms_left {
             k -= 1;
