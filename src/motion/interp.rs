@@ -42,6 +42,24 @@ impl Dda {
         mask
     }
 
+    /// The accumulator (the DMA burst's slave-major lane runs it in registers).
+    #[inline(always)]
+    pub(crate) fn acc(&self) -> u32 {
+        self.acc
+    }
+
+    /// Steps per move.
+    #[inline(always)]
+    pub(crate) fn count(&self) -> u32 {
+        self.count
+    }
+
+    /// Sets the accumulator the lane ran (in `0..master`, as [`Self::step`] leaves it).
+    #[inline(always)]
+    pub(crate) fn set_acc(&mut self, acc: u32) {
+        self.acc = acc;
+    }
+
     /// Advances by one master step; true when the slave steps too.
     #[inline(always)]
     pub fn step(&mut self, master: u32) -> bool {

@@ -129,6 +129,8 @@ impl<const N: usize> Prepared<N> {
         // (`get`, not indexing, here and below: `master` and the slave count stay below `N`,
         // and the feeder's code then has no bounds-check panic path.)
         let total = steps.get(master).map_or(0, |s| s.unsigned_abs());
+        // Slots from `n_slaves` on stay as here (count 0, no pins): the DMA fill walks slot
+        // `n_slaves` alongside the last slave when that saves a pass (it never steps).
         let mut slaves = [Slave { dda: Dda::new(0, 0), on: 0, axis: 0 }; N];
         let mut n = 0;
         let mut dir_word = 0;

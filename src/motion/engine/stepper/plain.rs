@@ -9,17 +9,27 @@
 //! last published (only the ramp half writes it, and in DMA mode it runs inside the fill,
 //! between runs), so a run needs no shared load per entry. The first entry that is not plain
 //! is left to [`Stepper::tick`].
+//!
+//! Moves with slaves (and dual-edge moves) run slave-major ([`Stepper::slave_lane`]): the
+//! master's pass writes the periods and the master's bit, then each group of slaves walks the
+//! same steps with its accumulators in registers and ORs its bits in. The slaves' [`Slave`]
+//! state is read at a walk's start and written back at its end, so between fills it is
+//! exactly what [`Stepper::tick`] would have left.
 
 use core::sync::atomic::Ordering::Relaxed;
 
 use super::{piece, slave_bits, toggle, Phase, Stepper};
 use crate::burst::tail;
+use crate::prepared::Slave;
 
 impl<const N: usize, const L: usize> Stepper<'_, N, L> {
     /// Fills the front of `words` and `periods` with plain entries; returns how many (0 when
     /// the next one needs a whole tick). Not inlined: the fill's own loop stays small.
     #[inline(never)]
     pub(crate) fn quick_entries(&mut self, words: &mut [u32], periods: &mut [u16]) -> usize {
+        if self.extend == 0 {
+            return self.plain(words, periods);
+        }
         // The rest of a period a whole tick split, first: then the lanes may take over.
         let first = self.fillers(words, periods);
         if self.extend != 0 {
@@ -72,7 +82,7 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
         let made = match (n == 0 && !self.dual, (period + 15) >> 4 <= max) {
             (true, true) => self.lane::<false, false>(words, periods, period, master_on, room),
             (true, false) => self.lane::<true, false>(words, periods, period, master_on, room),
-            (false, true) => self.lane::<false, true>(words, periods, period, master_on, room),
+            (false, true) => self.slave_lane(words, periods, period, master_on, room),
             (false, false) => self.lane::<true, true>(words, periods, period, master_on, room),
         };
         if self.left != left {
@@ -133,4 +143,139 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
         self.left -= steps;
         made
     }
+
+    /// [`Self::lane`] without the split, for a move with slaves or in dual-edge mode (the hot
+    /// path of 2 to 7 axes), slave-major: the master walks the steps (the periods, and its own
+    /// bit in the words); then the slaves, three or two at a time with their accumulators in
+    /// registers, walk the same steps and OR their bits into the words; in dual-edge mode a
+    /// last pass toggles them.
+    #[inline(never)]
+    fn slave_lane(&mut self, words: &mut [u32], periods: &mut [u16], period: u32, on: u32, room: u32) -> usize {
+        let len = words.len().min(periods.len()).min(room as usize);
+        // (Buffers are halves, at most HALF_MAX entries: `k·period` below stays far from 2^32.)
+        debug_assert!(len <= 1 << 11);
+        let (frac, ms_left) = (self.frac, self.ms_left);
+        // As many steps as the ramp millisecond leaves room for: the gaps of `k` steps add up
+        // to `(frac + k·period) >> 4` (`period` < 2^20: its gaps fit one entry).
+        let mut k = len;
+        while k > 0 && ((frac + k as u32 * period) >> 4) as i32 >= ms_left {
+            k -= 1;
+        }
+        if k == 0 {
+            return 0;
+        }
+        let made = k;
+        let sum = frac + made as u32 * period;
+        let (w, mut per) = (words.as_mut_ptr(), periods.as_mut_ptr());
+        let (mut acc, mut ws) = (frac, w);
+        // SAFETY: made ≤ len ≤ both lengths.
+        unsafe {
+            macro_rules! step {
+                () => {
+                    acc = (acc & 15) + period;
+                    *per = ((acc >> 4) - 1) as u16;
+                    *ws = on;
+                    (per, ws) = (per.add(1), ws.add(1));
+                };
+            }
+            // Two at a time (the loop's branch costs as much as a step's work).
+            if k & 1 != 0 {
+                step!();
+            }
+            k >>= 1;
+            while k != 0 {
+                step!();
+                step!();
+                k -= 1;
+            }
+        }
+        (self.frac, self.ms_left, self.gap_in) = (sum & 15, ms_left - (sum >> 4) as i32, acc >> 4);
+        self.left -= made as u32;
+        let mut last = on;
+        // Entry 0 is the edge that was about to happen; the steps' words but the last are
+        // entries 1..made, the last becomes the edge about to happen.
+        // SAFETY: 0 < made ≤ words.len(); the running move's slot: plain fields and its
+        // slaves, which only the step half touches (see `step`).
+        unsafe {
+            *w = self.word;
+            let (first, end) = (w.add(1), w.add(made));
+            let p = self.cur;
+            let (n, t, s) = ((*p).n_slaves as usize, (*p).total, (*p).slaves.as_mut_ptr());
+            // Threes, then twos: the last two may take slot `n`, unused (its count 0: it never
+            // steps; `n < N`, the master is no slave).
+            let mut i = 0;
+            while n - i >= 3 && n - i != 4 {
+                walk3(first, end, &mut last, s.add(i), t);
+                i += 3;
+            }
+            while i < n {
+                walk2(first, end, &mut last, s.add(i), t);
+                i += 2;
+            }
+            if self.dual {
+                // Each word toggles its pins, in step order (entry 0 already did).
+                let (mut w, mut level) = (first, self.level);
+                while w != end {
+                    *w = toggle(*w, &mut level);
+                    w = w.add(1);
+                }
+                last = toggle(last, &mut level);
+                self.level = level;
+            }
+        }
+        self.word = last;
+        made
+    }
+}
+
+/// Slave-major walks: `walkK` runs the K slaves from `s` on over the steps whose words are
+/// `first..end` and then `last`, ORing their bits in. In registers each accumulator runs as
+/// `total − 1 − acc` (in `0..total`, `total` < 2^31), counted down: the slave steps when it
+/// goes below 0 (one subtraction and its sign, where [`crate::interp::Dda::step_mask`] adds
+/// and compares). Out of line: each gets all the registers (a walk of three keeps 13 values).
+macro_rules! walks {
+    ($($name:ident: $($j:literal $s:ident $d:ident $c:ident $o:ident),*;)*) => {$(
+        #[inline(never)]
+        unsafe fn $name(first: *mut u32, end: *mut u32, last: &mut u32, s: *mut Slave, total: u32) {
+            let t = total as i32;
+            // SAFETY: the caller's slaves, from `s` on.
+            $(let $s = unsafe { &mut *s.add($j) };
+            let ($c, $o) = ($s.dda.count() as i32, $s.on);
+            let mut $d = (total - 1 - $s.dda.acc()) as i32;)*
+            macro_rules! step {
+                ($x:expr) => {{
+                    let mut x: u32 = $x;
+                    $($d -= $c;
+                    if $d < 0 {
+                        $d += t;
+                        x |= $o;
+                    })*
+                    x
+                }};
+            }
+            let (mut w, mut k) = (first, end as usize - first as usize);
+            // (Counted down and tested at the bottom: at opt-level "z" a loop tested at the top
+            // keeps fewer values in registers.)
+            if k != 0 {
+                loop {
+                    // SAFETY: first..end lies in the caller's words.
+                    unsafe {
+                        *w = step!(*w);
+                        w = w.add(1);
+                    }
+                    k -= 4;
+                    if k == 0 {
+                        break;
+                    }
+                }
+            }
+            *last = step!(*last);
+            $($s.dda.set_acc(total - 1 - $d as u32);)*
+        }
+    )*};
+}
+
+walks! {
+    walk2: 0 s0 d0 c0 o0, 1 s1 d1 c1 o1;
+    walk3: 0 s0 d0 c0 o0, 1 s1 d1 c1 o1, 2 s2 d2 c2 o2;
 }
