@@ -72,16 +72,18 @@ fn fast_532_is_exact_at_200_khz_in_both_edge_modes() {
 #[test]
 fn back_to_back_moves_at_the_dma_cap_keep_every_step() {
     use ddastep_bench::emu::sweep::{settings_lines, RATIO};
-    for axes in [1usize, 3, 7] {
-        let mut b = boot_dma(Settings::BENCH, false);
+    // Full pulses and dual-edge (each step one toggle: its own cap, counted on both edges).
+    for (axes, dual) in [(1usize, false), (3, false), (7, false), (1, true), (3, true), (7, true)] {
+        let mut b = boot_dma(Settings::BENCH, dual);
         for l in settings_lines() {
             ok(&mut b, &l);
         }
         let info = reply(&mut b, "$I");
-        let mut s = Settings { dma_burst: true, ..Settings::BENCH };
+        let mut s = Settings { dma_burst: true, dual_edge: dual, ..Settings::BENCH };
         s.set(0, ddastep_bench::emu::sweep::PULSE_US, 3).unwrap();
         let cap = s.timing().max_rate_for(axes as u32 - 1);
-        assert!(info.contains(&format!("[MSG:max step rate {} Hz DMA]", s.timing().max_rate_hz())), "{info}");
+        let name = if dual { "dual-edge DMA" } else { "DMA" };
+        assert!(info.contains(&format!("[MSG:max step rate {} Hz {name}]", s.timing().max_rate_hz())), "{info}");
         let hz = cap as f64 * 0.995;
         ok(&mut b, "G91");
         eprintln!("rx overruns {}", b.usart_rx_overruns());
@@ -103,9 +105,12 @@ fn back_to_back_moves_at_the_dma_cap_keep_every_step() {
             assert!(r.contains("ok"), "{l}: {r}; rx overruns {}", b.usart_rx_overruns());
         }
         wait_idle(&mut b, 3.0);
-        let st = steps(&b);
+        let st = if dual { toggles(&b) } else { steps(&b) };
         let r = b.report();
-        eprintln!("{axes} axes at {hz:.0} Hz (DMA cap {cap}): overruns {}", r.overruns);
+        let late = reply(&mut b, "$I");
+        let late = late.split(", late ").nth(1).and_then(|t| t.split(']').next()).unwrap_or("?").to_string();
+        eprintln!("{axes} axes{} at {hz:.0} Hz (DMA cap {cap}): overruns {}, late fills {late}", if dual { " dual-edge" } else { "" }, r.overruns);
+        assert_eq!(late, "0", "{axes} axes: the firmware's late fills");
         assert_eq!(net(&st), want, "{axes} axes");
         for (name, a) in &r.axes.0[..axes] {
             assert!(a.min_high_ns.unwrap() >= 500.0 && a.min_low_ns.unwrap() >= 500.0, "{name}: {a:?}");

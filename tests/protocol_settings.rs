@@ -203,7 +203,7 @@ fn dual_edge_is_a_pin_setting_with_its_own_rate_rule() {
 #[test]
 fn dma_burst_is_a_restarting_flag_whose_cap_is_the_fill_cost() {
     use ddastep::settings::DMA_BURST;
-    use ddastep::timing::{DMA_BASE_TICKS, DMA_FLOOR_TICKS, DMA_LANE_TICKS, DMA_MARGIN_TICKS, DMA_PER_SLAVE_TICKS};
+    use ddastep::timing::{DMA_BASE_TICKS, DMA_DUAL_BASE_TICKS, DMA_DUAL_PER_SLAVE_TICKS, DMA_FLOOR_TICKS, DMA_LANE_TICKS, DMA_MARGIN_TICKS, DMA_PER_SLAVE_TICKS};
     let mut s = Settings::BENCH;
     assert_eq!(s.get(DMA_BURST, 3), Some((0.0, 0)));
     // Like `$580`: the step output changes how it is built, so the MCU restarts.
@@ -223,7 +223,11 @@ fn dma_burst_is_a_restarting_flag_whose_cap_is_the_fill_cost() {
             d.set(0, pulse, 3).unwrap();
             let t = d.timing();
             // One axis with full pulses has the fill's lane of its own.
-            let cpu = if slaves == 0 && !dual { DMA_LANE_TICKS } else { DMA_BASE_TICKS + DMA_PER_SLAVE_TICKS * slaves };
+            let cpu = match (dual, slaves) {
+                (true, _) => DMA_DUAL_BASE_TICKS + DMA_DUAL_PER_SLAVE_TICKS * slaves,
+                (false, 0) => DMA_LANE_TICKS,
+                (false, _) => DMA_BASE_TICKS + DMA_PER_SLAVE_TICKS * slaves,
+            };
             let pulses = if dual { t.pulse_ticks + DMA_MARGIN_TICKS } else { 2 * (t.pulse_ticks + DMA_MARGIN_TICKS) };
             assert_eq!(t.min_period_for(slaves), cpu.max(pulses).max(DMA_FLOOR_TICKS), "{pulse} µs, {slaves} slaves, dual {dual}");
             let irq = Settings { dma_burst: false, ..d }.timing();

@@ -116,15 +116,12 @@ fn DMA1_CHANNEL1() {
                     core::slice::from_raw_parts_mut(s.periods.as_mut_ptr().add(at), half),
                 )
             };
-            // Where DMA's word channel (the first to read an entry) is in this half; its own
-            // flag set again: DMA played all of it.
-            let played = || {
-                let done = dma.isr().read().bits() & flag != 0;
-                ddastep::burst::dma_played(dma.ch2().ndtr().read().bits(), 2 * half, at, half, done)
-            };
-            // Late when DMA is in the half already as the fill starts, catches up with it after
-            // a long entry, or has played all of it when the fill ends.
-            let late = ddastep::burst::dma_played(dma.ch2().ndtr().read().bits(), 2 * half, at, half, false) > 0;
+            // Where DMA's word channel (the first to read an entry) is in this half (0 while it
+            // plays the other one).
+            let played = || ddastep::burst::dma_played(dma.ch2().ndtr().read().bits(), 2 * half, at, half, false);
+            // Late when DMA is in the half already as the fill starts, catches up with it during
+            // the fill, or has played all of it when the fill ends (its own flag set again).
+            let late = played() > 0;
             let late = burst.fill_watched(w, p, played) | late | (dma.isr().read().bits() & flag != 0);
             if late {
                 STEP_TIME.note_late();

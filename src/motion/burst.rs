@@ -122,16 +122,22 @@ impl<'a, const N: usize, const L: usize> Burst<'a, N, L> {
     /// has read so far (more than its length once it played all of it). Returns whether DMA
     /// read an entry before the fill wrote it (late), as far as the checks see: after every
     /// entry that ran the ramp half's work (the long ones; other entries take less time than
-    /// DMA plays one at the rate caps, so DMA cannot catch up on them). The caller checks the
-    /// fill's start and end itself (`played` before and after: more than 0, more than the
-    /// half).
+    /// DMA plays one at the rate caps, so DMA cannot catch up on them), and after a run of the
+    /// slave-major lane against its first entry (its words are whole only at its end). The
+    /// caller checks the fill's start and end itself (`played` before and after: more than 0,
+    /// more than the half).
     pub fn fill_watched(&mut self, words: &mut [u32], periods: &mut [u16], mut played: impl FnMut() -> usize) -> bool {
         let len = words.len().min(periods.len());
         let mut late = false;
         let mut i = 0;
         while i < len {
             if self.quick {
+                let at = i;
                 i += self.step.quick_entries(tail(words, i), tail(periods, i));
+                if core::mem::replace(&mut self.step.slave_major, false) {
+                    // DMA must not have reached the lane's first entry before its last pass.
+                    late |= played() > at;
+                }
                 if i >= len {
                     break;
                 }

@@ -104,7 +104,13 @@ impl Timing {
     pub const fn min_period_for(&self, slaves: u32) -> u32 {
         if self.dma {
             // The fill's cost per step (CPU ≤ 95 %, the DMA's bus cycles counted).
-            let cpu = if slaves == 0 && !self.dual { DMA_LANE_TICKS } else { DMA_BASE_TICKS + DMA_PER_SLAVE_TICKS * slaves };
+            let cpu = if self.dual {
+                DMA_DUAL_BASE_TICKS + DMA_DUAL_PER_SLAVE_TICKS * slaves
+            } else if slaves == 0 {
+                DMA_LANE_TICKS
+            } else {
+                DMA_BASE_TICKS + DMA_PER_SLAVE_TICKS * slaves
+            };
             return if cpu > self.min_period_ticks { cpu } else { self.min_period_ticks };
         }
         if self.dual {
@@ -200,20 +206,31 @@ pub const DUAL_BASE_TICKS: u32 = 245;
 /// on one axis; 320 leaves a margin.
 pub const DUAL_LONG_TICKS: u32 = 320;
 
-/// DMA burst mode: the buffer fill's cost per master step for a move with slaves (or in
-/// dual-edge mode), timer ticks, plus [`DMA_PER_SLAVE_TICKS`] per slave, DMA's own bus cycles
-/// (two or three stores per step) and `idle` counted: the sweep in DMA mode with the caps lifted
-/// (`cargo sim -- --sweep --dma`) holds the CPU ≤ 95 % busy up to 665, 564, 499, 447, 398 and
-/// 364 kHz on 2 to 7 axes (periods 108 to 198 ticks); 94 + 18 per slave allows 643, 554, 486,
-/// 434, 391 and 356 kHz, about 2 % under each.
-pub const DMA_BASE_TICKS: u32 = 94;
+/// DMA burst mode: the buffer fill's cost per master step for a move with slaves, timer ticks,
+/// plus [`DMA_PER_SLAVE_TICKS`] per slave, DMA's own bus cycles (three stores per step) and
+/// `idle` counted: the sweep in DMA mode with the caps lifted (`cargo sim -- --sweep --dma`;
+/// the slave lane's walks run from SRAM) holds the CPU ≤ 95 % busy up to 696, 686, 680, 574,
+/// 548 and 542 kHz on 2 to 7 axes (one straight move). Back-to-back moves at speed
+/// (`tests/firmware_dma.rs`) bind harder: the slave-major lane's words are whole only at its
+/// end, and a fill that starts late after a long one (a move change) has DMA reach them first
+/// (the firmware counts it, `$I`'s `late`); on 7 axes that happened at 416 kHz and above, not
+/// at 402 kHz. 100 + 13 per slave: 637, 571, 516, 471, 433 and 404 kHz on 2 to 7 axes.
+pub const DMA_BASE_TICKS: u32 = 100;
+/// The same in dual-edge DMA mode (`--dma --dual-edge`; the slave-major lane on every axis
+/// count, a last pass toggling the words): 762, 640, 645, 601, 531, 522 and 486 kHz on 1 to 7
+/// axes on one move, but back-to-back moves have fills run late well below that (one axis: at
+/// 478 kHz and above; toggles lost at 669 kHz): 170 + 10 per slave, 424, 379 and 313 kHz on 1,
+/// 3 and 7 axes, where the back-to-back moves see no late fill.
+pub const DMA_DUAL_BASE_TICKS: u32 = 170;
+/// Extra fill ticks per slave axis in dual-edge DMA mode.
+pub const DMA_DUAL_PER_SLAVE_TICKS: u32 = 10;
 /// DMA burst mode, one axis with full pulses (the fill's lane of its own): at 1 MHz the busiest
-/// millisecond of the cruise has the CPU 91.6 % busy, the fill with DMA's stores 87.8 %
+/// millisecond of the cruise has the CPU 80.3 % busy, the fill with DMA's stores 76.1 %
 /// (tests/firmware_dma.rs, `one_axis_runs_at_the_dma_cap`): the cost does not bind below the
 /// 1 MHz floor ([`DMA_FLOOR_TICKS`]).
 pub const DMA_LANE_TICKS: u32 = 72;
 /// Extra fill ticks per slave axis in DMA burst mode.
-pub const DMA_PER_SLAVE_TICKS: u32 = 18;
+pub const DMA_PER_SLAVE_TICKS: u32 = 13;
 /// Shortest period in DMA burst mode: 72 ticks, 1 MHz (the ramp tables' top rate).
 pub const DMA_FLOOR_TICKS: u32 = 72;
 /// DMA burst mode: the spread of a DMA store's latency after its timer event (arbitration,

@@ -82,6 +82,9 @@ pub struct Stepper<'a, const N: usize, const L: usize = RAMP_LEN> {
     /// The next tick may be a plain step ([`Self::tick_quick`]): stepping (`phase` is `Run`)
     /// and no period being split. Set by every whole tick; only ever conservative.
     quick: bool,
+    /// The DMA fill's last run of plain entries took the slave-major lane (its words are whole
+    /// only at its end; [`crate::burst::Burst::fill_watched`] checks DMA against its start).
+    pub(crate) slave_major: bool,
 }
 
 // SAFETY: `cur` points into the ring the engine consumes; the step half is moved into the
@@ -112,6 +115,7 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
             pended: false,
             max_tick: MAX_TICK,
             quick: false,
+            slave_major: false,
         }
     }
 

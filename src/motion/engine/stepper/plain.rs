@@ -82,7 +82,12 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
         let made = match (n == 0 && !self.dual, (period + 15) >> 4 <= max) {
             (true, true) => self.lane::<false, false>(words, periods, period, master_on, room),
             (true, false) => self.lane::<true, false>(words, periods, period, master_on, room),
-            (false, true) => self.slave_lane(words, periods, period, master_on, room),
+            (false, true) => {
+                // (Its words are whole only once the lane ends: the slaves' passes come after
+                // the master's.)
+                self.slave_major = true;
+                self.slave_lane(words, periods, period, master_on, room)
+            }
             (false, false) => self.lane::<true, true>(words, periods, period, master_on, room),
         };
         if self.left != left {
@@ -236,6 +241,7 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
 macro_rules! walks {
     ($($name:ident: $($j:literal $s:ident $d:ident $c:ident $o:ident),*;)*) => {$(
         #[inline(never)]
+        #[cfg_attr(target_os = "none", link_section = ".data.ramfunc.walk")]
         unsafe fn $name(first: *mut u32, end: *mut u32, last: &mut u32, s: *mut Slave, total: u32) {
             let t = total as i32;
             // SAFETY: the caller's slaves, from `s` on.
