@@ -43,8 +43,8 @@ pub struct StepTime {
     read_ms: AtomicU32,
     read_count: [AtomicU32; 2],
     read_busy: [AtomicU32; 2],
-    /// DMA burst mode: fills that ended after DMA had entered their half (the fill interrupt
-    /// writes, wrapping), and the count the last report saw.
+    /// DMA burst mode: fills DMA may have read an entry of before they wrote it (the fill
+    /// interrupt writes, wrapping), and the count the last report saw.
     late: AtomicU32,
     read_late: AtomicU32,
 }
@@ -97,8 +97,8 @@ impl StepTime {
         }
     }
 
-    /// DMA burst mode: a fill ended after DMA had started reading its half (the fill
-    /// interrupt only): entries may have played stale.
+    /// DMA burst mode: DMA may have read an entry before the fill wrote it (the fill interrupt
+    /// only; `ddastep::burst::Burst::fill_watched`): entries may have played stale.
     pub fn note_late(&self) {
         self.late.store(self.late.load(Relaxed).wrapping_add(1), Relaxed);
     }

@@ -118,7 +118,7 @@ fn DMA1_CHANNEL1() {
             };
             // Where DMA's word channel (the first to read an entry) is in this half (0 while it
             // plays the other one).
-            let played = || ddastep::burst::dma_played(dma.ch2().ndtr().read().bits(), 2 * half, at, half, false);
+            let played = || ddastep::burst::dma_played(dma.ch2().ndtr().read().bits(), 2 * half, at, half);
             // Late when DMA is in the half already as the fill starts, catches up with it during
             // the fill, or has played all of it when the fill ends (its own flag set again).
             let late = played() > 0;

@@ -119,13 +119,12 @@ impl<'a, const N: usize, const L: usize> Burst<'a, N, L> {
     }
 
     /// [`Self::fill`] for buffers DMA is playing: `played` says how many entries of this half DMA
-    /// has read so far (more than its length once it played all of it). Returns whether DMA
-    /// read an entry before the fill wrote it (late), as far as the checks see: after every
-    /// entry that ran the ramp half's work (the long ones; other entries take less time than
-    /// DMA plays one at the rate caps, so DMA cannot catch up on them), and after a run of the
-    /// slave-major lane against its first entry (its words are whole only at its end). The
-    /// caller checks the fill's start and end itself (`played` before and after: more than 0,
-    /// more than the half).
+    /// has read so far ([`dma_played`]). Returns whether DMA read an entry before the fill wrote
+    /// it (late), as far as the checks see: after every entry that ran the ramp half's work (the
+    /// long ones; other entries take less time than DMA plays one at the rate caps, so DMA
+    /// cannot catch up on them), and after a run of the slave-major lane against its first
+    /// entry (its words are whole only at its end). The caller checks the fill's start (`played`
+    /// more than 0) and end (the half's own completion flag set again) itself.
     pub fn fill_watched(&mut self, words: &mut [u32], periods: &mut [u16], mut played: impl FnMut() -> usize) -> bool {
         let len = words.len().min(periods.len());
         let mut late = false;
@@ -176,13 +175,9 @@ impl<'a, const N: usize, const L: usize> Burst<'a, N, L> {
 
 /// Entries DMA has read of the half `at..at + half` of a circular buffer of `n` entries, its
 /// channel's remaining count being `cndtr` (n..=1: the next entry it reads is `n − cndtr`; it
-/// reloads to n after the last), `done` when the half's own completion flag is set (it played
-/// all of it: more than `half`); 0 while it plays the other half. For
+/// reloads to n after the last); 0 while it plays the other half. For
 /// [`Burst::fill_watched`].
-pub fn dma_played(cndtr: u32, n: usize, at: usize, half: usize, done: bool) -> usize {
-    if done {
-        return half + 1;
-    }
+pub fn dma_played(cndtr: u32, n: usize, at: usize, half: usize) -> usize {
     // (cndtr is 1..=n: no remainder needed, and none taken on this path.)
     let next = n.wrapping_sub(cndtr as usize);
     if next >= at && next < at + half {
@@ -208,11 +203,10 @@ mod tests {
     #[test]
     fn dma_position_against_the_half_filled() {
         // 2 halves of 4: next entry 8 - cndtr (8 after a reload: entry 0)
-        let played = |cndtr| (dma_played(cndtr, 8, 0, 4, false), dma_played(cndtr, 8, 4, 4, false));
+        let played = |cndtr| (dma_played(cndtr, 8, 0, 4), dma_played(cndtr, 8, 4, 4));
         assert_eq!(played(8), (0, 0), "reloaded: entry 0 next, none of the first half read");
         assert_eq!(played(5), (3, 0), "entry 3 next");
         assert_eq!(played(4), (0, 0), "entry 4 next: the second half");
         assert_eq!(played(1), (0, 3), "entry 7 next");
-        assert_eq!(dma_played(8, 8, 0, 4, true), 5, "the half's flag: all of it played");
     }
 }
