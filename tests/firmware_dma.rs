@@ -9,6 +9,11 @@ use ddastep::settings::Settings;
 use ddastep_bench::emu::{gcode_lines, HZ};
 use fil::*;
 
+/// The late fills `$I`'s `step fill` line reports (`…, late N]`).
+fn late_fills(info: &str) -> Option<u32> {
+    info.split(", late ").nth(1)?.split(']').next()?.parse().ok()
+}
+
 /// Steps per axis from the pins.
 fn counts(s: &[Step]) -> [usize; 7] {
     let mut c = [0; 7];
@@ -96,21 +101,16 @@ fn back_to_back_moves_at_the_dma_cap_keep_every_step() {
             for (w, s) in want.iter_mut().zip(&steps) {
                 *w += s;
             }
-            let mm: Vec<f64> = steps.iter().map(|&s| s as f64 / 100.0).collect();
-            let path = mm.iter().map(|m| m * m).sum::<f64>().sqrt();
-            let feed = path / (steps[0] as f64 / hz) * 60.0;
-            let words: String = "XYZABCU".chars().zip(&mm).map(|(a, m)| format!(" {a}{m}")).collect();
-            let l = format!("G1{words} F{feed:.3}");
+            let l = ddastep_bench::emu::changes::g1_line(&steps, hz);
             let r = reply(&mut b, &l);
             assert!(r.contains("ok"), "{l}: {r}; rx overruns {}", b.usart_rx_overruns());
         }
         wait_idle(&mut b, 3.0);
         let st = if dual { toggles(&b) } else { steps(&b) };
         let r = b.report();
-        let late = reply(&mut b, "$I");
-        let late = late.split(", late ").nth(1).and_then(|t| t.split(']').next()).unwrap_or("?").to_string();
-        eprintln!("{axes} axes{} at {hz:.0} Hz (DMA cap {cap}): overruns {}, late fills {late}", if dual { " dual-edge" } else { "" }, r.overruns);
-        assert_eq!(late, "0", "{axes} axes: the firmware's late fills");
+        let late = late_fills(&reply(&mut b, "$I"));
+        eprintln!("{axes} axes{} at {hz:.0} Hz (DMA cap {cap}): overruns {}, late fills {late:?}", if dual { " dual-edge" } else { "" }, r.overruns);
+        assert_eq!(late, Some(0), "{axes} axes: the firmware's late fills");
         assert_eq!(net(&st), want, "{axes} axes");
         for (name, a) in &r.axes.0[..axes] {
             assert!(a.min_high_ns.unwrap() >= 500.0 && a.min_low_ns.unwrap() >= 500.0, "{name}: {a:?}");
@@ -249,8 +249,7 @@ fn a_late_fill_is_counted_and_reported() {
         b.hold_irq(IRQ_CHANNEL1, false);
         wait_idle(&mut b, 1.0);
         let info = reply(&mut b, "$I");
-        let late: u32 = info.split(", late ").nth(1).and_then(|t| t.split(']').next()).and_then(|n| n.parse().ok())
-            .unwrap_or_else(|| panic!("no late count: {info}"));
+        let late = late_fills(&info).unwrap_or_else(|| panic!("no late count: {info}"));
         eprintln!("fill interrupt held {held_us} µs: late {late}, the bench's DMA overruns {}", b.dma_overruns());
         if held_us == 0 {
             assert_eq!(late, 0, "{info}");

@@ -117,11 +117,7 @@ fn back_to_back_moves_above_the_full_pulse_cap_keep_every_step() {
                 *w += s;
                 total += s.unsigned_abs() as usize;
             }
-            let mm: Vec<f64> = steps.iter().map(|&s| s as f64 / 100.0).collect();
-            let path = mm.iter().map(|m| m * m).sum::<f64>().sqrt();
-            let feed = path / (steps[0] as f64 / hz) * 60.0;
-            let words: String = "XYZABCU".chars().zip(&mm).map(|(a, m)| format!(" {a}{m}")).collect();
-            ok(&mut b, &format!("G1{words} F{feed:.3}"));
+            ok(&mut b, &ddastep_bench::emu::changes::g1_line(&steps, hz));
         }
         wait_idle(&mut b, 3.0);
         let t = toggles(&b);

@@ -49,6 +49,16 @@ impl ChangeResult {
     }
 }
 
+/// The `G1` line (relative, the sweep's steps/mm) that moves `steps` per axis with the master,
+/// the first axis, at `master_hz`.
+pub fn g1_line(steps: &[i64], master_hz: f64) -> String {
+    let mm: Vec<f64> = steps.iter().map(|&s| s as f64 / super::sweep::STEPS_PER_MM).collect();
+    let path = mm.iter().map(|m| m * m).sum::<f64>().sqrt();
+    let feed = path / (steps[0] as f64 / master_hz) * 60.0;
+    let words: String = "XYZABCU".chars().zip(&mm).map(|(a, m)| format!(" {a}{m}")).collect();
+    format!("G1{words} F{feed:.3}")
+}
+
 /// On a booted `board` (the sweep's settings are sent first: 0.5 µs pulses, the shortest
 /// leave a long tick the least room): one long move, then [`MOVES`] short ones of 200 master
 /// steps, queued while the long one runs so that each starts at speed, at master rate `hz` on
@@ -82,11 +92,7 @@ pub fn back_to_back_at(b: &mut Board, axes: usize, hz: f64, pulse_us: f64) -> Re
             *w += s;
             rising += s.abs();
         }
-        let mm: Vec<f64> = steps.iter().map(|&s| s as f64 / 100.0).collect();
-        let path = mm.iter().map(|m| m * m).sum::<f64>().sqrt();
-        let feed = path / (steps[0] as f64 / hz) * 60.0;
-        let words: String = "XYZABCU".chars().zip(&mm).map(|(a, m)| format!(" {a}{m}")).collect();
-        let r = b.send_line_wait_ok(&format!("G1{words} F{feed:.3}"))?;
+        let r = b.send_line_wait_ok(&g1_line(&steps, hz))?;
         ensure!(r.contains("ok"), "{r}");
     }
     b.run_until_quiet(HZ / 10, 5 * HZ)?;

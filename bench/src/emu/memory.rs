@@ -155,7 +155,8 @@ pub fn sram_fetch_stalls(insns: &[(u32, u32, u64, u64)]) -> Vec<u64> {
     let mut c = 0u64; // the current cycle
     let mut free_at = 0u64; // the cycle the previous instruction's execution ends
     let mut stalls = Vec::with_capacity(insns.len());
-    // Runs cycle `c`: a fetch unless `data` holds the bus, the fetch unit `ahead_of` a word.
+    // Runs cycle `c`: a fetch unless `data` holds the bus, while the fetch unit is fewer than
+    // FETCH_AHEAD words past `at` (the first word of the instruction executing or waiting).
     let cycle = |c: &mut u64, fetched: &mut u64, data: bool, at: u64| {
         if !data && *fetched < at + FETCH_AHEAD {
             *fetched += 1;

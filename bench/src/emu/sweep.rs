@@ -28,7 +28,7 @@ use super::stats::WINDOW;
 /// Steps per axis per 10 master steps: X:Y:Z:A:B:C:U = 10:6:4:8:2:7:5 (the paper's 5:3:2 first).
 pub const RATIO: [u64; 7] = [10, 6, 4, 8, 2, 7, 5];
 /// Steps/mm the sweep leaves at its default.
-const STEPS_PER_MM: f64 = 100.0;
+pub(crate) const STEPS_PER_MM: f64 = 100.0;
 /// `$120..126` for the sweep, mm/s² (10⁸ master steps/s²: 500 kHz in 5 ms).
 const ACCEL_MM_S2: f64 = 1_000_000.0;
 /// `$110..126` for the sweep, mm/min (1 MHz at 100 steps/mm: never the limit).
