@@ -155,6 +155,7 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
     /// registers, walk the same steps and OR their bits into the words; in dual-edge mode a
     /// last pass toggles them.
     #[inline(never)]
+    #[cfg_attr(target_os = "none", link_section = ".data.ramfunc.slave_lane")]
     fn slave_lane(&mut self, words: &mut [u32], periods: &mut [u16], period: u32, on: u32, room: u32) -> usize {
         let len = words.len().min(periods.len()).min(room as usize);
         // (Buffers are halves, at most HALF_MAX entries: `k·period` below stays far from 2^32.)
