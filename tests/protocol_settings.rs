@@ -222,10 +222,10 @@ fn dma_burst_is_a_restarting_flag_whose_cap_is_the_fill_cost() {
             let mut d = Settings { dma_burst: true, dual_edge: dual, ..Settings::BENCH };
             d.set(0, pulse, 3).unwrap();
             let t = d.timing();
-            // One axis with full pulses has the fill's lane of its own.
+            // One axis has the fill's lane of its own, in either edge mode.
             let cpu = match (dual, slaves) {
+                (_, 0) => DMA_LANE_TICKS,
                 (true, _) => DMA_DUAL_BASE_TICKS + DMA_DUAL_PER_SLAVE_TICKS * slaves,
-                (false, 0) => DMA_LANE_TICKS,
                 (false, _) => DMA_BASE_TICKS + DMA_PER_SLAVE_TICKS * slaves,
             };
             let pulses = if dual { t.pulse_ticks + DMA_MARGIN_TICKS } else { 2 * (t.pulse_ticks + DMA_MARGIN_TICKS) };

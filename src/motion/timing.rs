@@ -104,10 +104,10 @@ impl Timing {
     pub const fn min_period_for(&self, slaves: u32) -> u32 {
         if self.dma {
             // The fill's cost per step (CPU ≤ 95 %, the DMA's bus cycles counted).
-            let cpu = if self.dual {
-                DMA_DUAL_BASE_TICKS + DMA_DUAL_PER_SLAVE_TICKS * slaves
-            } else if slaves == 0 {
+            let cpu = if slaves == 0 {
                 DMA_LANE_TICKS
+            } else if self.dual {
+                DMA_DUAL_BASE_TICKS + DMA_DUAL_PER_SLAVE_TICKS * slaves
             } else {
                 DMA_BASE_TICKS + DMA_PER_SLAVE_TICKS * slaves
             };
@@ -216,18 +216,20 @@ pub const DUAL_LONG_TICKS: u32 = 320;
 /// (the firmware counts it, `$I`'s `late`); on 7 axes that happened at 416 kHz and above, not
 /// at 402 kHz. 100 + 13 per slave: 637, 571, 516, 471, 433 and 404 kHz on 2 to 7 axes.
 pub const DMA_BASE_TICKS: u32 = 100;
-/// The same in dual-edge DMA mode (`--dma --dual-edge`; the slave-major lane on every axis
-/// count, a last pass toggling the words): 762, 640, 645, 601, 531, 522 and 486 kHz on 1 to 7
-/// axes on one move, but back-to-back moves have fills run late well below that (one axis: at
-/// 478 kHz and above; toggles lost at 669 kHz): 170 + 10 per slave, 424, 379 and 313 kHz on 1,
-/// 3 and 7 axes, where the back-to-back moves see no late fill.
+/// The same in dual-edge DMA mode for a move with slaves (`--dma --dual-edge`; the slave-major
+/// lane, a last pass toggling the words): 640, 645, 601, 531, 522 and 486 kHz on 2 to 7 axes on
+/// one move, but back-to-back moves have fills run late well below that: 170 + 10 per slave,
+/// 379 and 313 kHz on 3 and 7 axes, where the back-to-back moves see no late fill. (One axis
+/// takes [`DMA_LANE_TICKS`].)
 pub const DMA_DUAL_BASE_TICKS: u32 = 170;
 /// Extra fill ticks per slave axis in dual-edge DMA mode.
 pub const DMA_DUAL_PER_SLAVE_TICKS: u32 = 10;
-/// DMA burst mode, one axis with full pulses (the fill's lane of its own): at 1 MHz the busiest
-/// millisecond of the cruise has the CPU 80.3 % busy, the fill with DMA's stores 76.1 %
-/// (tests/firmware_dma.rs, `one_axis_runs_at_the_dma_cap`): the cost does not bind below the
-/// 1 MHz floor ([`DMA_FLOOR_TICKS`]).
+/// DMA burst mode, one axis (the fill's lane of its own, entry by entry; in dual-edge mode its
+/// words alternate between setting and resetting the pin): at 1 MHz the busiest millisecond
+/// of the cruise has the CPU 80.3 % busy with full pulses, the fill with DMA's stores 76.1 %
+/// (tests/firmware_dma.rs, `one_axis_runs_at_the_dma_cap`), 83 % in dual-edge mode (`cargo sim
+/// -- --point 1@1000000 --dma --dual-edge`), and back-to-back moves at 995 kHz see no late
+/// fill: the cost does not bind below the 1 MHz floor ([`DMA_FLOOR_TICKS`]).
 pub const DMA_LANE_TICKS: u32 = 72;
 /// Extra fill ticks per slave axis in DMA burst mode.
 pub const DMA_PER_SLAVE_TICKS: u32 = 13;

@@ -10,7 +10,9 @@
 //! between runs), so a run needs no shared load per entry. The first entry that is not plain
 //! is left to [`Stepper::tick`].
 //!
-//! Moves with slaves (and dual-edge moves) run slave-major ([`Stepper::slave_lane`]): the
+//! One axis runs entry by entry ([`Stepper::lane`]; in dual-edge mode its words alternate
+//! between setting and resetting the pin). Moves with slaves run slave-major
+//! ([`Stepper::slave_lane`]): the
 //! master's pass writes the periods and the master's bit, then each group of slaves walks the
 //! same steps with its accumulators in registers and ORs its bits in. The slaves' [`Slave`]
 //! state is read at a walk's start and written back at its end, so between fills it is
@@ -79,16 +81,18 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
         let left = self.left;
         // Gaps that never need a second entry take the lanes without the split; one axis with
         // full pulses the lanes without slaves.
-        let made = match (n == 0 && !self.dual, (period + 15) >> 4 <= max) {
-            (true, true) => self.lane::<false, false>(words, periods, period, master_on, room),
-            (true, false) => self.lane::<true, false>(words, periods, period, master_on, room),
-            (false, true) => {
+        let made = match (n == 0, self.dual, (period + 15) >> 4 <= max) {
+            (true, false, true) => self.lane::<false, false, false>(words, periods, period, master_on, room),
+            (true, false, false) => self.lane::<true, false, false>(words, periods, period, master_on, room),
+            // One axis in dual-edge mode: entry by entry (each word whole as it is written).
+            (true, true, true) => self.lane::<false, false, true>(words, periods, period, master_on, room),
+            (false, _, true) => {
                 // (Its words are whole only once the lane ends: the slaves' passes come after
                 // the master's.)
                 self.slave_major = true;
                 self.slave_lane(words, periods, period, master_on, room)
             }
-            (false, false) => self.lane::<true, true>(words, periods, period, master_on, room),
+            _ => self.lane::<true, true, false>(words, periods, period, master_on, room),
         };
         if self.left != left {
             self.shared.mv_done.store(total - self.left, Relaxed);
@@ -98,13 +102,18 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
 
     /// Plain steps at `period`, each gap at most two entries (one unless `SPLIT`): at most
     /// `room` of them, until a ramp millisecond would end; counted off `left`. `SLAVES`: the
-    /// move has slaves or runs dual-edge (without, one axis with full pulses, the loop keeps
-    /// fewer values).
+    /// move has slaves, or runs dual-edge with split gaps (without, one axis, the loop keeps
+    /// fewer values). `FLIP`: one axis in dual-edge mode, its words alternating between
+    /// setting and resetting the pin.
     #[inline(never)]
-    fn lane<const SPLIT: bool, const SLAVES: bool>(&mut self, words: &mut [u32], periods: &mut [u16], period: u32, on: u32, room: u32) -> usize {
+    fn lane<const SPLIT: bool, const SLAVES: bool, const FLIP: bool>(&mut self, words: &mut [u32], periods: &mut [u16], period: u32, on: u32, room: u32) -> usize {
         let p = self.cur;
         let (mut frac, mut ms_left, mut word, mut level, mut gap_in) = (self.frac, self.ms_left, self.word, self.level, self.gap_in);
         let (dual, max) = (self.dual, self.max_tick);
+        // One axis: the step after `word` sets the pin; with `FLIP` it resets it when `word`
+        // leaves it high, and each step after flips between the two (`toggle`'s words).
+        let flip = on | on << 16;
+        let mut one = if FLIP && level & on != 0 { on << 16 } else { on };
         let mut it = words.iter_mut().zip(periods.iter_mut());
         let (mut made, mut steps) = (0usize, 0u32);
         while steps < room {
@@ -120,7 +129,10 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
             }
             ms_left -= gap as i32;
             frac = acc & 15;
-            let mut next = on;
+            let mut next = one;
+            if FLIP {
+                one ^= flip;
+            }
             if SLAVES {
                 // SAFETY: the running move's slot; plain fields and its slaves (see `step`).
                 next |= unsafe { slave_bits(&mut (*p).slaves, (*p).n_slaves as usize, (*p).total) };
@@ -143,6 +155,10 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
             }
             gap_in = gap;
             steps += 1;
+        }
+        if FLIP && steps & 1 != 0 {
+            // (An odd number of toggles of the pin.)
+            level ^= flip & on;
         }
         (self.frac, self.ms_left, self.word, self.level, self.gap_in) = (frac, ms_left, word, level, gap_in);
         self.left -= steps;
