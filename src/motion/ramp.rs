@@ -580,15 +580,20 @@ mod tests {
         ((lo as u32) << IDX_FRAC) + (f.min(4095) << (IDX_FRAC - 12))
     }
 
-    #[test]
-    fn searches_match_the_former_ones() {
+    /// A fixed xorshift stream: `next(n)` is in `0..n`.
+    fn xorshift() -> impl FnMut(u32) -> u32 {
         let mut r = 0x2545_F491_4F6C_DD1Du64;
-        let mut next = |n: u32| {
+        move |n| {
             r ^= r << 13;
             r ^= r >> 7;
             r ^= r << 17;
             (r % n as u64) as u32
-        };
+        }
+    }
+
+    #[test]
+    fn searches_match_the_former_ones() {
+        let mut next = xorshift();
         let mut table = RampTable::<256>::new();
         assert_eq!((table.index_of_hz(1000.0), table.index_of_sum(5)), (0, 0));
         for _ in 0..300 {
@@ -611,13 +616,7 @@ mod tests {
 
     #[test]
     fn ramp_ms_is_the_ceiling_of_the_exact_quotient() {
-        let mut r = 0x2545_F491_4F6C_DD1Du64;
-        let mut next = |n: u32| {
-            r ^= r << 13;
-            r ^= r >> 7;
-            r ^= r << 17;
-            (r % n as u64) as u32
-        };
+        let mut next = xorshift();
         for i in 0..100_000 {
             let v0 = 1 + next(MAX_RATE_HZ);
             let vmax = v0 + next(MAX_RATE_HZ - v0 + 1);
