@@ -68,6 +68,10 @@ struct Args {
     /// src/ has uncommitted changes).
     #[arg(long)]
     firmware_label: Option<String>,
+    /// The floor of a one-axis step handler: a hand-scheduled one doing only what interrupt
+    /// mode's plain step must, and without its optional parts (bench/src/emu/floor.rs).
+    #[arg(long, conflicts_with_all = ["gcode", "sweep", "point", "serve"])]
+    floor: bool,
     /// One sweep point, AXES@HZ (e.g. 7@200000), with the step-ISR profile of its cruise.
     #[arg(long)]
     point: Option<String>,
@@ -108,6 +112,10 @@ fn main() -> std::process::ExitCode {
 }
 
 fn run(args: Args) -> Result<()> {
+    if args.floor {
+        print!("{}", ddastep_bench::emu::floor::markdown(&ddastep_bench::emu::floor::measure()?));
+        return Ok(());
+    }
     let elf = match args.elf.clone() {
         Some(p) => p,
         None => firmware_elf()?,

@@ -25,6 +25,7 @@ mod exception;
 mod exti;
 pub mod figures;
 mod firmware;
+pub mod floor;
 mod gpio;
 pub mod iwdg;
 pub mod memory;

@@ -798,6 +798,17 @@ pub fn results_markdown(s: &Sweep, others: &[Sweep], command: &str, firmware: &s
         writeln!(m, "≤ 144 cycles per step including entry and return (26). The step interrupt's code (the TIM2")?;
         writeln!(m, "handler, `Stepper::tick`, the plain step of `Stepper::tick_quick`) runs from SRAM, where the")?;
         writeln!(m, "bench charges its fetches sharing the System bus with data (bench/README.md, \"Model\").\n")?;
+        let floor = super::floor::measure()?;
+        writeln!(m, "### The step handler's floor\n")?;
+        writeln!(m, "A hand-scheduled Thumb handler that does only what interrupt mode's plain step must (the")?;
+        writeln!(m, "checks of `Stepper::tick_quick`, the step's state, the rising store first, the compare")?;
+        writeln!(m, "event's falling edge, the DWT self-timing `$I` reports), one axis, TIM2 at 250 kHz")?;
+        writeln!(m, "(`cargo sim -- --floor`, bench/src/emu/floor.rs; entry and return included):\n")?;
+        m += &super::floor::markdown(&floor);
+        writeln!(m, "\nNo compiled handler of the same work goes below the first row ({:.0} cycles; ours: {a:.0}).", floor[0].1)?;
+        writeln!(m, "500 kHz in interrupt mode needs ≤ 137 cycles per step at 95 % CPU, so it is out of reach")?;
+        writeln!(m, "while every step times itself; without the self-timing the floor would allow it, with")?;
+        writeln!(m, "nothing left for the long ticks (a move change, a ramp millisecond) that must also fit.\n")?;
     }
     let mut thread_per_entry = 0.0f64;
     for (axes, hz) in [(7usize, 50_000u32), (1, 50_000)] {
