@@ -85,6 +85,7 @@ fn plan(cmd: &str) -> Option<Plan> {
             Skip("run from the repository root by tests/firmware_size.rs (the same size check)")
         }
         "cargo sim -- --point 7@200000" => Run(&[]),
+        "cargo sim -- --floor" => Run(&[]),
         "cargo bench --target host-tuple -p ddastep-la --bench la_throughput" => {
             Skip("a benchmark: numbers only, half a minute")
         }
