@@ -165,7 +165,7 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
         made
     }
 
-    /// [`Self::lane`] without the split, for a move with slaves or in dual-edge mode (the hot
+    /// [`Self::lane`] without the split, for a move with slaves, in either edge mode (the hot
     /// path of 2 to 7 axes), slave-major: the master walks the steps (the periods, and its own
     /// bit in the words); then the slaves, three or two at a time with their accumulators in
     /// registers, walk the same steps and OR their bits into the words; in dual-edge mode a
