@@ -170,15 +170,15 @@ impl StepTime {
         let d_ms = ms.wrapping_sub(self.read_ms.swap(ms, Relaxed));
         let d_count = count - swap64(&self.read_count, count);
         let d_busy = busy - swap64(&self.read_busy, busy);
-        // f64 like the rest of the firmware's float math: f32 division would link a second set.
-        let elapsed = crate::num::f64_of_u64(d_ms.max(1) as u64 * CYCLES_PER_MS as u64);
+        // f32 like the rest of the firmware's float math.
+        let elapsed = crate::num::f32_of_u64(d_ms.max(1) as u64 * CYCLES_PER_MS as u64);
         Some(StepTimeReport {
             entries: d_count,
             min,
-            mean: (crate::num::f64_of_u64(d_busy) / crate::num::f64_of_u64(d_count)) as f32,
+            mean: (crate::num::f32_of_u64(d_busy) / crate::num::f32_of_u64(d_count)),
             max,
-            load: (crate::num::f64_of_u64(d_busy) / elapsed) as f32,
-            peak_load: (peak as f64 / CYCLES_PER_MS as f64) as f32,
+            load: (crate::num::f32_of_u64(d_busy) / elapsed),
+            peak_load: (peak as f32 / CYCLES_PER_MS as f32),
             late: {
                 let late = self.late.load(Relaxed);
                 late.wrapping_sub(self.read_late.swap(late, Relaxed))

@@ -11,6 +11,7 @@ use std::f64::consts::PI;
 
 /// Interprets `line` at `pos` after `setup` lines (modal words), returning the arc.
 fn arc_of(setup: &str, line: &str, pos: [f64; 3]) -> Result<Arc<3>, Error> {
+    let pos = pos.map(|v| v as f32);
     let mut m = Modal::RESET;
     for l in setup.split_whitespace() {
         m = m.interpret::<3>(&parse::<3>(l.as_bytes())?, &pos)?.0;
@@ -27,15 +28,23 @@ fn dist_to_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
     ((p[0] - a[0] - t * dx).powi(2) + (p[1] - a[1] - t * dy).powi(2)).sqrt()
 }
 
-/// Checks every chord of `seg` against the true arc; returns the chord ends.
+/// Checks every chord of `seg` against the true arc; returns the chord ends. (The library
+/// computes in `f32`, as Grbl; the checks widen its values to `f64`, which is exact.)
+///
+/// Tolerances: 1e-9 of the arc's scale when the library ran in f64; f32 rounds each
+/// coordinate to 6e-8 of its size and each angle to 6e-8 of the travel (a few of those per
+/// chord end), so 1e-6 of the scale (0.5 µm on a 300 mm arc at 200 mm, below a step of 4 µm).
 fn check_chords(arc: &Arc<3>, start: [f64; 3], seg: Segments<3>, tol: f64) -> Vec<[f64; 3]> {
+    let start = start.map(|v| v as f32 as f64);
     let (a, b) = arc.axes();
-    let c = arc.center();
-    let r = arc.radius();
+    let c = arc.center().map(f64::from);
+    let r = arc.radius() as f64;
+    let travel = arc.travel() as f64;
+    let target = arc.target().map(f64::from);
     let chords = seg.chords();
-    let ends: Vec<[f64; 3]> = seg.collect();
+    let ends: Vec<[f64; 3]> = seg.map(|e| e.map(f64::from)).collect();
     assert_eq!(ends.len() as u32, chords);
-    assert_eq!(ends.last().unwrap(), arc.target(), "last chord ends on the target, bit for bit");
+    assert_eq!(ends.last().unwrap(), &target, "last chord ends on the target, bit for bit");
     let n = ends.len() as f64;
     let lin = 3 - a - b;
     let mut prev = start;
@@ -43,24 +52,25 @@ fn check_chords(arc: &Arc<3>, start: [f64; 3], seg: Segments<3>, tol: f64) -> Ve
         let k = (i + 1) as f64;
         if i + 1 < ends.len() {
             // On the circle, at the angle k/n of the travel; the helix axis in proportion.
-            let ang = arc.travel() * k / n;
+            let ang = travel * k / n;
             let (s0, s1) = (start[a] - c[0], start[b] - c[1]);
             let want = [c[0] + s0 * ang.cos() - s1 * ang.sin(), c[1] + s0 * ang.sin() + s1 * ang.cos()];
-            let scale = 1e-9 * (1.0 + r + c[0].abs() + c[1].abs());
+            let scale = 1e-6 * (1.0 + r + c[0].abs() + c[1].abs());
             assert!((p[a] - want[0]).abs() < scale && (p[b] - want[1]).abs() < scale, "chord end {i}: {p:?} vs {want:?}");
-            let want_lin = start[lin] + (arc.target()[lin] - start[lin]) * k / n;
-            assert!((p[lin] - want_lin).abs() < 1e-9 * (1.0 + want_lin.abs()));
+            let want_lin = start[lin] + (target[lin] - start[lin]) * k / n;
+            assert!((p[lin] - want_lin).abs() < 1e-6 * (1.0 + start[lin].abs() + target[lin].abs()));
         }
         // The true arc between the two ends stays within tol of the chord.
         let a0 = (prev[b] - c[1]).atan2(prev[a] - c[0]);
-        let span = arc.travel() / n;
+        let span = travel / n;
         for j in 0..=16 {
             let t = a0 + span * j as f64 / 16.0;
             let q = [c[0] + r * t.cos(), c[1] + r * t.sin()];
             let d = dist_to_segment(q, [prev[a], prev[b]], [p[a], p[b]]);
             // The last chord may end up to the IJK radius mismatch off the circle.
-            let slack = if i + 1 == ends.len() { 1e-6 } else { 1e-9 };
-            assert!(d <= tol + slack * (1.0 + r), "chord {i}: {d} from the arc (tol {tol}, r {r})");
+            // (The f32 chord ends' own error, as above.)
+            let slack = if i + 1 == ends.len() { 1e-6 * (1.0 + r) } else { 0.0 } + 1e-6 * (1.0 + r + c[0].abs() + c[1].abs());
+            assert!(d <= tol + slack, "chord {i}: {d} from the arc (tol {tol}, r {r})");
         }
         prev = *p;
     }
@@ -71,10 +81,25 @@ fn letter(axis: usize) -> char {
     ['X', 'Y', 'Z'][axis]
 }
 
-/// How far off π a sweep may be for rounding to 6 decimals to push an R arc's chord past the
-/// diameter (see the `ArcRadiusError` arm below): r·δ²/4 ≤ 0.71 µm, with a factor of 2 margin.
-fn near_half_window(r: f64) -> f64 {
-    (5.7e-6 / r).sqrt().max(1e-3)
+/// Half an f32 ulp, relative (the library reads and computes in f32, as Grbl).
+const EPS32: f64 = f32::EPSILON as f64 / 2.0;
+
+/// How far off π a sweep may be for rounding to push an R arc's chord past the diameter (see
+/// the `ArcRadiusError` arm below): r·δ²/4 ≤ the chord's error, with a factor of 2 margin. In
+/// f64 that error was the 6 decimals' 0.71 µm; in f32 add the words' own rounding (coordinates
+/// up to `m` mm, 4 roundings of their size) and that of 4r² - d² (8 ulps of r², as Grbl's).
+fn near_half_window(r: f64, m: f64) -> f64 {
+    ((5.7e-6 + 2.0 * 4.0 * 4.0 * EPS32 * m) / r + 2.0 * 8.0 * EPS32).sqrt().max(1e-3)
+}
+
+/// The travel's error (rad) from f32 (nothing in f64): the words' rounding (4 roundings of
+/// coordinates up to `m` mm) turns the ends by that over r; an R arc's center moves along the
+/// chord's bisector by the error of 4r² - d² (8 ulps of r², plus the chord's) over 2·r·δ, δ its
+/// sweep's distance from a half circle.
+fn f32_travel_slack(r: f64, m: f64, radius_form: bool, sweep: f64) -> f64 {
+    let coord = 4.0 * EPS32 * m;
+    let near = if radius_form { (8.0 * EPS32 * r * r + 4.0 * r * coord) / (2.0 * r * r * (sweep - PI).abs().max(1e-9)) } else { 0.0 };
+    2.0 * (coord / r + near)
 }
 
 proptest! {
@@ -117,39 +142,45 @@ proptest! {
             format!("{}{i:.6}{}{j:.6}", names[a], names[b])
         };
         let line = format!("G{}{words}{center}F1000", if cw { 2 } else { 3 });
+        // The largest coordinate the arc's words and center reach, mm (f32 resolves it to 6e-8).
+        let m = start.iter().chain(&target).chain(&c).fold(r, |m, v| m.max(v.abs() + r));
         let setup = format!("G{plane} G90");
         let arc = match arc_of(&setup, &line, start) {
             Ok(arc) => arc,
             // An R arc whose rounded words put the chord just beyond the diameter: rounding
             // moves the target by up to 0.71 µm, and a half circle's chord falls short of 2r by
             // r·δ²/4 for a sweep δ off π, so a small radius needs a wider window than 1e-3.
-            Err(Error::ArcRadiusError) if radius_form && (sweep - PI).abs() < near_half_window(r) => return Ok(()),
+            Err(Error::ArcRadiusError) if radius_form && (sweep - PI).abs() < near_half_window(r, m) => return Ok(()),
             // A rounded R form so close to the start that the target equals it.
             Err(Error::InvalidTarget) if radius_form && target == start => return Ok(()),
             Err(e) => panic!("{line}: {e:?}"),
         };
         // Direction and extent: G2 turns negative, G3 positive, as far as asked.
         prop_assert_eq!(arc.travel() < 0.0, cw, "{}", line);
-        let near_half = radius_form && (sweep - PI).abs() < near_half_window(r);
+        let near_half = radius_form && (sweep - PI).abs() < near_half_window(r, m);
         let tiny = r * sweep < 1e-4;
         if !near_half && !tiny {
-            prop_assert!((arc.travel().abs() - sweep).abs() < 1e-4, "{} travel {} want {}", line, arc.travel(), sweep);
+            // 1e-4 rad, plus what f32 needs (see f32_travel_slack).
+            prop_assert!((arc.travel().abs() as f64 - sweep).abs() < 1e-4 + f32_travel_slack(r, m, radius_form, sweep), "{} travel {} want {}", line, arc.travel(), sweep);
         }
         let seg = arc.segments(tol);
-        let ends = check_chords(&arc, start, seg, tol);
+        let ends = check_chords(&arc, start, seg, tol as f64);
         // Step counts: the chords as planned moves add up to the whole arc's steps.
         let lim = Limits::<3>::new(&Settings::BENCH, 60_000);
         let mut p = Planner::<3>::new();
+        let start = start.map(|v| v as f32);
         p.set_position(&start.map(Some), &lim).unwrap();
         let mut sum = [0i64; 3];
         for e in &ends {
-            if let Some(pl) = p.line(e, Some(1000.0), &lim).unwrap() {
+            if let Some(pl) = p.line(&e.map(|v| v as f32), Some(1000.0), &lim).unwrap() {
                 for (s, d) in sum.iter_mut().zip(pl.mv.steps()) {
                     *s += *d as i64;
                 }
             }
         }
-        let spm = |k: usize| Settings::BENCH.steps_per_mm[k] as f64;
+        let spm = |k: usize| Settings::BENCH.steps_per_mm[k];
+        // The target as the library read it from the words (the nearest f32 to each).
+        let target = *arc.target();
         let want: [i64; 3] = std::array::from_fn(|k| to_steps(target[k], spm(k)).unwrap() - to_steps(start[k], spm(k)).unwrap());
         prop_assert_eq!(sum, want);
         prop_assert_eq!(p.position_mm(), &target);
@@ -178,7 +209,8 @@ fn segment_count_follows_the_tolerance() {
     let ideal = 2.0 * PI / (4.0 * (0.025f64).sqrt().asin());
     let n = arc.segments(0.5).chords() as f64;
     assert!(n >= ideal && n <= (ideal * 1.001).ceil(), "{n} chords, ideal {ideal}");
-    assert!((arc.travel() + 2.0 * PI).abs() < 1e-12);
+    // 1e-12 rad in f64; the f32 travel is 2π less the f32 atan2, to about an ulp of 2π.
+    assert!((arc.travel() as f64 + 2.0 * PI).abs() < 1e-6);
     // A tolerance above the diameter still turns at most a half circle per chord.
     assert_eq!(arc.segments(50.0).chords(), 2);
 }
@@ -190,14 +222,16 @@ fn radius_form_picks_grbls_center() {
     assert!((arc.center()[0] - 5.0).abs() < 1e-12 && arc.center()[1].abs() < 1e-6);
     // R10 to (10,0): G2 short way → center below the chord (Grbl's sign), travel under π.
     let arc = arc_of("", "G2X10R10F100", [0.0, 0.0, 0.0]).unwrap();
-    assert!(arc.center()[1] < 0.0 && arc.travel() > -PI);
+    assert!(arc.center()[1] < 0.0 && (arc.travel() as f64) > -PI);
     let arc = arc_of("", "G2X10R-10F100", [0.0, 0.0, 0.0]).unwrap();
-    assert!(arc.center()[1] > 0.0 && arc.travel() < -PI);
+    assert!(arc.center()[1] > 0.0 && (arc.travel() as f64) < -PI);
     let arc = arc_of("", "G3X10R10F100", [0.0, 0.0, 0.0]).unwrap();
-    assert!(arc.center()[1] > 0.0 && arc.travel() > 0.0 && arc.travel() < PI);
+    assert!(arc.center()[1] > 0.0 && arc.travel() > 0.0 && (arc.travel() as f64) < PI);
     // Inches: R and IJK scale like the axes.
     let arc = arc_of("G20", "G2X1I0.5F10", [0.0, 0.0, 0.0]).unwrap();
-    assert!((arc.radius() - 12.7).abs() < 1e-12);
+    // 1e-12 mm in f64; in f32 12.7 itself is 1.9e-7 off, and the radius is a root of a sum
+    // of squares: 2 ulps (2e-6 mm).
+    assert!((arc.radius() as f64 - 12.7).abs() < 2e-6);
 }
 
 #[test]

@@ -178,7 +178,7 @@ fn s_curve_table_rises_smoothly_to_vmax() {
     let mut t: RampTable = RampTable::new();
     let cfg = RampConfig { v0: 500, vmax: 50_000, accel: 400_000, shape: Shape::SCurve };
     t.build(cfg).unwrap();
-    let rates: Vec<f64> = t.periods().iter().map(|&p| hz_of_period(p)).collect();
+    let rates: Vec<f64> = t.periods().iter().map(|&p| hz_of_period(p) as f64).collect();
     assert!(rates.windows(2).all(|w| w[1] >= w[0]));
     // Steepest step between entries is the acceleration (per ms), within 2 %.
     let steepest = rates.windows(2).map(|w| w[1] - w[0]).fold(0.0, f64::max);

@@ -85,7 +85,7 @@ fn back_to_back_moves_at_the_dma_cap_keep_every_step() {
         }
         let info = reply(&mut b, "$I");
         let mut s = Settings { dma_burst: true, dual_edge: dual, ..Settings::BENCH };
-        s.set(0, ddastep_bench::emu::sweep::PULSE_US, 3).unwrap();
+        s.set(0, ddastep_bench::emu::sweep::PULSE_US as f32, 3).unwrap();
         let cap = s.timing().max_rate_for(axes as u32 - 1);
         let name = if dual { "dual-edge DMA" } else { "DMA" };
         assert!(info.contains(&format!("[MSG:max step rate {} Hz {name}]", s.timing().max_rate_hz())), "{info}");

@@ -98,7 +98,7 @@ fn back_to_back_moves_above_the_full_pulse_cap_keep_every_step() {
         ok(&mut b, &format!("$0={PULSE_US}"));
         let info = reply(&mut b, "$I");
         let mut s = Settings::BENCH;
-        s.set(0, PULSE_US, 3).unwrap();
+        s.set(0, PULSE_US as f32, 3).unwrap();
         let single = s.timing().max_rate_for(axes as u32 - 1);
         s.dual_edge = true;
         let cap = s.timing().max_rate_for(axes as u32 - 1);

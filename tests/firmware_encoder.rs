@@ -23,7 +23,7 @@ fn machine(cps: f64, lag_us: f64, extra: &str) -> MachineSpec {
 fn boot_encoder(spec: &MachineSpec, enc: &[(u16, f64)]) -> Board {
     let mut s = Settings::BENCH;
     for &(id, v) in enc {
-        s.set(id, v, 7).unwrap();
+        s.set(id, v as f32, 7).unwrap();
     }
     let mut b = Board::load(firmware_elf().unwrap()).unwrap();
     b.attach_plant(Box::new(VirtualMachine::new(spec)));

@@ -94,7 +94,7 @@ fn back_to_back_moves_at_the_rate_cap_keep_every_step() {
         // The cap for this move's slaves, from the firmware's own timing (as `$I` prints the
         // single-axis one).
         let mut s = ddastep::settings::Settings::BENCH;
-        s.set(0, pulse_us, 3).unwrap();
+        s.set(0, pulse_us as f32, 3).unwrap();
         let cap = s.timing().max_rate_for(axes as u32 - 1);
         let r = ddastep_bench::emu::changes::back_to_back_at(&mut b, axes, cap as f64 * 0.995, pulse_us).unwrap();
         let info = reply(&mut b, "$I");

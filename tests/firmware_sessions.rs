@@ -153,7 +153,7 @@ fn cncjs_like_session_with_work_offsets() {
     // The offsets are in flash.
     let st = stored(&mut b).expect("image");
     assert_eq!(st.coords.get::<3>(0)[..2], [5.0, -3.0]);
-    assert_eq!(st.coords.get::<3>(1)[2], (z as f64 / 100.0) as f32 as f64, "stored as f32, like Grbl's EEPROM floats");
+    assert_eq!(st.coords.get::<3>(1)[2], (z as f64 / 100.0) as f32, "stored as f32, like Grbl's EEPROM floats");
     assert!(b.fault().is_none());
 }
 

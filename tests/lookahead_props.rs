@@ -93,13 +93,13 @@ fn plan(c: &Chain, s: &Settings, lim: &Limits<N>) -> Vec<Seen> {
     let mut p = Planner::<N>::new();
     let mut out = Vec::new();
     for (target, feed) in &c.moves {
-        let Some(pl) = p.line(target, *feed, lim).unwrap() else { continue };
+        let Some(pl) = p.line(&target.map(|v| v as f32), feed.map(|f| f as f32), lim).unwrap() else { continue };
         let steps = pl.mv.steps().map(i64::from);
         let d: Vec<f64> = (0..N).map(|i| steps[i] as f64 / s.steps_per_mm[i] as f64).collect();
         let len = d.iter().map(|x| x * x).sum::<f64>().sqrt();
         let master = steps.iter().map(|x| x.unsigned_abs()).max().unwrap() as f64;
         // The nominal path speed: the cruise rate over the master's share of the path.
-        let nominal = ddastep::ramp::hz_of_period(pl.mv.cruise()) / (master / len);
+        let nominal = ddastep::ramp::hz_of_period(pl.mv.cruise()) as f64 / (master / len);
         out.push(Seen { steps, unit: core::array::from_fn(|i| d[i] / len), share: master / len, nominal });
         let _ = &pl;
     }
@@ -111,7 +111,7 @@ fn plan(c: &Chain, s: &Settings, lim: &Limits<N>) -> Vec<Seen> {
 fn run(rig: &mut Rig<N>, c: &Chain, lim: &Limits<N>, mut each: impl FnMut(&mut Rig<N>) -> bool) {
     let mut p = Planner::<N>::new();
     let mut queue: std::collections::VecDeque<_> =
-        c.moves.iter().filter_map(|(t, f)| p.line(t, *f, lim).unwrap()).map(|pl| pl.mv).collect();
+        c.moves.iter().filter_map(|(t, f)| p.line(&t.map(|v| v as f32), f.map(|f| f as f32), lim).unwrap()).map(|pl| pl.mv).collect();
     let mut updates = 0u64;
     loop {
         while let Some(mv) = queue.front() {

@@ -16,10 +16,10 @@ fn cruise_is_clamped_to_the_ceiling_for_the_moves_axis_count() {
     let lim = Limits::<7>::new(&s, 1_000_000);
     for axes in 1..=7usize {
         let mut p = Planner::<7>::new();
-        let target: [f64; 7] = core::array::from_fn(|i| if i < axes { 100.0 - i as f64 } else { 0.0 });
+        let target: [f32; 7] = core::array::from_fn(|i| if i < axes { 100.0 - i as f32 } else { 0.0 });
         let planned = p.line(&target, Some(1e7), &lim).unwrap().unwrap();
         let hz = hz_of_period(planned.mv.cruise());
-        let ceiling = t.max_rate_for(axes as u32 - 1) as f64;
+        let ceiling = t.max_rate_for(axes as u32 - 1) as f32;
         assert!(hz <= ceiling * 1.0001 && hz >= ceiling * 0.999, "{axes} axes: {hz} Hz vs {ceiling}");
     }
     assert!(t.max_rate_for(6) < t.max_rate_for(0));

@@ -42,7 +42,11 @@ proptest! {
             b.line(&format!("$10{i}={s}"));
         }
         b.run_ms(2);
-        let mut mm = [0.0f64; 3];
+        // The targets in f32, as the library (and Grbl) reads and adds them: the nearest f32 to
+        // each word, times the unit, added to the position. (In f64 when the library was: at
+        // exact decimal ties, k + ½ steps, the two round either way in about 1 % of cases, and
+        // f64 itself differs from the exact decimal in as many.)
+        let mut mm = [0.0f32; 3];
         for blk in &blocks {
             let mut line = format!(
                 "{} {} {}",
@@ -50,12 +54,12 @@ proptest! {
                 if blk.relative { "G91" } else { "G90" },
                 if blk.rapid { "G0" } else { "G1" },
             );
-            let unit = if blk.inches { 25.4 } else { 1.0 };
+            let unit: f32 = if blk.inches { 25.4 } else { 1.0 };
             for (i, w) in blk.words.iter().enumerate() {
                 if let Some(t) = w {
                     let text = num(*t);
                     line += &format!(" {}{}", ['X', 'Y', 'Z'][i], text);
-                    let v: f64 = text.parse().unwrap();
+                    let v: f32 = text.parse().unwrap();
                     mm[i] = if blk.relative { mm[i] + v * unit } else { v * unit };
                 }
             }
@@ -67,10 +71,10 @@ proptest! {
         for _ in 0..nudges {
             b.line("G21 G91 G1 X0.003 Y-0.007 F3000");
             mm[0] += 0.003;
-            mm[1] -= 0.007;
+            mm[1] += -0.007;
         }
         b.run_to_idle(600_000);
-        let want: [i64; 3] = std::array::from_fn(|i| (mm[i] * spm[i] as f64).round() as i64);
+        let want: [i64; 3] = std::array::from_fn(|i| (mm[i] * spm[i]).round() as i64);
         prop_assert_eq!(b.shared.positions().map(i64::from), want);
     }
 }

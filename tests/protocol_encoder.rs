@@ -14,7 +14,7 @@ use protocol_rig::{Bench, EncoderModel};
 fn bench(cps: f64, threshold: u32, lag: f64, alarm: bool) -> Bench<3> {
     let mut s = Settings { axes: 3, ..Settings::BENCH };
     for (id, v) in [(87, 1.0), (88, cps), (97, threshold as f64), (98, alarm as u8 as f64), (99, lag)] {
-        s.set(id, v, 3).unwrap();
+        s.set(id, v as f32, 3).unwrap();
     }
     let mut b = Bench::<3>::new(s);
     b.encoder = Some(EncoderModel::new(0, cps, 0));

@@ -3,7 +3,7 @@
 use ddastep::gcode::{parse, parse_number, Modal, Motion};
 use ddastep::protocol::Error;
 
-fn num(s: &str) -> Result<f64, Error> {
+fn num(s: &str) -> Result<f32, Error> {
     let mut i = 0;
     let v = parse_number(s.as_bytes(), &mut i)?;
     assert_eq!(i, s.len(), "{s}");
@@ -13,7 +13,7 @@ fn num(s: &str) -> Result<f64, Error> {
 #[test]
 fn numbers_match_std_and_refuse_junk() {
     for s in ["0", "-0.5", "+12.25", "123456.789", ".5", "5.", "0.000001", "999999999999999", "1.10000000000000000000"] {
-        assert_eq!(num(s), Ok(s.parse::<f64>().unwrap()), "{s}");
+        assert_eq!(num(s), Ok(s.parse::<f32>().unwrap()), "{s}");
     }
     for s in ["", "-", "--5", ".", "+.", "1000000000000000", "0.0000000000000000000001234"] {
         assert_eq!(num(s), Err(Error::BadNumberFormat), "{s}");

@@ -117,7 +117,7 @@ proptest! {
         let f = format!("{:06}", frac);
         let s = format!("{}{}.{}", if neg { "-" } else { "" }, int, &f[..digits]);
         let mut i = 0;
-        prop_assert_eq!(parse_number(s.as_bytes(), &mut i), Ok(s.parse::<f64>().unwrap()));
+        prop_assert_eq!(parse_number(s.as_bytes(), &mut i), Ok(s.parse::<f32>().unwrap()));
         prop_assert_eq!(i, s.len());
     }
 
@@ -127,7 +127,7 @@ proptest! {
         match parse_number(s.as_bytes(), &mut i) {
             Ok(v) => {
                 prop_assert!(v.is_finite() && v.abs() < 1e15);
-                prop_assert_eq!(v, s[..i].parse::<f64>().unwrap());
+                prop_assert_eq!(v, s[..i].parse::<f32>().unwrap());
             }
             Err(e) => prop_assert_eq!(e, Error::BadNumberFormat),
         }
@@ -145,11 +145,11 @@ proptest! {
         flip in 0usize..SETTINGS_LEN, bit in 0u8..8,
         mask in 0u8..4, count in 3u8..=7,
         home in (any::<u8>(), 0.001f32..1e5, 0.001f32..1e5, 0u32..=65_535, 0.0f32..1e6),
-        enc in (0u8..=7, 0.001f64..64.0, any::<bool>(), 0u32..=1_000_000, any::<bool>(), 0.0f64..1000.0),
+        enc in (0u8..=7, 0.001f32..64.0, any::<bool>(), 0u32..=1_000_000, any::<bool>(), 0.0f32..1000.0),
     ) {
         let mut encoder = ddastep::encoder::EncoderSettings::DEFAULT;
-        let values = [enc.0 % (count + 1)].map(f64::from).into_iter()
-            .chain([enc.1, enc.2 as u8 as f64, enc.3 as f64, enc.4 as u8 as f64, enc.5]);
+        let values = [enc.0 % (count + 1)].map(f32::from).into_iter()
+            .chain([enc.1, enc.2 as u8 as f32, enc.3 as f32, enc.4 as u8 as f32, enc.5]);
         for (id, v) in ddastep::encoder::IDS.into_iter().zip(values) {
             encoder.set(id, v, count as usize).unwrap();
         }

@@ -38,7 +38,7 @@ fn set_follows_grbl_rules() {
     assert!(s.hard_limits);
     assert_eq!(s.set(7, 0.0, 3), Err(Error::InvalidStatement));
     assert_eq!(s.set(RAMP_SHAPE, 2.0, 3), Err(Error::InvalidStatement));
-    assert_eq!(s.set(110, f64::NAN, 3), Err(Error::BadNumberFormat));
+    assert_eq!(s.set(110, f32::NAN, 3), Err(Error::BadNumberFormat));
 }
 
 #[test]
@@ -165,7 +165,7 @@ fn dual_edge_is_a_pin_setting_with_its_own_rate_rule() {
     assert_eq!(s.set(DUAL_EDGE, 1.0, 3), Ok(Change::Pins));
     assert!(s.dual_edge && s.timing().dual);
     assert_eq!(s.get(DUAL_EDGE, 3), Some((1.0, 0)));
-    assert_eq!(s.set(DUAL_EDGE, f64::NAN, 3), Err(Error::BadNumberFormat));
+    assert_eq!(s.set(DUAL_EDGE, f32::NAN, 3), Err(Error::BadNumberFormat));
     assert_eq!(s.set(DUAL_EDGE, -1.0, 3), Err(Error::NegativeValue));
     // Stored as a flag bit next to `$4`-`$21`: an image from before `$580` (bit clear) loads as
     // single-edge, the image with it round-trips.
@@ -209,7 +209,7 @@ fn dma_burst_is_a_restarting_flag_whose_cap_is_the_fill_cost() {
     // Like `$580`: the step output changes how it is built, so the MCU restarts.
     assert_eq!(s.set(DMA_BURST, 1.0, 3), Ok(Change::Pins));
     assert!(s.dma_burst && s.timing().dma && !s.timing().dual);
-    assert_eq!(s.set(DMA_BURST, f64::NAN, 3), Err(Error::BadNumberFormat));
+    assert_eq!(s.set(DMA_BURST, f32::NAN, 3), Err(Error::BadNumberFormat));
     // Its own flag bit: the image round-trips, and one without it loads as interrupt mode.
     assert_eq!(Settings::decode(&s.to_bytes()), Some(s));
     let off = Settings { dma_burst: false, ..s };

@@ -115,7 +115,7 @@ fn laser_m4_power_follows_the_rate_through_the_ramps() {
     let cruise = 5_000.0;
     let mut ramp_points = 0;
     for &(rate, ccr) in &t {
-        let want = duty(1000.0 * (rate as f64 / cruise).min(1.0), 0.0, 1000.0, ARR);
+        let want = duty(1000.0 * (rate as f32 / cruise).min(1.0), 0.0, 1000.0, ARR);
         // The rig polls right after running the engine, reading the same rate.
         assert!((ccr as i64 - want as i64).abs() <= 1, "rate {rate} Hz: ccr {ccr}, want {want}");
         if rate > 0 && rate < 4_900 {

@@ -35,7 +35,7 @@ pub struct Loss {
     pub axis: usize,
     /// Commanded minus measured position, steps (positive: the motor is behind; whole
     /// encoder counts).
-    pub steps: f64,
+    pub steps: f32,
     /// Alarm (`$98=1`) rather than feed hold.
     pub alarm: bool,
 }
@@ -151,8 +151,8 @@ impl Monitor {
     }
 
     /// Commanded − measured position at the last reading, steps (to the encoder's count).
-    pub fn error_steps(&self) -> f64 {
-        self.deviation() as f64 * ONE as f64 / self.ratio as f64
+    pub fn error_steps(&self) -> f32 {
+        self.deviation() as f32 * ONE as f32 / self.ratio as f32
     }
 
     /// The commanded position at the last reading, steps.
@@ -161,13 +161,13 @@ impl Monitor {
     }
 
     /// The measured position at the last reading, steps.
-    pub fn measured_steps(&self) -> f64 {
-        self.last.commanded as f64 - self.error_steps()
+    pub fn measured_steps(&self) -> f32 {
+        self.last.commanded as f32 - self.error_steps()
     }
 
     /// The measured speed over the last window, steps/s.
-    pub fn speed_steps_per_s(&self) -> f64 {
-        self.last.window as f64 * (1000 * ONE / WINDOW_MS as i64) as f64 / self.ratio as f64
+    pub fn speed_steps_per_s(&self) -> f32 {
+        self.last.window as f32 * (1000 * ONE / WINDOW_MS as i64) as f32 / self.ratio as f32
     }
 }
 
@@ -182,7 +182,7 @@ mod tests {
 
     fn monitor(cps: f32, invert: bool, threshold: u32, lag_ms: f32) -> Monitor {
         let mut s = EncoderSettings::DEFAULT;
-        for (id, v) in [(87, 1.0), (88, cps as f64), (89, invert as u8 as f64), (97, threshold as f64), (98, 1.0), (99, lag_ms as f64)] {
+        for (id, v) in [(87, 1.0), (88, cps as f32), (89, invert as u8 as f32), (97, threshold as f32), (98, 1.0), (99, lag_ms as f32)] {
             s.set(id, v, 3).unwrap();
         }
         let mut m = Monitor::OFF;

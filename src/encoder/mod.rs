@@ -31,7 +31,7 @@ pub const IDS: [u16; 6] = [AXIS, COUNTS_PER_STEP, INVERT, THRESHOLD, ACTION, LAG
 pub const IMAGE_LEN: usize = 24;
 /// Largest `$88`: at the engine's fastest 248 kHz this is 15.9 M counts/s, within what TIM3
 /// counts through its input filter and what the 1 ms extension keeps.
-pub const MAX_COUNTS_PER_STEP: f64 = 64.0;
+pub const MAX_COUNTS_PER_STEP: f32 = 64.0;
 
 /// Per setting, in [`IDS`] order: highest value (`$87`'s is the axis count), decimals in `$$`
 /// (0: whole numbers, truncated as Grbl truncates masks and flags), the binary point of the
@@ -103,25 +103,25 @@ impl EncoderSettings {
     }
 
     /// Value and decimals of setting `id` (one of [`IDS`]) for `$$`.
-    pub fn get(&self, id: u16) -> Option<(f64, u32)> {
+    pub fn get(&self, id: u16) -> Option<(f32, u32)> {
         // `get`, not indexing: no panic path in the firmware.
         let i = index(id)?;
         let (&v, &(_, decimals, shift, _)) = (self.0.get(i)?, TABLE.get(i)?);
-        Some((v as f64 / (1u32 << shift) as f64, decimals as u32))
+        Some((v as f32 / (1u32 << shift) as f32, decimals as u32))
     }
 
     /// `$id=value` for one of [`IDS`] (`value` must be finite and not negative, as
     /// `Settings::set` checks first), on a machine with `axes` axes.
-    pub fn set(&mut self, id: u16, value: f64, axes: usize) -> Result<(), Error> {
+    pub fn set(&mut self, id: u16, value: f32, axes: usize) -> Result<(), Error> {
         let i = index(id).ok_or(Error::InvalidStatement)?;
         let (Some(slot), Some(&(hi, decimals, shift, _))) = (self.0.get_mut(i), TABLE.get(i)) else {
             return Err(Error::InvalidStatement);
         };
         let hi = if i == 0 { axes as u32 } else { hi };
-        let v = if decimals == 0 { libm::trunc(value) } else { value };
-        let scaled = v * (1u32 << shift) as f64 + 0.5;
+        let v = if decimals == 0 { libm::truncf(value) } else { value };
+        let scaled = v * (1u32 << shift) as f32 + 0.5;
         // `$88` must be at least one step of its fixed point: a ratio of 0 watches nothing.
-        if !(value <= hi as f64 && scaled >= (i == 1) as u8 as f64) {
+        if !(value <= hi as f32 && scaled >= (i == 1) as u8 as f32) {
             return Err(Error::InvalidStatement);
         }
         // SAFETY: finite, not negative and within the table's range, so below 2^23 once

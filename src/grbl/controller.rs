@@ -95,9 +95,9 @@ enum Rate {
     /// G0: the axes' max rates.
     Rapid,
     /// G94: path feed, mm/min.
-    Feed(f64),
+    Feed(f32),
     /// G93: the move's time, minutes.
-    Minutes(f64),
+    Minutes(f32),
 }
 
 /// One accepted line still being carried out; each stage is cleared when done.
@@ -117,7 +117,7 @@ struct Job<const N: usize> {
     arc: Option<Segments<N>>,
     rate: Rate,
     /// M3/M4/M5, S, M7/M8/M9 to apply once the queue has run out (before the motion).
-    tool: Option<(SpindleDir, f64, u8)>,
+    tool: Option<(SpindleDir, f32, u8)>,
     /// Laser mode: the power the block's moves carry (none for jogs).
     power: Power,
     drivers_off: bool,
@@ -207,7 +207,7 @@ pub struct Controller<'a, const N: usize> {
     /// Laser power of each move in the queue (laser mode), indexed like `feed_ring`.
     power_ring: [Power; FEED_RING],
     /// Spindle direction and speed, and coolant, in force.
-    tool: (SpindleDir, f64, u8),
+    tool: (SpindleDir, f32, u8),
     /// `$33` last handed to the shell (0: none yet).
     pwm_hz: u32,
     /// `$C` off, `$RST`: a soft reset follows the line's `ok`.
@@ -644,7 +644,7 @@ impl<'a, const N: usize> Controller<'a, N> {
             return false;
         }
         self.feed_ring[self.pushed as usize % FEED_RING] = pl.mm_per_step;
-        let cruise_hz = crate::ramp::hz_of_period(pl.mv.cruise()) as f32;
+        let cruise_hz = crate::ramp::hz_of_period(pl.mv.cruise());
         self.power_ring[self.pushed as usize % FEED_RING] = Power { cruise_hz, ..power };
         self.pushed = self.pushed.wrapping_add(1);
         self.idle_since = None;
@@ -795,10 +795,10 @@ impl<'a, const N: usize> Controller<'a, N> {
         let (arc, rate) = match &fx.arc {
             Some(a) => {
                 a.check_range(&self.limits.steps_per_mm)?;
-                let seg = a.segments(self.settings.arc_tolerance as f64);
+                let seg = a.segments(self.settings.arc_tolerance);
                 // G93 over an arc: its time shared by the (equal) chords.
                 let per = match rate {
-                    Rate::Minutes(t) => Rate::Minutes(t / seg.chords() as f64),
+                    Rate::Minutes(t) => Rate::Minutes(t / seg.chords() as f32),
                     r => r,
                 };
                 (Some(seg), per)
@@ -879,7 +879,7 @@ impl<'a, const N: usize> Controller<'a, N> {
 /// the equivalent feed, so its axis-rate clamps apply as to any feed.
 fn plan<const N: usize>(
     planner: &mut Planner<N>,
-    target: &[f64; N],
+    target: &[f32; N],
     rate: Rate,
     lim: &Limits<N>,
     cfg: &RampConfig,
@@ -894,7 +894,7 @@ fn plan<const N: usize>(
                 Some(probe) => {
                     let master = probe.mv.steps().iter().map(|s| s.unsigned_abs()).max().unwrap_or(0);
                     let ramp = match probe.mv.path() {
-                        Some(p) => inverse_time::MasterRamp::new(p.share as f64, p.accel as f64, lim.per_mm, cfg),
+                        Some(p) => inverse_time::MasterRamp::new(p.share, p.accel, lim.per_mm, cfg),
                         None => inverse_time::MasterRamp::new(1.0, 0.0, 0.0, cfg),
                     };
                     inverse_time::cruise_hz(master as u64, t * 60.0, &ramp) / probe.wanted_hz

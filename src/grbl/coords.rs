@@ -37,17 +37,17 @@ impl Default for Coords {
 impl Coords {
     pub const ZERO: Coords = Coords { slots: [[0.0; MAX_AXES]; SLOTS] };
 
-    /// Slot `i` for `N` axes, as `f64`.
-    pub fn get<const N: usize>(&self, i: usize) -> [f64; N] {
+    /// Slot `i` for `N` axes, as `f32`.
+    pub fn get<const N: usize>(&self, i: usize) -> [f32; N] {
         let s = self.slots.get(i).copied().unwrap_or([0.0; MAX_AXES]);
-        core::array::from_fn(|a| s.get(a).copied().unwrap_or(0.0) as f64)
+        core::array::from_fn(|a| s.get(a).copied().unwrap_or(0.0))
     }
 
     /// Stores slot `i` (axes beyond `N` keep their value).
-    pub fn set<const N: usize>(&mut self, i: usize, v: &[f64; N]) {
+    pub fn set<const N: usize>(&mut self, i: usize, v: &[f32; N]) {
         if let Some(s) = self.slots.get_mut(i) {
             for (d, x) in s.iter_mut().zip(v) {
-                *d = *x as f32;
+                *d = *x;
             }
         }
     }
@@ -80,11 +80,11 @@ impl Coords {
 pub struct Offsets<const N: usize> {
     pub stored: Coords,
     /// G92 offset, mm (not persistent).
-    pub g92: [f64; N],
+    pub g92: [f32; N],
     /// G43.1 tool length offset on Z, mm (not persistent).
-    pub tlo: f64,
+    pub tlo: f32,
     /// The last probe cycle's position (machine mm) and whether it made contact (`[PRB:]`).
-    pub prb: [f64; N],
+    pub prb: [f32; N],
     pub prb_ok: bool,
 }
 
@@ -101,12 +101,12 @@ impl<const N: usize> Offsets<N> {
     }
 
     /// Work coordinate system `sel` (0 = G54).
-    pub fn wcs(&self, sel: u8) -> [f64; N] {
+    pub fn wcs(&self, sel: u8) -> [f32; N] {
         self.stored.get(sel as usize)
     }
 
     /// The tool length offset's share of axis `i`.
-    pub fn tlo_of(&self, i: usize) -> f64 {
+    pub fn tlo_of(&self, i: usize) -> f32 {
         if i == TLO_AXIS {
             self.tlo
         } else {
@@ -115,19 +115,19 @@ impl<const N: usize> Offsets<N> {
     }
 
     /// Work coordinate offset with system `sel`: WCS + G92 + TLO.
-    pub fn wco(&self, sel: u8) -> [f64; N] {
+    pub fn wco(&self, sel: u8) -> [f32; N] {
         let w = self.wcs(sel);
         core::array::from_fn(|i| w[i] + self.g92[i] + self.tlo_of(i))
     }
 
     /// Machine position of program coordinate `w` on axis `i` in system `sel` (G90).
-    pub fn to_machine(&self, sel: u8, i: usize, w: f64) -> f64 {
+    pub fn to_machine(&self, sel: u8, i: usize, w: f32) -> f32 {
         w + self.wcs(sel).get(i).copied().unwrap_or(0.0) + self.g92[i] + self.tlo_of(i)
     }
 
     /// G92: the offset that makes the machine position `pos` read `words` in system `sel`
     /// (`G92 = MPos − WCS − TLO − WPos`; axes without a word keep theirs).
-    pub fn g92_for(&self, sel: u8, pos: &[f64; N], words: &[Option<f64>; N]) -> [f64; N] {
+    pub fn g92_for(&self, sel: u8, pos: &[f32; N], words: &[Option<f32>; N]) -> [f32; N] {
         let wcs = self.wcs(sel);
         core::array::from_fn(|i| match words[i] {
             Some(w) => pos[i] - wcs[i] - self.tlo_of(i) - w,
@@ -137,7 +137,7 @@ impl<const N: usize> Offsets<N> {
 
     /// G10 L2 (`l20` false: the words are the offsets) or L20 (the position `pos` reads the
     /// words: `WCS = MPos − G92 − TLO − WPos`): stored slot `slot` with the named axes changed.
-    pub fn g10(&self, slot: usize, l20: bool, pos: &[f64; N], words: &[Option<f64>; N]) -> [f64; N] {
+    pub fn g10(&self, slot: usize, l20: bool, pos: &[f32; N], words: &[Option<f32>; N]) -> [f32; N] {
         let mut v = self.stored.get::<N>(slot);
         for (i, x) in v.iter_mut().enumerate() {
             if let Some(w) = words[i] {
@@ -149,7 +149,7 @@ impl<const N: usize> Offsets<N> {
 
     /// G28 (`k` 0) / G30 (1): after the intermediate point, the named axes (all of them when
     /// none is named) go to the stored position; the others stay at `pos`.
-    pub fn home(&self, k: u8, pos: &[f64; N], words: &[Option<f64>; N]) -> [f64; N] {
+    pub fn home(&self, k: u8, pos: &[f32; N], words: &[Option<f32>; N]) -> [f32; N] {
         let stored = self.stored.get::<N>(G28 + k as usize);
         let any = words.iter().any(Option::is_some);
         core::array::from_fn(|i| if any && words[i].is_none() { pos[i] } else { stored[i] })

@@ -6,8 +6,8 @@
 //! A block is checked in full before anything happens (Grbl's rule): [`parse`] reads the words
 //! and catches word-level errors in line order; [`Modal::interpret`] applies the block to a copy
 //! of the modal state and yields the [`Effects`] to carry out, so a refused line changes nothing.
-//! Numbers are read exactly: up to 15 significant digits as an integer, divided once by a power
-//! of ten, which is the nearest `f64` to the decimal (as `str::parse` gives).
+//! Numbers are read exactly: up to 15 significant digits as an integer, then the nearest `f32`
+//! to the decimal (as `str::parse` gives; [`decimal_f32`]).
 
 use crate::arc::{Arc, Center};
 use crate::coords::{Offsets, G28};
@@ -17,19 +17,19 @@ use crate::spindle::{SpindleDir, FLOOD, MIST};
 use crate::AXIS_NAMES;
 
 /// Largest axis target accepted, mm (beyond it: `error:33`).
-pub const MAX_MM: f64 = 1e6;
+pub const MAX_MM: f32 = 1e6;
 /// Largest line number (Grbl's MAX_LINE_NUMBER).
-pub const MAX_LINE_NUMBER: f64 = 10_000_000.0;
+pub const MAX_LINE_NUMBER: f32 = 10_000_000.0;
 /// Longest dwell, s (keeps the wrapping millisecond clock unambiguous).
-pub const MAX_DWELL_S: f64 = 1_000_000.0;
-/// Largest significand read: 15 decimal digits are exact in `f64`.
+pub const MAX_DWELL_S: f32 = 1_000_000.0;
+/// Largest significand read: 15 decimal digits (below 2^50, as [`decimal_f32`] needs).
 const MAX_SIGNIFICAND: u64 = 999_999_999_999_999;
-/// Most digits after the point: 10^22 is the largest power of ten exact in `f64`.
+/// Most digits after the point (5^22 < 2^52, as [`decimal_f32`] needs).
 const MAX_FRAC: usize = 22;
 
 /// Reads a decimal number at `s[*i..]` (optional sign, digits, at most one point) and moves
 /// `*i` past it. No exponent, no `inf`/`nan`: anything else is [`Error::BadNumberFormat`].
-pub fn parse_number(s: &[u8], i: &mut usize) -> Result<f64, Error> {
+pub fn parse_number(s: &[u8], i: &mut usize) -> Result<f32, Error> {
     let mut j = *i;
     let neg = s.get(j) == Some(&b'-');
     if matches!(s.get(j), Some(b'-' | b'+')) {
@@ -72,14 +72,48 @@ pub fn parse_number(s: &[u8], i: &mut usize) -> Result<f64, Error> {
         return Err(Error::BadNumberFormat);
     }
     *i = j;
-    // 10^frac by repeated ×10: every product up to 10^22 is exact, so this is the same value
-    // a table would hold, without its 184 bytes of flash.
-    let mut pow10 = 1.0;
-    for _ in 0..frac {
-        pow10 *= 10.0;
-    }
-    let v = crate::num::f64_of_u64(sig) / pow10;
+    let v = decimal_f32(sig, frac as u32);
     Ok(if neg { -v } else { v })
+}
+
+/// The nearest `f32` to `sig / 10^frac` (`sig` < 2^50, `frac` ≤ 22), as `str::parse` gives.
+///
+/// A significand of 24 bits over 10^frac ≤ 10^10 (both exact in `f32`) is one correctly rounded
+/// division. Otherwise in integers: 10^frac = 5^frac · 2^frac (5^22 < 2^52), so the quotient
+/// by 5^frac is taken to 26 bits with a sticky bit (which the one rounding of the `u32`
+/// conversion then rounds correctly), and the powers of two are exact.
+fn decimal_f32(sig: u64, frac: u32) -> f32 {
+    if sig < 1 << 24 && frac <= 10 {
+        // 10^frac by repeated ×10: every product up to 10^10 is exact in f32.
+        let mut pow10 = 1.0f32;
+        for _ in 0..frac {
+            pow10 *= 10.0;
+        }
+        return sig as u32 as f32 / pow10;
+    }
+    if sig == 0 {
+        return 0.0;
+    }
+    let d = 5u64.pow(frac);
+    // sig / d = (q + r/d) · 2^-shift, q brought to 26 bits (r < d < 2^52: 2r fits).
+    let (mut q, mut r, mut shift) = (sig / d, sig % d, 0i32);
+    while q < 1 << 25 {
+        r <<= 1;
+        q = q << 1 | (r >= d) as u64;
+        if r >= d {
+            r -= d;
+        }
+        shift += 1;
+    }
+    let mut sticky = r != 0;
+    while q >= 1 << 26 {
+        sticky |= q & 1 != 0;
+        q >>= 1;
+        shift -= 1;
+    }
+    // 2^-(shift + frac): within f32's normal range here (shift ≤ 77, frac ≤ 22; shift ≥ -24).
+    let scale = f32::from_bits(((127 - shift - frac as i32) as u32) << 23);
+    (q as u32 | sticky as u32) as f32 * scale
 }
 
 /// Motion mode (group 1).
@@ -172,16 +206,16 @@ pub struct Block<const N: usize> {
     pub spindle: Option<SpindleDir>,
     /// M7 / M8 / M9 (the code).
     pub coolant: Option<u8>,
-    pub axes: [Option<f64>; N],
+    pub axes: [Option<f32>; N],
     /// I J K arc offsets.
-    pub ijk: [Option<f64>; 3],
-    pub r: Option<f64>,
-    pub f: Option<f64>,
-    pub l: Option<f64>,
-    pub p: Option<f64>,
-    pub s: Option<f64>,
-    pub t: Option<f64>,
-    pub n: Option<f64>,
+    pub ijk: [Option<f32>; 3],
+    pub r: Option<f32>,
+    pub f: Option<f32>,
+    pub l: Option<f32>,
+    pub p: Option<f32>,
+    pub s: Option<f32>,
+    pub t: Option<f32>,
+    pub n: Option<f32>,
 }
 
 impl<const N: usize> Block<N> {
@@ -263,16 +297,16 @@ pub fn parse<const N: usize>(line: &[u8]) -> Result<Block<N>, Error> {
 }
 
 /// Splits a command number into its integer part and Grbl's two-digit mantissa (G91.1 → 91, 10).
-fn split_code(v: f64) -> Result<(u32, u32), Error> {
+fn split_code(v: f32) -> Result<(u32, u32), Error> {
     if !(0.0..1000.0).contains(&v) {
         return Err(Error::UnsupportedCommand);
     }
-    let int = libm::trunc(v);
+    let int = libm::truncf(v);
     Ok((u32_of(int), round_u32(100.0 * (v - int))))
 }
 
 #[inline(never)]
-fn g_word<const N: usize>(b: &mut Block<N>, v: f64) -> Result<(), Error> {
+fn g_word<const N: usize>(b: &mut Block<N>, v: f32) -> Result<(), Error> {
     use group::*;
     let (code, mut mantissa) = split_code(v)?;
     let g = match code {
@@ -371,7 +405,7 @@ fn non_modal<const N: usize>(b: &mut Block<N>, code: u32, mantissa: &mut u32) ->
     Ok(())
 }
 
-fn m_word<const N: usize>(b: &mut Block<N>, v: f64) -> Result<(), Error> {
+fn m_word<const N: usize>(b: &mut Block<N>, v: f32) -> Result<(), Error> {
     use group::*;
     let (code, mantissa) = split_code(v)?;
     if mantissa != 0 {
@@ -409,7 +443,7 @@ fn m_word<const N: usize>(b: &mut Block<N>, v: f64) -> Result<(), Error> {
 }
 
 #[inline(never)]
-fn value_word<const N: usize>(b: &mut Block<N>, letter: u8, v: f64) -> Result<(), Error> {
+fn value_word<const N: usize>(b: &mut Block<N>, letter: u8, v: f32) -> Result<(), Error> {
     let slot = match letter {
         b'F' => &mut b.f,
         b'L' => &mut b.l,
@@ -443,18 +477,18 @@ pub struct Effects<const N: usize> {
     /// G4: dwell this many ms once the queue has run out.
     pub dwell_ms: Option<u32>,
     /// G10 / G28.1 / G30.1: stored slot (0..=5 G54..G59, 6 G28, 7 G30) and its new value.
-    pub coord_write: Option<(usize, [f64; N])>,
+    pub coord_write: Option<(usize, [f32; N])>,
     /// G92 / G92.1: the new G92 offset.
-    pub g92: Option<[f64; N]>,
+    pub g92: Option<[f32; N]>,
     /// G43.1 / G49: the new tool length offset.
-    pub tlo: Option<f64>,
+    pub tlo: Option<f32>,
     /// G0/G1 (or G28/G30's intermediate point): machine target of every axis, and whether it
     /// is a rapid.
-    pub motion: Option<([f64; N], bool)>,
+    pub motion: Option<([f32; N], bool)>,
     /// G2/G3, checked (machine mm).
     pub arc: Option<Arc<N>>,
     /// G28/G30: the rapid to the stored position that follows.
-    pub home: Option<[f64; N]>,
+    pub home: Option<[f32; N]>,
     pub stop: Option<Stop>,
     /// G38.2–G38.5 (2–5): `motion` is a probe move; 0 when not.
     pub probe: u8,
@@ -482,9 +516,9 @@ pub struct Modal {
     /// G93: F is the inverse of each move's time in minutes, given on every motion line.
     pub inverse_time: bool,
     /// Feed rate, mm/min, or 1/min under G93 (0: none yet).
-    pub feed: f64,
+    pub feed: f32,
     /// S.
-    pub spindle: f64,
+    pub spindle: f32,
     /// M3 / M4 / M5.
     pub spindle_dir: SpindleDir,
     /// M7 / M8 bits ([`MIST`], [`FLOOD`]); M9 clears both.
@@ -516,7 +550,7 @@ impl Modal {
     };
 
     /// [`Self::interpret_with`] with no work offsets.
-    pub fn interpret<const N: usize>(&self, b: &Block<N>, pos: &[f64; N]) -> Result<(Modal, Effects<N>), Error> {
+    pub fn interpret<const N: usize>(&self, b: &Block<N>, pos: &[f32; N]) -> Result<(Modal, Effects<N>), Error> {
         self.interpret_with(b, pos, &Offsets::default())
     }
 
@@ -525,7 +559,7 @@ impl Modal {
     pub fn interpret_with<const N: usize>(
         &self,
         b: &Block<N>,
-        pos: &[f64; N],
+        pos: &[f32; N],
         off: &Offsets<N>,
     ) -> Result<(Modal, Effects<N>), Error> {
         let mut fx = Effects::none();
@@ -538,7 +572,7 @@ impl Modal {
     pub fn interpret_into<const N: usize>(
         &self,
         b: &Block<N>,
-        pos: &[f64; N],
+        pos: &[f32; N],
         off: &Offsets<N>,
         fx: &mut Effects<N>,
     ) -> Result<Modal, Error> {
@@ -602,7 +636,7 @@ impl Modal {
             (_, Some(_)) => return Err(Error::UnusedWords),
             _ => {}
         }
-        let in_range = |v: f64| if libm::fabs(v) <= MAX_MM { Ok(v) } else { Err(Error::InvalidTarget) };
+        let in_range = |v: f32| if libm::fabsf(v) <= MAX_MM { Ok(v) } else { Err(Error::InvalidTarget) };
         let mut words = [None; N];
         for (w, a) in words.iter_mut().zip(&b.axes) {
             *w = a.map(|v| in_range(v * unit)).transpose()?;
@@ -692,22 +726,22 @@ impl Modal {
 /// G10 L2/L20 P: the slot it writes and the slot's new value (Grbl's checks and order).
 fn set_coord_data<const N: usize>(
     b: &Block<N>,
-    words: &[Option<f64>; N],
-    pos: &[f64; N],
+    words: &[Option<f32>; N],
+    pos: &[f32; N],
     off: &Offsets<N>,
     active: u8,
-) -> Result<(usize, [f64; N]), Error> {
+) -> Result<(usize, [f32; N]), Error> {
     if !b.has_axes() {
         return Err(Error::NoAxisWords);
     }
     if b.p.is_none() && b.l.is_none() {
         return Err(Error::ValueWordMissing);
     }
-    let p = libm::trunc(b.p.unwrap_or(0.0));
+    let p = libm::truncf(b.p.unwrap_or(0.0));
     if p > 6.0 {
         return Err(Error::UnsupportedCoordSys);
     }
-    let l20 = match b.l.map(libm::trunc) {
+    let l20 = match b.l.map(libm::truncf) {
         Some(20.0) => true,
         Some(2.0) => false,
         _ => return Err(Error::UnsupportedCommand),
@@ -718,7 +752,7 @@ fn set_coord_data<const N: usize>(
 
 /// G2/G3 words to a checked arc, in Grbl's order: axis words (`error:26`), axis words in the
 /// plane (`error:32`), then the geometry ([`Arc::new`]).
-fn arc<const N: usize>(b: &Block<N>, m: &Modal, pos: &[f64; N], target: [f64; N], unit: f64) -> Result<Arc<N>, Error> {
+fn arc<const N: usize>(b: &Block<N>, m: &Modal, pos: &[f32; N], target: [f32; N], unit: f32) -> Result<Arc<N>, Error> {
     if !b.has_axes() {
         return Err(Error::NoAxisWords);
     }
@@ -738,9 +772,10 @@ mod tests {
     extern crate std;
     use super::*;
 
-    /// The former reader (a table of powers of ten, checked 64-bit arithmetic), as the reference.
-    fn reference(s: &[u8], i: &mut usize) -> Result<f64, Error> {
-        const POW10: [f64; 23] = [
+    /// The former reader (a table of powers of ten, checked 64-bit arithmetic), as the reference
+    /// for the syntax; its value is `str::parse::<f32>`'s (the nearest `f32`).
+    fn reference(s: &[u8], i: &mut usize) -> Result<f32, Error> {
+        const POW10: [f32; 23] = [
             1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
             1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
         ];
@@ -782,7 +817,8 @@ mod tests {
             return Err(Error::BadNumberFormat);
         }
         *i = j;
-        let v = sig as f64 / POW10[frac];
+        // The nearest f32 to the decimal (core's reader is correctly rounded).
+        let v: f32 = std::format!("{sig}e-{frac}").parse().unwrap();
         Ok(if neg { -v } else { v })
     }
 
@@ -806,7 +842,7 @@ mod tests {
         for s in edges.iter().map(|e| e.as_bytes().to_vec()).chain(random) {
             let (mut i, mut k) = (0, 0);
             let (a, b) = (parse_number(&s, &mut i), reference(&s, &mut k));
-            assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits), "{:?}", core::str::from_utf8(&s));
+            assert_eq!(a.map(f32::to_bits), b.map(f32::to_bits), "{:?}", core::str::from_utf8(&s));
             assert_eq!(i, k);
         }
     }

@@ -13,8 +13,8 @@ use crate::protocol::Error;
 /// A checked jog: machine target (mm) and feed (mm/min).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Jog<const N: usize> {
-    pub target: [f64; N],
-    pub feed: f64,
+    pub target: [f32; N],
+    pub feed: f32,
 }
 
 /// Parses the text after `$J=` against the modal state, the machine position and the offsets,
@@ -25,7 +25,7 @@ pub fn plan<const N: usize>(
     line: &[u8],
     axes: usize,
     modal: &Modal,
-    pos: &[f64; N],
+    pos: &[f32; N],
     off: &Offsets<N>,
 ) -> Result<Jog<N>, Error> {
     let b: Block<N> = parse(line)?;

@@ -22,8 +22,8 @@ pub fn active_pins(gpioa_idr: u32, invert: bool) -> u8 {
 
 /// True when `target` (machine mm) leaves the box `-travel[i] ..= 0` on one of the first
 /// `axes` axes.
-pub fn outside<const N: usize>(target: &[f64; N], travel: &[f32], axes: usize) -> bool {
-    target.iter().zip(travel).take(axes).any(|(&t, &len)| t > 0.0 || t < -(len as f64))
+pub fn outside<const N: usize>(target: &[f32; N], travel: &[f32], axes: usize) -> bool {
+    target.iter().zip(travel).take(axes).any(|(&t, &len)| t > 0.0 || t < -len)
 }
 
 #[cfg(test)]

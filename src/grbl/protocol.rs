@@ -198,25 +198,34 @@ fn put_padded(out: &mut impl Out, mut v: u32, width: usize) {
     out.put(buf.get(start..).unwrap_or_default());
 }
 
-/// Writes `x` rounded to `decimals` places (0..=3), e.g. `-1.250`. Non-finite values and
-/// magnitudes beyond 1e15 are written as 0 (reports only; never reached by settings).
+/// Writes `x` rounded to `decimals` places (0..=3, halves away from zero), e.g. `-1.250`.
+/// Non-finite values and magnitudes beyond 1e15 are written as 0 (reports only; never reached
+/// by settings).
 ///
-/// 32-bit integers only (no 64-bit division in the firmware): the rounded magnitude, a whole
-/// `f64` below 1e15, splits exactly into `hi · 10⁹ + lo` (every integer below 2^53 is exact,
-/// and a quotient that is not whole lies at least 10⁻¹⁵ of itself below the next integer, so
-/// truncating it is the floor).
-pub fn put_fixed(out: &mut impl Out, x: f64, decimals: u32) {
+/// Exact, in integers: `x` is `m · 2^e` with a 24-bit `m`, so `m · 10^decimals` (below 2^34)
+/// shifted by `e` and rounded once is the decimal of `x` itself. (`x · 1000` in `f32` would
+/// round first, and a value just below a half could print one digit up.)
+pub fn put_fixed(out: &mut impl Out, x: f32, decimals: u32) {
     let decimals = decimals.min(3);
     // NonZero: dividing by it has no panic path.
     let scale = core::num::NonZeroU32::new(10u32.pow(decimals)).unwrap_or(core::num::NonZeroU32::MIN);
-    let scaled = libm::round(x * scale.get() as f64);
-    let scaled = if scaled.is_finite() && libm::fabs(scaled) < 1e15 { scaled } else { 0.0 };
-    if scaled < 0.0 {
+    let bits = x.to_bits();
+    let exp = (bits >> 23 & 0xFF) as i32;
+    let m = bits & 0x7F_FFFF | if exp == 0 { 0 } else { 0x80_0000 };
+    let e = exp.max(1) - 150;
+    let p = m as u64 * scale.get() as u64;
+    let scaled = match e {
+        _ if exp == 0xFF => 0, // ±∞, NaN
+        0..=29 => p << e,      // below 2^63; from 2^30 up, |x| ≥ 2^53 > 10^15
+        -63..=-1 => (p + (1 << (-e - 1))) >> -e,
+        _ => 0, // too small to round up to 1
+    };
+    let scaled = if scaled < 1_000_000_000_000_000 { scaled } else { 0 };
+    if scaled != 0 && bits >> 31 != 0 {
         out.put(b"-");
     }
-    let a = libm::fabs(scaled);
-    let hi = crate::num::u32_of(a / 1e9);
-    let lo = crate::num::u32_of(a - hi as f64 * 1e9);
+    let hi = (scaled / 1_000_000_000) as u32;
+    let lo = (scaled % 1_000_000_000) as u32;
     if hi > 0 {
         put_u32(out, hi);
         put_padded(out, lo / scale, 9 - decimals as usize);
@@ -345,10 +354,11 @@ mod tests {
     use super::*;
     use std::{format, string::String};
 
-    /// The former 64-bit integer formatting, as the reference.
-    fn reference(x: f64, decimals: u32) -> String {
+    /// The former formatting (the `f32` widened to `f64`, whose product with 10^decimals is
+    /// exact, rounded; 64-bit integers), as the reference.
+    fn reference(x: f32, decimals: u32) -> String {
         let scale = 10i64.pow(decimals);
-        let s = libm::round(x * scale as f64);
+        let s = libm::round(x as f64 * scale as f64);
         let s = if s.is_finite() && libm::fabs(s) < 1e15 { s as i64 } else { 0 };
         let (sign, a, scale) = (if s < 0 { "-" } else { "" }, s.unsigned_abs(), scale as u64);
         match decimals {
@@ -357,7 +367,7 @@ mod tests {
         }
     }
 
-    fn fixed(x: f64, decimals: u32) -> String {
+    fn fixed(x: f32, decimals: u32) -> String {
         let mut b = heapless::Vec::<u8, 64>::new();
         put_fixed(&mut b, x, decimals);
         String::from_utf8(b.to_vec()).unwrap()
@@ -367,8 +377,8 @@ mod tests {
     fn put_fixed_matches_64_bit_formatting() {
         let edges = [
             0.0, -0.0, 0.0004, -0.0004, -0.0005, 1.25, -1.2345, 999_999.999_5, 999_999_999.0, 1e9,
-            1_000_000_000.000_5, 999_999_999_999.999, 999_999_999_999_999.0, 1e15, -1e15, 1e300,
-            f64::NAN, f64::INFINITY, f64::NEG_INFINITY,
+            1_000_000_000.000_5, 999_999_999_999.999, 999_999_999_999_999.0, 1e15, -1e15, 3e38, 1e-40, 0.0005, -0.0125, 2.5e-4,
+            f32::NAN, f32::INFINITY, f32::NEG_INFINITY,
         ];
         let mut r = 0x9E37_79B9_7F4A_7C15u64;
         let random = (0..20_000).map(|_| {
@@ -377,7 +387,7 @@ mod tests {
             r ^= r << 17;
             // Magnitudes from 10^-4 to 10^16, both signs.
             let m = (r >> 11) as f64 / (1u64 << 53) as f64;
-            let v = libm::pow(10.0, -4.0 + 20.0 * m);
+            let v = libm::pow(10.0, -4.0 + 20.0 * m) as f32;
             if r & 1 == 0 { v } else { -v }
         });
         for x in edges.into_iter().chain(random) {

@@ -102,25 +102,25 @@ pub const SETTING_LEN: usize = 24;
 pub struct Status<'a> {
     pub state: &'a [u8],
     /// Machine or work position (per `$10`), one value per axis in use.
-    pub pos: &'a [f64],
+    pub pos: &'a [f32],
     /// `pos` is the machine position.
     pub mpos: bool,
     /// `Bf:` planner blocks free, RX bytes free (when `$10` asks for it).
     pub bf: Option<(u32, u32)>,
     /// Current feed, mm/min.
-    pub feed: f64,
+    pub feed: f32,
     /// Spindle speed in force (0 when off; at most `$30`).
-    pub speed: f64,
+    pub speed: f32,
     /// `A:` accessories, shown with `Ov:`: spindle CW (`S`) or CCW (`C`), flood (`F`), mist (`M`).
     pub acc: &'a [u8],
     /// `Pn:` input pins active (bit i = axis i's limit), shown when not 0.
     pub pins: u8,
     /// `WCO:` when due.
-    pub wco: Option<&'a [f64]>,
+    pub wco: Option<&'a [f32]>,
     /// `Ov:` when due.
     pub ov: Option<Overrides>,
     /// `Enc:` encoder position (mm) and speed (mm/min), when an encoder is on.
-    pub enc: Option<(f64, f64)>,
+    pub enc: Option<(f32, f32)>,
 }
 
 /// `<State|MPos:x,y,z|Bf:15,128|FS:feed,speed|Pn:XZ|WCO:x,y,z|Ov:100,100,100|A:SF|Enc:p,v>`.
@@ -176,13 +176,13 @@ pub fn status(out: &mut impl Out, s: &Status) {
 }
 
 /// `[MSG:Step loss X 12]`: the axis and how far the motor is behind, steps (negative: ahead).
-pub fn step_loss(out: &mut impl Out, axis: usize, steps: f64) {
+pub fn step_loss(out: &mut impl Out, axis: usize, steps: f32) {
     values(out, [b"[MSG:Step loss ", axis_letter(axis), b" "], &[(steps, 0)], b"]\r\n");
 }
 
 /// `$ENC`: `[ENC:X,10.000,9.960,4]`: axis, commanded and measured position (mm, machine),
 /// commanded − measured steps.
-pub fn encoder(out: &mut impl Out, axis: usize, commanded_mm: f64, measured_mm: f64, steps: f64) {
+pub fn encoder(out: &mut impl Out, axis: usize, commanded_mm: f32, measured_mm: f32, steps: f32) {
     values(out, [b"[ENC:", axis_letter(axis), b","], &[(commanded_mm, 3), (measured_mm, 3), (steps, 0)], b"]\r\n");
 }
 
@@ -194,7 +194,7 @@ fn axis_letter(i: usize) -> &'static [u8] {
 /// `head`, then `(value, decimals)` separated by commas, then `tail`: one copy of the writes
 /// for the encoder's two lines.
 #[inline(never)]
-fn values(out: &mut impl Out, head: [&[u8]; 3], values: &[(f64, u32)], tail: &[u8]) {
+fn values(out: &mut impl Out, head: [&[u8]; 3], values: &[(f32, u32)], tail: &[u8]) {
     for part in head {
         out.put(part);
     }
@@ -207,7 +207,7 @@ fn values(out: &mut impl Out, head: [&[u8]; 3], values: &[(f64, u32)], tail: &[u
     out.put(tail);
 }
 
-fn axes(out: &mut impl Out, v: &[f64]) {
+fn axes(out: &mut impl Out, v: &[f32]) {
     for (i, x) in v.iter().enumerate() {
         if i > 0 {
             out.put(b",");
@@ -217,7 +217,7 @@ fn axes(out: &mut impl Out, v: &[f64]) {
 }
 
 /// One `$$` line: `$N=value`.
-pub fn setting(out: &mut impl Out, id: u16, value: f64, decimals: u32) {
+pub fn setting(out: &mut impl Out, id: u16, value: f32, decimals: u32) {
     out.put(b"$");
     put_u32(out, id as u32);
     out.put(b"=");
@@ -311,13 +311,13 @@ pub fn step_time(out: &mut impl Out, t: &crate::steptime::StepTimeReport, dma: b
     out.put(if dma { b"[MSG:step fill " as &[u8] } else { b"[MSG:step isr " });
     put_u32(out, t.min);
     out.put(b"/");
-    put_fixed(out, t.mean as f64, 1);
+    put_fixed(out, t.mean, 1);
     out.put(b"/");
     put_u32(out, t.max);
     out.put(b" cycles min/mean/max, load ");
-    put_fixed(out, t.load as f64 * 100.0, 1);
+    put_fixed(out, t.load * 100.0, 1);
     out.put(b" % peak ");
-    put_fixed(out, t.peak_load as f64 * 100.0, 1);
+    put_fixed(out, t.peak_load * 100.0, 1);
     if dma {
         // Fills that ended after DMA had entered their half (0 unless the fill fell behind).
         out.put(b" %, late ");
@@ -334,7 +334,7 @@ pub const PARAM_LINES: usize = 11;
 /// Line `i` of `$#` (machine millimetres; `[PRB:…:1]` after a probe made contact).
 pub fn param<const N: usize>(out: &mut impl Out, i: usize, off: &Offsets<N>, axes_used: usize) {
     let n = axes_used.min(N);
-    let (g, v): (u32, [f64; N]) = match i {
+    let (g, v): (u32, [f32; N]) = match i {
         0..=5 => (54 + i as u32, off.wcs(i as u8)),
         G28 => (28, off.stored.get(i)),
         G30 => (30, off.stored.get(i)),

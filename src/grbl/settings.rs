@@ -81,14 +81,14 @@ struct Spec {
 const WHOLE: u8 = 8;
 
 /// Value ranges of the `f32` and `u32` settings (inclusive).
-const RANGES: [(f64, f64); 10] = [
+const RANGES: [(f32, f32); 10] = [
     (0.0, 0.0),                  // 0: no range (bytes, flags, fixed)
     (0.2, 100.0),                // 1: $0 pulse (0.2 µs: TMC drivers need 100 ns; shorter no driver takes)
     (1e-4, 1000.0),              // 2: $12 arc tolerance (below 0.1 µm a chord is far below a step)
     (0.0, 1e6),                  // 3: $30/$31 spindle, $130+ travel
     (1.0, 100_000.0),            // 4: $33 PWM frequency
     (0.0, 1000.0),               // 5: $29 direction setup
-    (1.0, MAX_RATE_HZ as f64),   // 6: $40 ramp start
+    (1.0, MAX_RATE_HZ as f32),   // 6: $40 ramp start
     (1e-3, 1e5),                 // 7: $100+ steps per unit
     (1e-3, 1e8),                 // 8: $110+ max rate, $120+ acceleration, $24/$25 homing rates
     (0.0, 65_535.0),             // 9: $26 homing debounce, ms (Grbl's u16)
@@ -406,7 +406,7 @@ impl Settings {
     }
 
     /// Value of setting `id` and its decimals for `$$`, if it exists for `axes` axes.
-    pub fn get(&self, id: u16, axes: usize) -> Option<(f64, u32)> {
+    pub fn get(&self, id: u16, axes: usize) -> Option<(f32, u32)> {
         // The encoder's first: `EncoderSettings` keeps their values and decimals.
         if let Some(v) = self.encoder.get(id) {
             return Some(v);
@@ -414,19 +414,19 @@ impl Settings {
         let spec = Self::spec(id, axes.min(self.axes as usize))?;
         let mut s = *self;
         let v = match s.slot(id) {
-            Some(Slot::Real(v)) => *v as f64,
-            Some(Slot::Whole(v)) => *v as f64,
-            Some(Slot::Byte(v)) => *v as f64,
-            Some(Slot::Flag(v)) => *v as u8 as f64,
-            Some(Slot::Shape(v)) => (*v == Shape::SCurve) as u8 as f64,
-            None => FIXED.iter().find(|f| f.0 == id)?.1 as f64,
+            Some(Slot::Real(v)) => *v,
+            Some(Slot::Whole(v)) => *v as f32,
+            Some(Slot::Byte(v)) => *v as f32,
+            Some(Slot::Flag(v)) => *v as u8 as f32,
+            Some(Slot::Shape(v)) => (*v == Shape::SCurve) as u8 as f32,
+            None => FIXED.iter().find(|f| f.0 == id)?.1,
         };
         Some((v, spec.decimals as u32))
     }
 
     /// `$id=value`: checks and stores one setting (Grbl's rules: negative values refused,
     /// masks and flags truncated to integers).
-    pub fn set(&mut self, id: u16, value: f64, axes: usize) -> Result<Change, Error> {
+    pub fn set(&mut self, id: u16, value: f32, axes: usize) -> Result<Change, Error> {
         if !value.is_finite() {
             return Err(Error::BadNumberFormat);
         }
@@ -437,7 +437,7 @@ impl Settings {
             self.encoder.set(id, value, axes.min(self.axes as usize))?;
             return Ok(Change::Shell);
         }
-        let int = libm::trunc(value);
+        let int = libm::truncf(value);
         let spec = Self::spec(id, axes.min(self.axes as usize)).ok_or(Error::InvalidStatement)?;
         let bad = Err(Error::InvalidStatement);
         if id == 0 && value < 0.2 {
@@ -447,13 +447,13 @@ impl Settings {
         if id == 20 && int != 0.0 && !self.homing {
             return Err(Error::SoftLimitNeedsHoming);
         }
-        if id == AXIS_COUNT && !(3.0..=axes.min(MAX_AXES) as f64).contains(&int) {
+        if id == AXIS_COUNT && !(3.0..=axes.min(MAX_AXES) as f32).contains(&int) {
             return bad;
         }
         let (lo, hi) = RANGES.get(spec.range as usize).copied().unwrap_or_default();
         let in_range = (lo..=hi).contains(&value);
         match self.slot(id) {
-            Some(Slot::Real(v)) if in_range => *v = value as f32,
+            Some(Slot::Real(v)) if in_range => *v = value,
             Some(Slot::Whole(v)) if in_range => *v = u32_of(value),
             Some(Slot::Byte(v)) if int <= 255.0 => *v = u32_of(int) as u8,
             Some(Slot::Flag(v)) => *v = int != 0.0,
@@ -461,7 +461,7 @@ impl Settings {
             Some(_) => return bad,
             None => {
                 let f = FIXED.iter().find(|f| f.0 == id).ok_or(Error::InvalidStatement)?;
-                return if libm::fabs(value - f.1 as f64) < 1e-6 { Ok(Change::None) } else { bad };
+                return if libm::fabsf(value - f.1) < 1e-6 { Ok(Change::None) } else { bad };
             }
         }
         if id == STATUS_MASK {
@@ -477,7 +477,7 @@ impl Settings {
     /// True when every field is in the range [`Self::set`] accepts.
     pub fn is_valid(&self) -> bool {
         // Every axis is checked, also those beyond the axis count. Each value must come back
-        // unchanged from `set` (compared as bits: no f32 compare routines in the firmware).
+        // unchanged from `set` (compared as bits: integer compares, no calls).
         // (A copy and one store, not `Settings { axes, ..*self }`: that copies field by field.)
         let mut full = *self;
         full.axes = MAX_AXES as u8;
@@ -494,9 +494,9 @@ impl Settings {
 
     /// Step timing in timer ticks.
     pub fn timing(&self) -> Timing {
-        // f64 like the rest of the settings math: f32 arithmetic would link a second soft-float set.
-        let pulse = ns_to_ticks(round_u32(self.pulse_us as f64 * 1000.0));
-        let dir = ns_to_ticks(round_u32(self.dir_setup_us as f64 * 1000.0));
+        // f32 like the rest of the settings math.
+        let pulse = ns_to_ticks(round_u32(self.pulse_us * 1000.0));
+        let dir = ns_to_ticks(round_u32(self.dir_setup_us * 1000.0));
         let t = Timing::new(pulse, dir, ISR_FLOOR_TICKS);
         if self.dma_burst {
             t.burst(self.dual_edge)
@@ -510,8 +510,7 @@ impl Settings {
     /// Table rate per mm/s of path speed on the first `axes` axes: the largest `$100+i`, so a
     /// move's master never runs faster than the table.
     pub fn per_mm(&self, axes: usize) -> f32 {
-        // Compared in f64 (exact for f32 values): f32 max would link fmaxf and the f32 compares.
-        self.steps_per_mm.iter().take(axes.max(1)).fold(0.0f64, |a, &b| a.max(b as f64)) as f32
+        self.steps_per_mm.iter().take(axes.max(1)).fold(0.0f32, |a, &b| a.max(b))
     }
 
     /// The ramp table's top on `axes` axes once built (what the planner's limits take).
@@ -530,12 +529,12 @@ impl Settings {
         // formatting into the firmware.
         #[allow(clippy::manual_clamp, reason = "clamp's panic path costs flash")]
         let axes = axes.max(1).min(MAX_AXES);
-        let c = self.per_mm(axes) as f64;
-        let mut accel = 0.0f64;
-        let mut top2 = 0.0f64;
+        let c = self.per_mm(axes);
+        let mut accel = 0.0f32;
+        let mut top2 = 0.0f32;
         for i in 0..axes {
-            accel = accel.max(self.accel[i] as f64 * 2.0);
-            let v = self.max_rate[i] as f64 / 60.0;
+            accel = accel.max(self.accel[i] * 2.0);
+            let v = self.max_rate[i] / 60.0;
             top2 += v * v;
         }
         let accel = accel * c;
@@ -543,7 +542,7 @@ impl Settings {
         RampConfig {
             v0: self.ramp_start_hz.max(1).min(vmax),
             vmax,
-            accel: u32_of(accel.min(u32::MAX as f64)).max(1),
+            accel: u32_of(accel.min(u32::MAX as f32)).max(1),
             shape: self.shape,
         }
     }
@@ -561,8 +560,8 @@ impl Settings {
                 // Too long for the table: a steeper table (every move walks it at its own
                 // fraction, so no move runs faster), down to a lower top only as a last resort.
                 Err(RampError::TooLong { .. }) if attempt < 4 => {
-                    let ms = crate::num::f64_of_u64(RampTable::<L>::ramp_ms(&cfg));
-                    cfg.accel = u32_of((cfg.accel as f64 * ms / (L as f64 - 2.0).max(1.0)).min(u32::MAX as f64 / 2.0)) + 1;
+                    let ms = crate::num::f32_of_u64(RampTable::<L>::ramp_ms(&cfg));
+                    cfg.accel = u32_of((cfg.accel as f32 * ms / (L as f32 - 2.0).max(1.0)).min(u32::MAX as f32 / 2.0)) + 1;
                 }
                 Err(RampError::TooLong { reachable_vmax }) => {
                     table_limited = true;

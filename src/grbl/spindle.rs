@@ -39,12 +39,12 @@ pub struct Power {
 
 impl Power {
     /// The speed to output at master rate `rate_hz`.
-    pub fn at(&self, rate_hz: u32) -> f64 {
+    pub fn at(&self, rate_hz: u32) -> f32 {
         if self.dynamic {
-            let ratio = rate_hz as f64 / (self.cruise_hz as f64).max(1.0);
-            self.speed as f64 * ratio.min(1.0)
+            let ratio = rate_hz as f32 / self.cruise_hz.max(1.0);
+            self.speed * ratio.min(1.0)
         } else {
-            self.speed as f64
+            self.speed
         }
     }
 }
@@ -80,7 +80,7 @@ impl PwmTiming {
 
 /// Compare value for `speed` (S after override and laser scaling) between `min` (`$31`) and
 /// `max` (`$30`), for a period of `arr + 1` counts (a compare above ARR is full duty).
-pub fn duty(speed: f64, min: f64, max: f64, arr: u16) -> u16 {
+pub fn duty(speed: f32, min: f32, max: f32, arr: u16) -> u16 {
     let top = arr as u32 + 1;
     let ccr = if !(speed > 0.0) {
         0
@@ -89,7 +89,7 @@ pub fn duty(speed: f64, min: f64, max: f64, arr: u16) -> u16 {
     } else if speed <= min {
         1
     } else {
-        crate::num::round_u32((speed - min) / (max - min) * top as f64).max(1).min(top)
+        crate::num::round_u32((speed - min) / (max - min) * top as f32).max(1).min(top)
     };
     ccr.min(0xFFFF) as u16
 }
@@ -102,8 +102,8 @@ mod tests {
     fn pwm_timing_reaches_the_frequency() {
         for hz in [1, 50, 1000, 1099, 1100, 5000, 20_000, 100_000] {
             let t = PwmTiming::new(hz);
-            let f = TIMER_HZ as f64 / ((t.psc as f64 + 1.0) * (t.arr as f64 + 1.0));
-            assert!((f - hz as f64).abs() / (hz as f64) < 2e-3, "{hz} Hz: {t:?} gives {f}");
+            let f = TIMER_HZ as f32 / ((t.psc as f32 + 1.0) * (t.arr as f32 + 1.0));
+            assert!((f - hz as f32).abs() / (hz as f32) < 2e-3, "{hz} Hz: {t:?} gives {f}");
         }
         assert_eq!(PwmTiming::new(1000), PwmTiming { psc: 1, arr: 35_999 });
         assert_eq!(PwmTiming::new(5000), PwmTiming { psc: 0, arr: 14_399 });
@@ -113,7 +113,7 @@ mod tests {
     fn duty_follows_grbls_mapping() {
         assert_eq!(duty(0.0, 0.0, 1000.0, 999), 0);
         assert_eq!(duty(-5.0, 0.0, 1000.0, 999), 0);
-        assert_eq!(duty(f64::NAN, 0.0, 1000.0, 999), 0);
+        assert_eq!(duty(f32::NAN, 0.0, 1000.0, 999), 0);
         assert_eq!(duty(500.0, 0.0, 1000.0, 999), 500);
         assert_eq!(duty(1000.0, 0.0, 1000.0, 999), 1000);
         assert_eq!(duty(5000.0, 0.0, 1000.0, 999), 1000);

@@ -85,8 +85,8 @@ impl Rates {
         if pct == 100 {
             return self.cruise;
         }
-        // max/min, not clamp (no panic path); f64 like the planner (no f32 soft float set).
-        let hz = (self.asked_hz as f64 * pct as f64 * 0.01).min(self.cap_hz as f64).max(MIN_RATE_HZ as f64);
+        // max/min, not clamp (no panic path); f32 like the planner.
+        let hz = (self.asked_hz * pct as f32 * 0.01).min(self.cap_hz).max(MIN_RATE_HZ as f32);
         period_of_millihz(crate::num::u64_of(hz * 1000.0))
     }
 }

@@ -23,7 +23,7 @@ use core::sync::atomic::{AtomicBool, Ordering};
 
 use fixed::types::U28F4;
 
-use crate::num::{f64_of_u64, i32_of, u32_of, u64_of};
+use crate::num::{f32_of_u64, i32_of, u32_of, u64_of};
 use crate::timing::Timing;
 use crate::TIMER_HZ;
 
@@ -79,13 +79,14 @@ pub enum RampError {
 }
 
 /// Logistic steepness: the S-curve spans the logistic on [-S_CURVE_SPAN, S_CURVE_SPAN].
-const S_CURVE_SPAN: f64 = 4.0;
+const S_CURVE_SPAN: f32 = 4.0;
 
 /// Period of a rate given in milli-steps per second (rounded to the nearest 1/16 tick).
-/// (f64, exact here below 2^53: it keeps 64-bit integer division out of the firmware.)
+/// (64-bit integers, exact: `f32` has too few bits for the tick count of a slow rate.)
 pub fn period_of_millihz(milli_hz: u64) -> Period {
-    let q4 = (TIMER_HZ as f64 * 16_000.0) / f64_of_u64(milli_hz.max(1)) + 0.5;
-    Period::from_bits(if q4 >= u32::MAX as f64 { u32::MAX } else { u32_of(q4) })
+    let m = milli_hz.max(1);
+    let q4 = (TIMER_HZ as u64 * 32_000 + m) / (2 * m);
+    Period::from_bits(q4.min(u32::MAX as u64) as u32)
 }
 
 /// Period of a whole rate in steps/s.
@@ -94,8 +95,8 @@ pub fn period_of_hz(hz: u32) -> Period {
 }
 
 /// Rate in steps/s of a period (for reports and tests).
-pub fn hz_of_period(p: Period) -> f64 {
-    TIMER_HZ as f64 * 16.0 / p.to_bits().max(1) as f64
+pub fn hz_of_period(p: Period) -> f32 {
+    TIMER_HZ as f32 * 16.0 / p.to_bits().max(1) as f32
 }
 
 /// A ramp table of up to `L` milliseconds.
@@ -128,13 +129,13 @@ impl<const L: usize> RampTable<L> {
     /// Milliseconds the ramp from `v0` to `vmax` takes with this shape (for a config that
     /// [`Self::build`] accepts: `accel > 0`, `v0 ≤ vmax ≤ MAX_RATE_HZ`).
     pub fn ramp_ms(cfg: &RampConfig) -> u64 {
-        // 32-bit integers (`dv` · 1000 ≤ 10^9), the same as ⌈f64 quotient⌉ without libm::ceil.
+        // 32-bit integers (`dv` · 1000 ≤ 10^9): the ceiling of the exact quotient, no float.
         let dv = cfg.vmax.saturating_sub(cfg.v0).min(MAX_RATE_HZ);
         let ms = (dv * 1000).div_ceil(cfg.accel.max(1)) as u64;
         match cfg.shape {
             Shape::Trapezoid => ms,
             // The logistic's steepest slope is span/2 / norm of the mean slope.
-            Shape::SCurve => u64_of(f64_of_u64(ms) * s_curve_stretch()) + 1,
+            Shape::SCurve => u64_of(f32_of_u64(ms) * s_curve_stretch()) + 1,
         }
     }
 
@@ -153,11 +154,10 @@ impl<const L: usize> RampTable<L> {
         let n = Self::ramp_ms(&cfg).max(1);
         if n > L as u64 {
             let reachable = match cfg.shape {
-                // f64 (exact: the product is below 2^53 and a quotient that is not whole is
-                // at least 1/1000 from the next integer): no 64-bit division in the firmware.
-                Shape::Trapezoid => cfg.v0 as u64 + u64_of(cfg.accel as f64 * L as f64 / 1000.0),
+                // 64-bit integers: the same whole part as the exact quotient.
+                Shape::Trapezoid => cfg.v0 as u64 + cfg.accel as u64 * L as u64 / 1000,
                 Shape::SCurve => {
-                    cfg.v0 as u64 + u64_of(cfg.accel as f64 * L as f64 / 1000.0 / s_curve_stretch())
+                    cfg.v0 as u64 + u64_of(cfg.accel as f32 * L as f32 / 1000.0 / s_curve_stretch())
                 }
             };
             return Err(RampError::TooLong { reachable_vmax: reachable.saturating_sub(1) as u32 });
@@ -244,22 +244,22 @@ impl<const L: usize> RampTable<L> {
 
     /// The fractional index (Q20) whose interpolated rate is `hz` (clamped to the table; 0
     /// below its start). Binary search: planner side only.
-    pub fn index_of_hz(&self, hz: f64) -> u32 {
+    pub fn index_of_hz(&self, hz: f32) -> u32 {
         // (The entries in use as one slice: the searches below index it without panic paths.)
         let periods = self.periods.get(..self.len as usize).unwrap_or_default();
         let (Some(first), Some(last)) = (periods.first(), periods.last()) else { return 0 };
         if !(hz > 0.0) {
             return 0;
         }
-        let p = TIMER_HZ as f64 * 16.0 / hz;
-        if p >= first.to_bits() as f64 {
+        let p = TIMER_HZ as f32 * 16.0 / hz;
+        if p >= first.to_bits() as f32 {
             return 0;
         }
-        if p <= last.to_bits() as f64 {
+        if p <= last.to_bits() as f32 {
             return self.top_q();
         }
         // Last entry i with periods[i] > p (periods never rise along the table).
-        let bits = |i: usize| periods.get(i).map_or(0.0, |q| q.to_bits() as f64);
+        let bits = |i: usize| periods.get(i).map_or(0.0, |q| q.to_bits() as f32);
         let (mut lo, mut hi) = (0usize, periods.len() - 1);
         while hi - lo > 1 {
             let mid = (lo + hi) / 2;
@@ -271,7 +271,7 @@ impl<const L: usize> RampTable<L> {
         }
         let (a, b) = (bits(lo), bits(hi));
         let f = if a > b { (a - p) / (a - b) } else { 0.0 };
-        ((lo as u32) << IDX_FRAC) + u32_of(f.max(0.0).min(1.0) * IDX_ONE as f64).min(IDX_MASK)
+        ((lo as u32) << IDX_FRAC) + u32_of(f.max(0.0).min(1.0) * IDX_ONE as f32).min(IDX_MASK)
     }
 
     /// The highest fractional index (Q20) whose [`Self::sum_at`] is at most `sum` (clamped to
@@ -351,34 +351,36 @@ impl<const L: usize> RampTable<L> {
 }
 
 /// How much longer the S-curve takes than a trapezoid with the same peak acceleration.
-fn s_curve_stretch() -> f64 {
+fn s_curve_stretch() -> f32 {
     let norm = logistic(S_CURVE_SPAN) - logistic(-S_CURVE_SPAN);
     S_CURVE_SPAN / 2.0 / norm
 }
 
-fn logistic(x: f64) -> f64 {
+fn logistic(x: f32) -> f32 {
     1.0 / (1.0 + exp_small(-x))
 }
 
-/// e^x for |x| ≲ 700, relative error < 1e-8: 2^k · e^r with |r| ≤ ½·ln 2 and a degree-8
-/// Taylor series. Smaller in flash than `libm::exp` (the firmware budget is 32 KiB), and the
+/// e^x for |x| ≲ 87, relative error < 1e-6: 2^k · e^r with |r| ≤ ½·ln 2 (ln 2 in two parts,
+/// the high one of 16 bits so k·HI is exact) and a degree-8 Taylor series. Smaller in flash than `libm::expf` (the firmware budget is 32 KiB), and the
 /// table only needs entries good to far better than 0.5 %.
-fn exp_small(x: f64) -> f64 {
-    const LN2: f64 = core::f64::consts::LN_2;
+fn exp_small(x: f32) -> f32 {
+    const LN2: f32 = core::f32::consts::LN_2;
     let t = x / LN2;
     let k = i32_of(if t >= 0.0 { t + 0.5 } else { t - 0.5 });
-    let r = x - k as f64 * LN2;
+    const LN2_HI: f32 = 0.693_145_751_953_125;
+    const LN2_LO: f32 = 1.428_606_820_3e-6;
+    let r = (x - k as f32 * LN2_HI) - k as f32 * LN2_LO;
     let mut term = 1.0;
     let mut sum = 1.0;
     for n in 1..=8 {
-        term *= r / n as f64;
+        term *= r / n as f32;
         sum += term;
     }
-    sum * f64::from_bits(((1023 + k.clamp(-1022, 1023)) as u64) << 52)
+    sum * f32::from_bits(((127 + k.clamp(-126, 127)) as u32) << 23)
 }
 
 /// Ideal profile's normalized progress (0..=1) at fraction `u` (0..=1) of the ramp.
-fn s_curve(u: f64) -> f64 {
+fn s_curve(u: f32) -> f32 {
     let lo = logistic(-S_CURVE_SPAN);
     let hi = logistic(S_CURVE_SPAN);
     (logistic(-S_CURVE_SPAN + 2.0 * S_CURVE_SPAN * u) - lo) / (hi - lo)
@@ -400,17 +402,18 @@ fn mean_millihz(cfg: &RampConfig, i: usize, n: usize) -> u64 {
                 if start >= vmax {
                     return vmax;
                 }
-                // Ramp part of length f = (vmax-start)/a ms, then vmax for 1-f.
-                let f = f64_of_u64(vmax - start) / f64_of_u64(a);
-                let mean = f * (f64_of_u64(start) + f64_of_u64(vmax)) / 2.0 + (1.0 - f) * f64_of_u64(vmax);
-                u64_of(mean).min(vmax)
+                // Ramp part of length f = (vmax-start)/a ms, then vmax for 1-f: the mean is
+                // vmax - d²/(2a) with d = vmax - start < a, whose floor is taken in integers
+                // (d² < 2^64 as d < a ≤ u32::MAX; f32 has too few bits for milli-steps/s).
+                let d = vmax - start;
+                vmax - (d * d).div_ceil(2 * a)
             }
         }
         Shape::SCurve => {
             // Midpoint of the millisecond on the logistic stretched over n ms (Simpson-free:
             // the curve is smooth enough that the midpoint is within 0.1 % of the mean here).
-            let u = ((i as f64 + 0.5) / n as f64).min(1.0);
-            let v = f64_of_u64(v0) + f64_of_u64(vmax - v0) * s_curve(u);
+            let u = ((i as f32 + 0.5) / n as f32).min(1.0);
+            let v = f32_of_u64(v0) + f32_of_u64(vmax - v0) * s_curve(u);
             // max/min, not clamp: its panic message would link integer formatting.
             u64_of(v).max(v0.max(1)).min(vmax.max(1))
         }
@@ -532,30 +535,30 @@ mod tests {
     use super::*;
 
     /// The former searches (indexing the arrays), as the reference.
-    fn index_of_hz_ref<const L: usize>(t: &RampTable<L>, hz: f64) -> u32 {
+    fn index_of_hz_ref<const L: usize>(t: &RampTable<L>, hz: f32) -> u32 {
         if t.len == 0 || !(hz > 0.0) {
             return 0;
         }
-        let p = TIMER_HZ as f64 * 16.0 / hz;
+        let p = TIMER_HZ as f32 * 16.0 / hz;
         let n = t.len as usize;
-        if p >= t.periods[0].to_bits() as f64 {
+        if p >= t.periods[0].to_bits() as f32 {
             return 0;
         }
-        if p <= t.periods[n - 1].to_bits() as f64 {
+        if p <= t.periods[n - 1].to_bits() as f32 {
             return t.top_q();
         }
         let (mut lo, mut hi) = (0usize, n - 1);
         while hi - lo > 1 {
             let mid = (lo + hi) / 2;
-            if t.periods[mid].to_bits() as f64 > p {
+            if t.periods[mid].to_bits() as f32 > p {
                 lo = mid;
             } else {
                 hi = mid;
             }
         }
-        let (a, b) = (t.periods[lo].to_bits() as f64, t.periods[hi].to_bits() as f64);
+        let (a, b) = (t.periods[lo].to_bits() as f32, t.periods[hi].to_bits() as f32);
         let f = if a > b { (a - p) / (a - b) } else { 0.0 };
-        ((lo as u32) << IDX_FRAC) + u32_of(f.max(0.0).min(1.0) * IDX_ONE as f64).min(IDX_MASK)
+        ((lo as u32) << IDX_FRAC) + u32_of(f.max(0.0).min(1.0) * IDX_ONE as f32).min(IDX_MASK)
     }
 
     fn index_of_sum_ref<const L: usize>(t: &RampTable<L>, sum: u32) -> u32 {
@@ -605,7 +608,7 @@ mod tests {
             }
             let top = *table.sums.get(table.len as usize - 1).unwrap_or(&0);
             for _ in 0..200 {
-                let hz = next(vmax + 2_000) as f64 + next(1000) as f64 / 1000.0;
+                let hz = next(vmax + 2_000) as f32 + next(1000) as f32 / 1000.0;
                 assert_eq!(table.index_of_hz(hz), index_of_hz_ref(&table, hz), "{hz}");
                 let sum = next(top.saturating_add(100).max(1));
                 assert_eq!(table.index_of_sum(sum), index_of_sum_ref(&table, sum), "{sum}");
@@ -631,8 +634,10 @@ mod tests {
     fn exp_small_matches_libm() {
         let mut x = -30.0;
         while x < 30.0 {
-            let (a, b) = (exp_small(x), libm::exp(x));
-            assert!(((a - b) / b).abs() < 1e-8, "exp({x}): {a} vs {b}");
+            // 1e-8 when this ran in f64; in f32 a few ulps (2^-24 = 6e-8 each): the S-curve
+            // table needs entries good to far better than 0.5 %.
+            let (a, b) = (exp_small(x) as f64, libm::exp(x as f64));
+            assert!(((a - b) / b).abs() < 1e-6, "exp({x}): {a} vs {b}");
             x += 0.01;
         }
     }

@@ -20,20 +20,21 @@
 //!   rotation in place of its third-order small-angle one);
 //! - the last chord ends on the programmed target, bit for bit.
 //!
-//! `f64` like the rest of the planner: the interpreter and planner already link the `f64`
-//! soft-float routines, so `f32` would add a second set to the flash instead of saving one.
+//! `f32` like the rest of the library and like Grbl's arcs. (The target vector is taken from
+//! the start-to-target differences, not from the rounded center, so a full circle's travel is
+//! exactly a turn.)
 
 use crate::gcode::MAX_MM;
 use crate::planner::to_steps;
 use crate::protocol::Error;
 use crate::planning::trig::{atan2, sin_cos};
-use core::f64::consts::PI;
+use core::f32::consts::PI;
 
 /// Chord ends computed by rotation between two exact ones (Grbl's `N_ARC_CORRECTION`).
 pub const CORRECTION: u32 = 12;
 /// Angular travel below which an arc whose target is its start is a full circle (Grbl's
 /// `ARC_ANGULAR_TRAVEL_EPSILON`, rad).
-const FULL_CIRCLE_EPSILON: f64 = 5e-7;
+const FULL_CIRCLE_EPSILON: f32 = 5e-7;
 
 /// The plane of G17 / G18 / G19 as axis indices: first, second (counter-clockwise from the first
 /// to the second is G3).
@@ -49,21 +50,21 @@ pub fn plane_axes(plane: u8) -> (usize, usize) {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Center {
     /// I J K (mm, from the start), indexed X Y Z; only the plane's two matter.
-    Offsets([Option<f64>; 3]),
+    Offsets([Option<f32>; 3]),
     /// R (mm): negative asks for the arc longer than a half circle.
-    Radius(f64),
+    Radius(f32),
 }
 
 /// A checked arc, absolute mm.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Arc<const N: usize> {
-    start: [f64; N],
-    target: [f64; N],
+    start: [f32; N],
+    target: [f32; N],
     axes: (usize, usize),
-    center: [f64; 2],
-    radius: f64,
+    center: [f32; 2],
+    radius: f32,
     /// Signed angular travel, rad (positive: counter-clockwise).
-    travel: f64,
+    travel: f32,
 }
 
 impl<const N: usize> Arc<N> {
@@ -72,7 +73,7 @@ impl<const N: usize> Arc<N> {
     /// `error:34`; IJK form: no offset in the plane → `error:35`, start and target radii differing
     /// by more than 0.005 mm and more than 0.5 mm or 0.1 % → `error:33`.
     #[inline(never)]
-    pub fn new(plane: u8, start: [f64; N], target: [f64; N], clockwise: bool, center: Center) -> Result<Self, Error> {
+    pub fn new(plane: u8, start: [f32; N], target: [f32; N], clockwise: bool, center: Center) -> Result<Self, Error> {
         let axes = plane_axes(plane);
         let (a, b) = axes;
         if a >= N || b >= N {
@@ -112,7 +113,7 @@ impl<const N: usize> Arc<N> {
                 let off = [i.unwrap_or(0.0), j.unwrap_or(0.0)];
                 let r_start = hypot(off[0], off[1]);
                 let r_end = hypot(dx - off[0], dy - off[1]);
-                let dr = libm::fabs(r_end - r_start);
+                let dr = libm::fabsf(r_end - r_start);
                 if dr > 0.005 && (dr > 0.5 || dr > 0.001 * r_start) {
                     return Err(Error::InvalidTarget);
                 }
@@ -123,7 +124,9 @@ impl<const N: usize> Arc<N> {
         let radius = hypot(offset[0], offset[1]);
         // Angle from the start vector to the target vector, then the way round G2/G3 asks.
         let (sx, sy) = (-offset[0], -offset[1]);
-        let (tx, ty) = (target[a] - center[0], target[b] - center[1]);
+        // (From the differences, not from the rounded center: a full circle's target vector
+        // is then exactly minus the offset, and its travel exactly 0 before the turn is added.)
+        let (tx, ty) = (dx - offset[0], dy - offset[1]);
         let mut travel = atan2(sx * ty - sy * tx, sx * tx + sy * ty);
         if clockwise {
             if travel >= -FULL_CIRCLE_EPSILON {
@@ -139,17 +142,17 @@ impl<const N: usize> Arc<N> {
     }
 
     /// Radius, mm (from the start point).
-    pub fn radius(&self) -> f64 {
+    pub fn radius(&self) -> f32 {
         self.radius
     }
 
     /// Signed angular travel, rad (positive: counter-clockwise in the plane).
-    pub fn travel(&self) -> f64 {
+    pub fn travel(&self) -> f32 {
         self.travel
     }
 
     /// The center in the plane's two axes, mm.
-    pub fn center(&self) -> [f64; 2] {
+    pub fn center(&self) -> [f32; 2] {
         self.center
     }
 
@@ -159,12 +162,12 @@ impl<const N: usize> Arc<N> {
     }
 
     /// The programmed end point.
-    pub fn target(&self) -> &[f64; N] {
+    pub fn target(&self) -> &[f32; N] {
         &self.target
     }
 
     /// Path length of the helix, mm (what G93 divides by its time).
-    pub fn length(&self) -> f64 {
+    pub fn length(&self) -> f32 {
         let mut l2 = self.radius * self.travel * self.radius * self.travel;
         for (i, (s, t)) in self.start.iter().zip(&self.target).enumerate() {
             if i != self.axes.0 && i != self.axes.1 {
@@ -177,11 +180,11 @@ impl<const N: usize> Arc<N> {
     /// `Ok` when every chord end lies within ±[`MAX_MM`] and every chord end and chord fits in
     /// the step range, so planning the chords cannot fail once the block has been accepted
     /// (else `error:33`).
-    pub fn check_range(&self, steps_per_mm: &[f64; N]) -> Result<(), Error> {
+    pub fn check_range(&self, steps_per_mm: &[f32; N]) -> Result<(), Error> {
         let (a, b) = self.axes;
         for (c, ax) in self.center.into_iter().zip([a, b]) {
             for v in [c - self.radius, c + self.radius] {
-                if !(libm::fabs(v) <= MAX_MM) {
+                if !(libm::fabsf(v) <= MAX_MM) {
                     return Err(Error::InvalidTarget);
                 }
                 to_steps(v, at(steps_per_mm, ax))?;
@@ -194,9 +197,9 @@ impl<const N: usize> Arc<N> {
 
     /// Chord ends for arc tolerance `tol` (mm, > 0).
     #[inline(never)]
-    pub fn segments(&self, tol: f64) -> Segments<N> {
+    pub fn segments(&self, tol: f32) -> Segments<N> {
         let n = segment_count(self.radius, self.travel, tol);
-        let phi = self.travel / n as f64;
+        let phi = self.travel / n as f32;
         let (a, b) = self.axes;
         let r0 = [at(&self.start, a) - self.center[0], at(&self.start, b) - self.center[1]];
         let (sin, cos) = sin_cos(phi);
@@ -206,14 +209,14 @@ impl<const N: usize> Arc<N> {
 
 /// Chords for a circle of `radius` turning `travel` rad with sagitta at most `tol` (at least 1;
 /// NaN or infinite inputs also give 1).
-pub fn segment_count(radius: f64, travel: f64, tol: f64) -> u32 {
+pub fn segment_count(radius: f32, travel: f32, tol: f32) -> u32 {
     // Sagitta r(1 - cos(φ/2)) = 2r·sin²(φ/4) ≤ tol: φmax = 4·asin(√(tol/2r)), taken from
     // below by asin x ≥ x + x³/6 (about 3x⁴/40 more chords: 0.02 % at tol/r = 0.1); no chord
     // beyond a half circle.
     let x = sqrt(tol / (2.0 * radius));
     let phi_max = if x >= 1.0 { PI } else { (4.0 * (x + x * x * x / 6.0)).min(PI) };
-    let n = libm::ceil(libm::fabs(travel) / phi_max);
-    if n >= 1.0 && n < u32::MAX as f64 {
+    let n = libm::ceilf(libm::fabsf(travel) / phi_max);
+    if n >= 1.0 && n < u32::MAX as f32 {
         crate::num::u32_of(n)
     } else {
         1 // no travel (a zero radius), or NaN from a zero tolerance: one straight chord
@@ -226,10 +229,10 @@ pub struct Segments<const N: usize> {
     arc: Arc<N>,
     n: u32,
     i: u32,
-    cos: f64,
-    sin: f64,
+    cos: f32,
+    sin: f32,
     /// Vector from the center to the last chord end.
-    r: [f64; 2],
+    r: [f32; 2],
 }
 
 impl<const N: usize> Segments<N> {
@@ -245,9 +248,9 @@ impl<const N: usize> Segments<N> {
 }
 
 impl<const N: usize> Iterator for Segments<N> {
-    type Item = [f64; N];
+    type Item = [f32; N];
 
-    fn next(&mut self) -> Option<[f64; N]> {
+    fn next(&mut self) -> Option<[f32; N]> {
         if self.i >= self.n {
             return None;
         }
@@ -261,14 +264,14 @@ impl<const N: usize> Iterator for Segments<N> {
             // Exact: the start vector turned by i·φ.
             let (a, b) = arc.axes;
             let (sx, sy) = (at(&arc.start, a) - arc.center[0], at(&arc.start, b) - arc.center[1]);
-            let angle = arc.travel * (self.i as f64 / self.n as f64);
+            let angle = arc.travel * (self.i as f32 / self.n as f32);
             let (s, c) = sin_cos(angle);
             [sx * c - sy * s, sx * s + sy * c]
         } else {
             [x * self.cos - y * self.sin, x * self.sin + y * self.cos]
         };
-        let frac = self.i as f64 / self.n as f64;
-        let mut p: [f64; N] = core::array::from_fn(|k| arc.start[k] + (arc.target[k] - arc.start[k]) * frac);
+        let frac = self.i as f32 / self.n as f32;
+        let mut p: [f32; N] = core::array::from_fn(|k| arc.start[k] + (arc.target[k] - arc.start[k]) * frac);
         for ((ax, c), r) in [arc.axes.0, arc.axes.1].into_iter().zip(arc.center).zip(self.r) {
             if let Some(v) = p.get_mut(ax) {
                 *v = c + r;
@@ -281,14 +284,14 @@ impl<const N: usize> Iterator for Segments<N> {
 /// `v[i]` of a plane axis (always below `N`): no bounds-check panic path. (Out of line: six
 /// callers.)
 #[inline(never)]
-fn at<const N: usize>(v: &[f64; N], i: usize) -> f64 {
+fn at<const N: usize>(v: &[f32; N], i: usize) -> f32 {
     v.get(i).copied().unwrap_or(0.0)
 }
 
-fn hypot(x: f64, y: f64) -> f64 {
+fn hypot(x: f32, y: f32) -> f32 {
     sqrt(x * x + y * y)
 }
 
-fn sqrt(x: f64) -> f64 {
+fn sqrt(x: f32) -> f32 {
     crate::planner::sqrt(x)
 }

@@ -225,7 +225,7 @@ impl<'a, const N: usize> Feeder<'a, N> {
             let (total, bits) = unsafe { ((*p).total, (*p).cruise_bits.load(Relaxed).max((*p).min_period.to_bits())) };
             // The running move (the oldest) counts what it has left.
             let left = if k == 0 { total.saturating_sub(made) } else { total };
-            us = us.saturating_add(crate::num::u32_of(left as f64 * bits as f64 * (1e6 / 16.0 / crate::TIMER_HZ as f64)));
+            us = us.saturating_add(crate::num::u32_of(left as f32 * bits as f32 * (1e6 / 16.0 / crate::TIMER_HZ as f32)));
             if us >= HORIZON_US {
                 break;
             }

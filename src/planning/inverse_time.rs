@@ -28,8 +28,8 @@ use crate::ramp::{RampConfig, RampTable, Shape, IDX_ONE};
 /// (steps/s²).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MasterRamp {
-    pub v0: f64,
-    pub accel: f64,
+    pub v0: f32,
+    pub accel: f32,
 }
 
 impl MasterRamp {
@@ -42,18 +42,18 @@ impl MasterRamp {
     /// `v0 + A·(i + ½) ms`, and millisecond `k` of the walk sits at index `k·r`, so the master
     /// runs `s·(v0 + A·(k·r + ½) ms)`: the mean of millisecond `k` of a ramp from
     /// `s·(v0 + A·(1 − r)/2 ms)` at `s·r·A`.
-    pub fn new(share: f64, accel: f64, per_mm: f64, cfg: &RampConfig) -> Self {
-        let v0 = cfg.v0 as f64;
+    pub fn new(share: f32, accel: f32, per_mm: f32, cfg: &RampConfig) -> Self {
+        let v0 = cfg.v0 as f32;
         let a = match cfg.shape {
-            Shape::Trapezoid => cfg.accel as f64,
+            Shape::Trapezoid => cfg.accel as f32,
             Shape::SCurve => {
-                let ms = crate::num::f64_of_u64(RampTable::<1>::ramp_ms(cfg).max(1));
-                (cfg.vmax as f64 - v0).max(1.0) * 1000.0 / ms
+                let ms = crate::num::f32_of_u64(RampTable::<1>::ramp_ms(cfg).max(1));
+                (cfg.vmax as f32 - v0).max(1.0) * 1000.0 / ms
             }
         };
         let (s, r) = if per_mm > 0.0 {
-            let (s, walk_q) = walk_of(share, accel, per_mm, cfg.accel.max(1) as f64);
-            (s, walk_q as f64 * (1.0 / IDX_ONE as f64))
+            let (s, walk_q) = walk_of(share, accel, per_mm, cfg.accel.max(1) as f32);
+            (s, walk_q as f32 * (1.0 / IDX_ONE as f32))
         } else {
             (1.0, 1.0)
         };
@@ -64,8 +64,8 @@ impl MasterRamp {
 
 /// Master cruise rate (steps/s) for `steps` master steps to take `seconds`, starting and ending
 /// at rest on the ramp `ramp`.
-pub fn cruise_hz(steps: u64, seconds: f64, ramp: &MasterRamp) -> f64 {
-    let n = steps as f64;
+pub fn cruise_hz(steps: u64, seconds: f32, ramp: &MasterRamp) -> f32 {
+    let n = steps as f32;
     let (v0, a) = (ramp.v0, ramp.accel);
     let flat = n / seconds;
     if flat <= v0 || a <= 0.0 {
@@ -82,8 +82,8 @@ pub fn cruise_hz(steps: u64, seconds: f64, ramp: &MasterRamp) -> f64 {
 
 /// How long a move of `steps` master steps at cruise `v` lasts on the ramp `ramp`, s (the
 /// forward formula the solver inverts; for tests and reports).
-pub fn duration_s(steps: u64, v: f64, ramp: &MasterRamp) -> f64 {
-    let (n, v0, a) = (steps as f64, ramp.v0, ramp.accel);
+pub fn duration_s(steps: u64, v: f32, ramp: &MasterRamp) -> f32 {
+    let (n, v0, a) = (steps as f32, ramp.v0, ramp.accel);
     if v <= v0 {
         return n / v;
     }

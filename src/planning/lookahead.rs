@@ -66,23 +66,21 @@ impl<const N: usize> Block<N> {
     /// starts from rest).
     #[inline(never)]
     pub fn new<const L: usize>(mv: Move<N>, profile: &Profile<L>, joins: bool, o: Overrides) -> Self {
-        // f64 arithmetic (the inputs are stored as f32): the firmware links f64 soft float for the
-        // planner anyway, and f32 arithmetic here would add a second set (~2 KB of flash).
-        let (table, per_mm) = (&profile.ramp, profile.per_mm as f64);
+        // f32 arithmetic, as the rest of the library (the inputs are stored as f32).
+        let (table, per_mm) = (&profile.ramp, profile.per_mm);
         let total = mv.steps.get(mv.master as usize).map_or(0, |s| s.unsigned_abs());
-        let t_accel = table.config().accel.max(1) as f64;
-        // `per_mm > 0.0` on the f32's bits (positive: 1 ..= +inf): LLVM would narrow an f64 compare of
-        // a widened f32 back to an f32 one and link the f32 compare routines for it.
+        let t_accel = table.config().accel.max(1) as f32;
+        // `per_mm > 0.0` on the f32's bits (positive: 1 ..= +inf): an integer compare, no call.
         let positive = (1..=0x7F80_0000).contains(&profile.per_mm.to_bits());
         let (ramp, budget, junction_q) = match (&mv.path, positive) {
             (Some(p), true) => {
-                let (s, walk_q) = walk_of(p.share as f64, p.accel as f64, per_mm, t_accel);
-                let r = walk_q as f64 / IDX_ONE as f64;
-                let scale = u32_of((65536.0 / s).min(u32::MAX as f64));
-                let dist_q = u32_of(((s / r) * 65536.0).min(u32::MAX as f64));
+                let (s, walk_q) = walk_of(p.share, p.accel, per_mm, t_accel);
+                let r = walk_q as f32 / IDX_ONE as f32;
+                let scale = u32_of((65536.0 / s).min(u32::MAX as f32));
+                let dist_q = u32_of(((s / r) * 65536.0).min(u32::MAX as f32));
                 let plan = RampPlan { cruise_q: 0, exit_q: 0, walk_q, scale, dist_q, cruise: mv.cruise };
                 let budget = usable(total) * 256.0 * r / s;
-                let v_j = if joins { p.junction as f64 * per_mm } else { 0.0 };
+                let v_j = if joins { p.junction * per_mm } else { 0.0 };
                 (plan, budget, table.index_of_hz(v_j))
             }
             _ => (RampPlan::lone(0, mv.cruise), usable(total) * 256.0, 0),
@@ -125,10 +123,10 @@ pub fn cruise_for<const L: usize>(rates: &Rates, o: Overrides, scale: u32, min_b
 /// per mm of path `share` over the table's `per_mm`) and its walk rate (Q20 entries per ms,
 /// at least one unit: its path acceleration `accel`, mm/s², as a fraction of the table's
 /// `t_accel`, table steps/s²).
-pub fn walk_of(share: f64, accel: f64, per_mm: f64, t_accel: f64) -> (f64, u32) {
+pub fn walk_of(share: f32, accel: f32, per_mm: f32, t_accel: f32) -> (f32, u32) {
     let s = (share / per_mm).clamp(1e-6, 1.0);
     let r = (accel * per_mm / t_accel).clamp(0.0, 1.0);
-    (s, u32_of(r * IDX_ONE as f64).max(1))
+    (s, u32_of(r * IDX_ONE as f32).max(1))
 }
 
 /// The lowest index (Q20) where the table, scaled by `scale` (Q16), is at least as fast as a
@@ -159,8 +157,8 @@ fn cruise_index<const L: usize>(table: &RampTable<L>, scale: u32, cruise_bits: u
 
 /// Master steps a deceleration may plan on: the engine's trigger is conservative by
 /// [`DECEL_MARGIN`] steps and by the step a millisecond boundary falls in.
-fn usable(total: u32) -> f64 {
-    total.saturating_sub(2 * DECEL_MARGIN + 1) as f64
+fn usable(total: u32) -> f32 {
+    total.saturating_sub(2 * DECEL_MARGIN + 1) as f32
 }
 
 /// Index reached from `from_q` walking `budget` of table distance up (or down) the table.

@@ -1,6 +1,6 @@
 //! The planner: G-code targets in mm to [`Move`]s (signed steps and a master cruise rate).
 //!
-//! Who uses it: the controller, once per G0/G1/G92 (outside any interrupt; `f64` math).
+//! Who uses it: the controller, once per G0/G1/G92 (outside any interrupt; `f32` math).
 //!
 //! Invariant: the planner keeps the programmed target in mm and the absolute step position
 //! `round(target × steps/mm)` of every axis; a move is the difference between two such step
@@ -16,7 +16,7 @@
 //! Each move also carries its junction speed with the move before it (junction deviation
 //! `$11`, Grbl's formula); the look-ahead ([`crate::lookahead`]) does the rest.
 
-use crate::num::{f64_of_i64, f64_of_u64};
+use crate::num::{f32_of_i64, f32_of_u64};
 use crate::protocol::Error;
 use crate::queue::{Move, Ovr, Path};
 use crate::settings::Settings;
@@ -29,17 +29,17 @@ pub const JUNCTION_DEVIATION_MM: f32 = 0.010;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Limits<const N: usize> {
     /// `$100+i`, steps/mm.
-    pub steps_per_mm: [f64; N],
+    pub steps_per_mm: [f32; N],
     /// `$110+i`, mm/min.
-    pub max_rate: [f64; N],
+    pub max_rate: [f32; N],
     /// `$120+i`, mm/s².
-    pub accel: [f64; N],
+    pub accel: [f32; N],
     /// Top of the ramp table (table rate = path speed × `per_mm`).
     pub vmax_hz: u32,
     /// Table rate per mm/s of path speed: the largest `$100+i`.
-    pub per_mm: f64,
+    pub per_mm: f32,
     /// Junction deviation, mm.
-    pub junction_dev: f64,
+    pub junction_dev: f32,
     /// Step timing: a move with more slave axes has a lower ceiling (`Timing::max_rate_for`).
     pub timing: Timing,
 }
@@ -48,13 +48,13 @@ impl<const N: usize> Limits<N> {
     /// Limits from settings and the ramp's top rate.
     pub fn new(s: &Settings, vmax_hz: u32) -> Self {
         Limits {
-            steps_per_mm: core::array::from_fn(|i| s.steps_per_mm[i] as f64),
-            max_rate: core::array::from_fn(|i| s.max_rate[i] as f64),
-            accel: core::array::from_fn(|i| s.accel[i] as f64),
+            steps_per_mm: core::array::from_fn(|i| s.steps_per_mm[i]),
+            max_rate: core::array::from_fn(|i| s.max_rate[i]),
+            accel: core::array::from_fn(|i| s.accel[i]),
             vmax_hz: vmax_hz.max(1),
             // The table's own path units: the axes in use ($42), as `Settings::build_profile`.
-            per_mm: s.per_mm(s.axis_count(N)) as f64,
-            junction_dev: JUNCTION_DEVIATION_MM as f64,
+            per_mm: s.per_mm(s.axis_count(N)),
+            junction_dev: JUNCTION_DEVIATION_MM,
             timing: s.timing(),
         }
     }
@@ -67,16 +67,16 @@ pub struct Planned<const N: usize> {
     /// Path length per master step, mm (turns the master rate into a feed).
     pub mm_per_step: f32,
     /// The master rate the feed and axis limits allow, before rounding and clamping (steps/s).
-    pub wanted_hz: f64,
+    pub wanted_hz: f32,
 }
 
 /// Planner position: programmed mm and absolute steps.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Planner<const N: usize> {
-    mm: [f64; N],
+    mm: [f32; N],
     steps: [i64; N],
     /// Direction of the last planned move (for the junction).
-    prev: Option<[f64; N]>,
+    prev: Option<[f32; N]>,
 }
 
 impl<const N: usize> Default for Planner<N> {
@@ -92,7 +92,7 @@ impl<const N: usize> Planner<N> {
     }
 
     /// Programmed position, mm.
-    pub fn position_mm(&self) -> &[f64; N] {
+    pub fn position_mm(&self) -> &[f32; N] {
         &self.mm
     }
 
@@ -110,13 +110,13 @@ impl<const N: usize> Planner<N> {
     /// Takes the engine's step counters as the position (after a reset or new steps/mm).
     pub fn sync(&mut self, steps: [i32; N], lim: &Limits<N>) {
         self.steps = steps.map(i64::from);
-        self.mm = core::array::from_fn(|i| steps[i] as f64 / lim.steps_per_mm[i]);
+        self.mm = core::array::from_fn(|i| steps[i] as f32 / lim.steps_per_mm[i]);
         self.prev = None;
     }
 
     /// G92: the named axes are now at the given mm. Returns the step position to publish
     /// (`Shared::set_positions`, once the engine is idle).
-    pub fn set_position(&mut self, set: &[Option<f64>; N], lim: &Limits<N>) -> Result<[i32; N], Error> {
+    pub fn set_position(&mut self, set: &[Option<f32>; N], lim: &Limits<N>) -> Result<[i32; N], Error> {
         let mut steps = self.steps;
         for ((s, mm), spm) in steps.iter_mut().zip(set).zip(&lim.steps_per_mm) {
             if let Some(mm) = mm {
@@ -132,7 +132,7 @@ impl<const N: usize> Planner<N> {
 
     /// A straight move to `target` (mm): `feed` in mm/min for G1, `None` for G0. `Ok(None)` when
     /// no axis moves a whole step (the position still advances, so nothing is lost).
-    pub fn line(&mut self, target: &[f64; N], feed: Option<f64>, lim: &Limits<N>) -> Result<Option<Planned<N>>, Error> {
+    pub fn line(&mut self, target: &[f32; N], feed: Option<f32>, lim: &Limits<N>) -> Result<Option<Planned<N>>, Error> {
         let mut to = [0i64; N];
         for ((s, mm), spm) in to.iter_mut().zip(target).zip(&lim.steps_per_mm) {
             *s = to_steps(*mm, *spm)?;
@@ -146,15 +146,15 @@ impl<const N: usize> Planner<N> {
         // Path length from the rounded steps; per-axis unit vector.
         // (Axes that do not move are skipped: soft float costs ~50–200 cycles an operation on
         // the M3 even for zeros. One division for the unit vector.)
-        let d: [f64; N] = core::array::from_fn(|i| if delta[i] == 0 { 0.0 } else { f64_of_i64(delta[i]) / lim.steps_per_mm[i] });
+        let d: [f32; N] = core::array::from_fn(|i| if delta[i] == 0 { 0.0 } else { f32_of_i64(delta[i]) / lim.steps_per_mm[i] });
         let len = sqrt(d.iter().filter(|v| **v != 0.0).map(|v| v * v).sum());
         let inv_len = 1.0 / len;
-        let unit: [f64; N] = core::array::from_fn(|i| if delta[i] == 0 { 0.0 } else { d[i] * inv_len });
+        let unit: [f32; N] = core::array::from_fn(|i| if delta[i] == 0 { 0.0 } else { d[i] * inv_len });
         // The path speed and acceleration every moving axis allows (Grbl's limit by axis).
-        let mut vmax = f64::MAX;
-        let mut accel = f64::MAX;
+        let mut vmax = f32::MAX;
+        let mut accel = f32::MAX;
         for i in 0..N {
-            let u = libm::fabs(unit[i]);
+            let u = libm::fabsf(unit[i]);
             if delta[i] != 0 && u > 0.0 {
                 vmax = vmax.min(lim.max_rate[i] / (60.0 * u));
                 accel = accel.min(lim.accel[i] / u);
@@ -165,15 +165,15 @@ impl<const N: usize> Planner<N> {
             Some(f) => (f / 60.0, Ovr::Feed),
             None => (vmax, Ovr::Rapid),
         };
-        let share = f64_of_u64(master_steps) / len;
+        let share = f32_of_u64(master_steps) / len;
         let wanted_hz = asked.min(vmax) * share;
         // The step handler's ceiling for this many slave axes, and the ramp table's top.
         let slaves = delta.iter().filter(|d| **d != 0).count() as u32 - 1;
-        let top = (lim.timing.max_rate_for(slaves) as f64).min(lim.vmax_hz as f64 * share / lim.per_mm.max(1e-9));
-        // max/min, not f64::clamp: its panic message would link float formatting into the firmware.
+        let top = (lim.timing.max_rate_for(slaves) as f32).min(lim.vmax_hz as f32 * share / lim.per_mm.max(1e-9));
+        // max/min, not f32::clamp: its panic message would link float formatting into the firmware.
         // Milli-steps/s: G93 times need more than whole steps/s at low rates.
         let top_millihz = crate::ramp::MAX_RATE_HZ as u64 * 1000;
-        let cruise_millihz = crate::num::u64_of(libm::round(wanted_hz.max(1.0).min(top) * 1000.0)).min(top_millihz);
+        let cruise_millihz = crate::num::u64_of(libm::roundf(wanted_hz.max(1.0).min(top) * 1000.0)).min(top_millihz);
         let mut mv = Move::new_millihz(delta, cruise_millihz).map_err(|_| Error::InvalidTarget)?;
         mv.ovr = ovr;
         // Junction deviation only: the look-ahead caps it by both moves' speeds under the
@@ -185,14 +185,14 @@ impl<const N: usize> Planner<N> {
         self.prev = Some(unit);
         let path = Path {
             share: share as f32,
-            accel: accel.min(1e12) as f32,
+            accel: accel.min(1e12),
             asked_hz: (asked * share) as f32,
             cap_hz: (vmax * share).min(top) as f32,
             junction: junction as f32,
         };
         self.mm = *target;
         self.steps = to;
-        Ok(Some(Planned { mv: mv.with_path(path), mm_per_step: (len / f64_of_u64(master_steps)) as f32, wanted_hz }))
+        Ok(Some(Planned { mv: mv.with_path(path), mm_per_step: (len / f32_of_u64(master_steps)) as f32, wanted_hz }))
     }
 }
 
@@ -200,11 +200,11 @@ impl<const N: usize> Planner<N> {
 /// speed at which a circle of deviation `dev` tangent to both moves is driven at the largest
 /// acceleration the axes allow along the change of direction,
 /// `v² = acc·dev·sin(θ/2)/(1 − sin(θ/2))`; 0 for a reversal, unlimited straight on.
-/// In f64 like the rest of the planner: f32 arithmetic would link a second soft-float set.
+/// In f32 like the rest of the planner (and Grbl).
 #[inline(never)]
-pub fn junction_speed<const N: usize>(a: &[f64; N], b: &[f64; N], axis_accel: &[f64; N], dev: f64) -> f64 {
-    let mut cos = 0.0f64;
-    let mut ju = [0.0f64; N];
+pub fn junction_speed<const N: usize>(a: &[f32; N], b: &[f32; N], axis_accel: &[f32; N], dev: f32) -> f32 {
+    let mut cos = 0.0f32;
+    let mut ju = [0.0f32; N];
     for i in 0..N {
         if a[i] != 0.0 || b[i] != 0.0 {
             cos -= a[i] * b[i];
@@ -215,12 +215,12 @@ pub fn junction_speed<const N: usize>(a: &[f64; N], b: &[f64; N], axis_accel: &[
         return 0.0;
     }
     if cos < -0.999_999 {
-        return f64::MAX;
+        return f32::MAX;
     }
-    let inv_n = 1.0 / sqrt(ju.iter().filter(|v| **v != 0.0).map(|v| v * v).sum::<f64>());
-    let mut acc = f64::MAX;
+    let inv_n = 1.0 / sqrt(ju.iter().filter(|v| **v != 0.0).map(|v| v * v).sum::<f32>());
+    let mut acc = f32::MAX;
     for i in 0..N {
-        let u = libm::fabs(ju[i]) * inv_n;
+        let u = libm::fabsf(ju[i]) * inv_n;
         if u > 1e-9 {
             acc = acc.min(axis_accel[i] / u);
         }
@@ -229,35 +229,35 @@ pub fn junction_speed<const N: usize>(a: &[f64; N], b: &[f64; N], axis_accel: &[
     sqrt(acc * dev * sin_d2 / (1.0 - sin_d2))
 }
 
-/// Square root, correctly rounded like `libm::sqrt`, in ~100 bytes of flash instead of ~700
-/// (libm's needs a 256-byte table and 64-bit multiplies). Digit by digit: the 54-bit truncated
-/// root of the significand, then rounded half up; a tie cannot happen, since a 54-bit odd
-/// significand squared never fits in 53 bits. Negative inputs give NaN, like libm.
-pub(crate) fn sqrt(x: f64) -> f64 {
+/// Square root, correctly rounded like `libm::sqrtf`, in ~100 bytes of flash. Digit by digit:
+/// the 25-bit truncated root of the significand, then rounded half up; a tie cannot happen,
+/// since a 25-bit odd significand squared never fits in 24 bits. Negative inputs give NaN,
+/// like libm.
+pub(crate) fn sqrt(x: f32) -> f32 {
     let bits = x.to_bits();
-    if bits > 1 << 63 {
-        return f64::NAN;
+    if bits > 1 << 31 {
+        return f32::NAN;
     }
-    if bits == 0 || bits >= 0x7FF << 52 {
+    if bits == 0 || bits >= 0xFF << 23 {
         return x; // ±0, +∞, NaN
     }
-    let mut e = (bits >> 52) as i32 - 1023;
-    let mut m = bits & ((1 << 52) - 1);
-    if e == -1023 {
+    let mut e = (bits >> 23) as i32 - 127;
+    let mut m = bits & ((1 << 23) - 1);
+    if e == -127 {
         // Subnormal: normalize.
         e += 1;
-        while m < 1 << 52 {
+        while m < 1 << 23 {
             m <<= 1;
             e -= 1;
         }
     } else {
-        m |= 1 << 52;
+        m |= 1 << 23;
     }
-    // Make the exponent even: √(m · 2^e) = √(m · 2^(e & 1)) · 2^(e >> 1), m now in [2^52, 2^54).
+    // Make the exponent even: √(m · 2^e) = √(m · 2^(e & 1)) · 2^(e >> 1), m now in [2^23, 2^25).
     m <<= e & 1;
     e >>= 1;
-    // q = ⌊√(m · 2^54)⌋ (54 bits), one bit at a time; the remainder stays below 2^57.
-    let (mut rem, mut s, mut q, mut r) = (m << 1, 0u64, 0u64, 1u64 << 53);
+    // q = ⌊√(m · 2^25)⌋ (25 bits), one bit at a time; the remainder stays below 2^28.
+    let (mut rem, mut s, mut q, mut r) = (m << 1, 0u32, 0u32, 1u32 << 24);
     while r != 0 {
         let t = s + r;
         if t <= rem {
@@ -269,14 +269,15 @@ pub(crate) fn sqrt(x: f64) -> f64 {
         r >>= 1;
     }
     // A carry out of the significand correctly bumps the exponent.
-    f64::from_bits((((e + 1022) as u64) << 52) + ((q + 1) >> 1))
+    f32::from_bits((((e + 126) as u32) << 23) + ((q + 1) >> 1))
 }
 
 /// Absolute steps of a position in mm: `round(mm × steps/mm)`, within ±(2^31 - 1).
-pub fn to_steps(mm: f64, steps_per_mm: f64) -> Result<i64, Error> {
-    let s = libm::round(mm * steps_per_mm);
-    if s.is_finite() && libm::fabs(s) <= i32::MAX as f64 {
-        // Through i32 (the value fits): the f64-to-i64 routine costs ~140 bytes of flash.
+pub fn to_steps(mm: f32, steps_per_mm: f32) -> Result<i64, Error> {
+    let s = libm::roundf(mm * steps_per_mm);
+    // Below 2^31 (exact in f32; `i32::MAX as f32` rounds up to it): whole, so within ±(2^31 - 1).
+    if s.is_finite() && libm::fabsf(s) < 2_147_483_648.0 {
+        // Through i32 (the value fits): the f32-to-i64 routine costs flash.
         Ok(crate::num::i32_of(s) as i64)
     } else {
         Err(Error::InvalidTarget)
@@ -299,7 +300,7 @@ mod tests {
         let mut p = Planner::<3>::new();
         let l = lim();
         let mut steps = [0i64; 3];
-        let mut mm = [0.0f64; 3];
+        let mut mm = [0.0f32; 3];
         for _ in 0..1000 {
             mm[0] += 0.001;
             mm[1] -= 0.0049;
@@ -318,7 +319,7 @@ mod tests {
         let mut p = Planner::<3>::new();
         let l = lim();
         // 50:30:20 mm at F = 600·√3800 mm/min: X runs 500 mm/s = 50 kHz.
-        let f = 600.0 * libm::sqrt(3800.0);
+        let f = 600.0 * libm::sqrtf(3800.0);
         let pl = p.line(&[50.0, 30.0, 20.0], Some(f), &l).unwrap().unwrap();
         assert_eq!(pl.mv.steps(), &[5000, 3000, 2000]);
         assert_eq!(pl.mv.cruise(), period_of_hz(50_000));
@@ -341,19 +342,19 @@ mod tests {
     #[test]
     fn sqrt_matches_libm() {
         let mut x = 0x2545_F491_4F6C_DD1Du64;
-        let specials = [0.0, -0.0, 1.0, 2.0, 3800.0, 5e-324, 2.2e-308, f64::MAX, f64::INFINITY];
+        let specials = [0.0, -0.0, 1.0, 2.0, 3800.0, 1e-45, 1.2e-38, 5e-39, f32::MAX, f32::INFINITY];
         for v in specials {
-            assert_eq!(sqrt(v).to_bits(), libm::sqrt(v).to_bits(), "√{v}");
+            assert_eq!(sqrt(v).to_bits(), libm::sqrtf(v).to_bits(), "√{v}");
         }
-        assert!(sqrt(-1.0).is_nan() && sqrt(f64::NAN).is_nan());
+        assert!(sqrt(-1.0).is_nan() && sqrt(f32::NAN).is_nan());
         for i in 0..200_000 {
             // xorshift64: random bit patterns (every exponent) and random lengths² in mm².
             x ^= x << 13;
             x ^= x >> 7;
             x ^= x << 17;
-            let v = if i % 2 == 0 { f64::from_bits(x >> 1) } else { (x >> 11) as f64 / (1u64 << 20) as f64 };
+            let v = if i % 2 == 0 { f32::from_bits((x >> 33) as u32) } else { (x >> 40) as f32 / (1u64 << 10) as f32 };
             if v.is_finite() {
-                assert_eq!(sqrt(v).to_bits(), libm::sqrt(v).to_bits(), "√{v}");
+                assert_eq!(sqrt(v).to_bits(), libm::sqrtf(v).to_bits(), "√{v}");
             }
         }
     }
@@ -363,7 +364,7 @@ mod tests {
         let mut p = Planner::<3>::new();
         let l = lim();
         assert_eq!(p.line(&[3e7, 0.0, 0.0], None, &l), Err(Error::InvalidTarget));
-        assert_eq!(p.line(&[f64::NAN, 0.0, 0.0], None, &l), Err(Error::InvalidTarget));
+        assert_eq!(p.line(&[f32::NAN, 0.0, 0.0], None, &l), Err(Error::InvalidTarget));
         assert_eq!(p.position_steps(), &[0, 0, 0]);
         assert_eq!(p.line(&[0.004, 0.0, 0.0], None, &l), Ok(None));
         assert_eq!(p.position_mm(), &[0.004, 0.0, 0.0]);

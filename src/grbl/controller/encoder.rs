@@ -41,7 +41,7 @@ impl<const N: usize> Controller<'_, N> {
     /// `|Enc:` fields: measured position (mm, machine) and speed (mm/min), if an encoder
     /// watches an axis in use.
     #[inline(never)]
-    pub(super) fn encoder_status(&self) -> Option<(f64, f64)> {
+    pub(super) fn encoder_status(&self) -> Option<(f32, f32)> {
         let spm = *self.limits.steps_per_mm.get(self.enc.axis()?)?;
         Some((self.enc.measured_steps() / spm, self.enc.speed_steps_per_s() * 60.0 / spm))
     }
@@ -51,13 +51,13 @@ impl<const N: usize> Controller<'_, N> {
         let axis = self.enc.axis().ok_or(Error::SettingDisabled)?;
         let spm = *self.limits.steps_per_mm.get(axis).ok_or(Error::SettingDisabled)?;
         let e = &self.enc;
-        report::encoder(out, axis, e.commanded_steps() as f64 / spm, e.measured_steps() / spm, e.error_steps());
+        report::encoder(out, axis, e.commanded_steps() as f32 / spm, e.measured_steps() / spm, e.error_steps());
         Ok(())
     }
 
     /// Commanded − measured position of the watched axis at the last reading, steps (what a
     /// step-loss report prints; for tests and tools).
-    pub fn encoder_error_steps(&self) -> Option<f64> {
+    pub fn encoder_error_steps(&self) -> Option<f32> {
         self.enc.axis().map(|_| self.enc.error_steps())
     }
 }

@@ -25,7 +25,7 @@
 //! Success clears the alarm lock; a full `$H` then runs the startup lines.
 
 use super::Controller;
-use crate::num::{f64_of, round_i32};
+use crate::num::round_i32;
 use crate::protocol::{Error, Out};
 use crate::queue::State;
 use crate::report;
@@ -76,7 +76,7 @@ impl<const N: usize> Controller<'_, N> {
         };
         // Contradictory settings would give a wrong position: refuse them.
         let s = &self.settings;
-        if (0..3).any(|i| (group | next) & 1 << i != 0 && f64_of(s.homing_pulloff) >= f64_of(s.max_travel[i])) {
+        if (0..3).any(|i| (group | next) & 1 << i != 0 && s.homing_pulloff >= s.max_travel[i]) {
             return Err(Error::InvalidStatement);
         }
         self.homing = Some(Homing {
@@ -158,10 +158,10 @@ impl<const N: usize> Controller<'_, N> {
             let mut travel = 0.0;
             for i in 0..3 {
                 if h.group & 1 << i != 0 {
-                    travel = libm::fmax(travel, s.max_travel[i] as f64);
+                    travel = libm::fmaxf(travel, s.max_travel[i]);
                 }
             }
-            let pulloff = s.homing_pulloff as f64;
+            let pulloff = s.homing_pulloff;
             let dist = match h.pass {
                 0 => 1.5 * travel,
                 2 => 5.0 * pulloff,
@@ -169,7 +169,7 @@ impl<const N: usize> Controller<'_, N> {
             };
             for i in 0..3 {
                 let toward_max = s.homing_dir & 1 << i == 0;
-                let d = round_i32(dist * s.steps_per_mm[i] as f64);
+                let d = round_i32(dist * s.steps_per_mm[i]);
                 h.target[i] = at[i] as i32 + if toward_max == approach { d } else { -d };
             }
         }
@@ -177,12 +177,12 @@ impl<const N: usize> Controller<'_, N> {
         let mut mm = *self.planner.position_mm();
         for i in 0..3 {
             if moving & 1 << i != 0 {
-                mm[i] = h.target[i] as f64 / s.steps_per_mm[i] as f64;
+                mm[i] = h.target[i] as f32 / s.steps_per_mm[i];
             }
         }
         let rate = if h.pass == 2 { s.homing_feed } else { s.homing_seek };
         // √(axes moving): a group has one or two axes.
-        let feed = rate as f64 * if moving.count_ones() > 1 { core::f64::consts::SQRT_2 } else { 1.0 };
+        let feed = rate * if moving.count_ones() > 1 { core::f32::consts::SQRT_2 } else { 1.0 };
         let mut planner = self.planner;
         h.epoch = self.shared.epoch();
         match planner.line(&mm, Some(feed), &self.limits) {
@@ -218,9 +218,9 @@ impl<const N: usize> Controller<'_, N> {
         let mut p = self.shared.positions();
         for i in 0..3 {
             if h.group & 1 << i != 0 {
-                let pulloff = s.homing_pulloff as f64;
-                let mm = if s.homing_dir & 1 << i != 0 { pulloff - s.max_travel[i] as f64 } else { -pulloff };
-                p[i] = round_i32(mm * s.steps_per_mm[i] as f64);
+                let pulloff = s.homing_pulloff;
+                let mm = if s.homing_dir & 1 << i != 0 { pulloff - s.max_travel[i] } else { -pulloff };
+                p[i] = round_i32(mm * s.steps_per_mm[i]);
             }
         }
         self.feeder.set_positions(p);

@@ -28,7 +28,7 @@ pub(super) enum SoftLimit {
 
 impl<const N: usize> Controller<'_, N> {
     /// True when soft limits are on and `target` (machine mm) leaves the travel box.
-    pub(super) fn beyond_travel(&self, target: &[f64; N]) -> bool {
+    pub(super) fn beyond_travel(&self, target: &[f32; N]) -> bool {
         self.settings.soft_limits && limits::outside(target, &self.settings.max_travel, self.axes)
     }
 

@@ -70,16 +70,16 @@ impl<const N: usize> Controller<'_, N> {
         let steps = self.shared.positions();
         let wco = self.offsets.wco(self.modal.coord);
         let mpos_only = self.settings.status_mask & 1 != 0;
-        let pos: [f64; N] = core::array::from_fn(|i| {
-            let m = steps[i] as f64 / self.limits.steps_per_mm[i];
+        let pos: [f32; N] = core::array::from_fn(|i| {
+            let m = steps[i] as f32 / self.limits.steps_per_mm[i];
             if mpos_only {
                 m
             } else {
                 m - wco[i]
             }
         });
-        let rate = self.shared.rate_hz() as f64;
-        let per_step = self.feed_ring[self.shared.moves_done() as usize % FEED_RING] as f64;
+        let rate = self.shared.rate_hz() as f32;
+        let per_step = self.feed_ring[self.shared.moves_done() as usize % FEED_RING];
         let blocks = (self.feeder.capacity() as u32).saturating_sub(self.feeder.pending());
         let (speed, acc, n_acc) = self.accessories();
         report::status(

@@ -109,7 +109,7 @@ impl<const N: usize> Controller<'_, N> {
                 }
                 i += 1;
                 let value = gcode::parse_number(cmd, &mut i)?;
-                if i != cmd.len() || id > u16::MAX as f64 || id != libm::trunc(id) {
+                if i != cmd.len() || id > u16::MAX as f32 || id != libm::truncf(id) {
                     return Err(Error::InvalidStatement);
                 }
                 need_idle(idle)?;
@@ -139,8 +139,8 @@ impl<const N: usize> Controller<'_, N> {
         if !idle {
             return Err(Error::NotIdle);
         }
-        let slot = libm::trunc(n);
-        if !(0.0..STARTUP_LINES as f64).contains(&slot) {
+        let slot = libm::truncf(n);
+        if !(0.0..STARTUP_LINES as f32).contains(&slot) {
             return Err(Error::InvalidStatement);
         }
         let text = Text::new(line).ok_or(Error::LineLengthExceeded)?;

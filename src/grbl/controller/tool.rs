@@ -10,14 +10,13 @@
 
 use super::Controller;
 use crate::gcode::{Modal, Motion};
-use crate::num::f64_of;
 use crate::queue::State;
 use crate::spindle::{duty, Power, SpindleDir, SpindleOut, FLOOD, MIST};
 
 impl<const N: usize> Controller<'_, N> {
     /// What a block with the new `modal` changes: the stage that waits for the queue, if any,
     /// and the laser power its moves carry.
-    pub(super) fn tool_sync(&self, modal: &Modal, moves: bool, rapid: bool) -> (Option<(SpindleDir, f64, u8)>, Power) {
+    pub(super) fn tool_sync(&self, modal: &Modal, moves: bool, rapid: bool) -> (Option<(SpindleDir, f32, u8)>, Power) {
         let old = &self.modal;
         let dir_changed = modal.spindle_dir != old.spindle_dir;
         let s_changed = modal.spindle != old.spindle;
@@ -30,7 +29,7 @@ impl<const N: usize> Controller<'_, N> {
         let stage = (sync || modal.coolant != old.coolant).then_some(new);
         let on = modal.spindle_dir != SpindleDir::Off && !rapid;
         let power = Power {
-            speed: if on { modal.spindle as f32 } else { 0.0 },
+            speed: if on { modal.spindle } else { 0.0 },
             dynamic: modal.spindle_dir == SpindleDir::Ccw,
             cruise_hz: 0.0,
         };
@@ -39,7 +38,7 @@ impl<const N: usize> Controller<'_, N> {
 
     /// Spindle and coolant as driven now: the modal ones, or all off while the safety door
     /// holds them (see `door.rs`).
-    fn tool_now(&self) -> (SpindleDir, f64, u8) {
+    fn tool_now(&self) -> (SpindleDir, f32, u8) {
         if self.door_tool_off() {
             (SpindleDir::Off, 0.0, 0)
         } else {
@@ -49,7 +48,7 @@ impl<const N: usize> Controller<'_, N> {
 
     /// For status reports: the spindle speed in force (S with the override, within `$31..=$30`
     /// as Grbl reports it; 0 when off) and the `A:` letters (S/C spindle, F flood, M mist).
-    pub(super) fn accessories(&self) -> (f64, [u8; 3], usize) {
+    pub(super) fn accessories(&self) -> (f32, [u8; 3], usize) {
         let (dir, speed, coolant) = self.tool_now();
         let mut acc = [0u8; 3];
         let mut n = 0;
@@ -64,8 +63,8 @@ impl<const N: usize> Controller<'_, N> {
             _ => {
                 push(if dir == SpindleDir::Cw { b'S' } else { b'C' });
                 let s = &self.settings;
-                let v = speed * self.shared.overrides().spindle as f64 / 100.0;
-                if v > 0.0 { v.max(s.spindle_min as f64).min(s.spindle_max as f64) } else { 0.0 }
+                let v = speed * self.shared.overrides().spindle as f32 / 100.0;
+                if v > 0.0 { v.max(s.spindle_min).min(s.spindle_max) } else { 0.0 }
             }
         };
         if coolant & FLOOD != 0 {
@@ -99,10 +98,10 @@ impl<const N: usize> Controller<'_, N> {
         } else {
             0.0
         };
-        let ov = self.shared.overrides().spindle as f64 / 100.0;
+        let ov = self.shared.overrides().spindle as f32 / 100.0;
         let arr = crate::spindle::PwmTiming::new(s.spindle_pwm_hz).arr;
         SpindleOut {
-            ccr: duty(speed * ov, f64_of(s.spindle_min), f64_of(s.spindle_max), arr),
+            ccr: duty(speed * ov, s.spindle_min, s.spindle_max, arr),
             enable: true,
             ccw: dir == SpindleDir::Ccw,
             mist: coolant & MIST != 0,
