@@ -128,7 +128,7 @@ pub enum Error {
 /// The controller checks [`Out::room`] before it starts a reply, so with a sink that reports
 /// its room no `ok` is ever lost: it takes no line byte unless [`REPLY_ROOM`] bytes are free,
 /// writes long listings (`$$`, `$#`) a line at a time as room appears, and delays a status
-/// report until it fits. The TX ring should hold at least 384 bytes.
+/// report until it fits. The TX ring should hold at least 400 bytes.
 pub trait Out {
     /// Writes as many of `bytes` as fit.
     fn put(&mut self, bytes: &[u8]);
@@ -139,9 +139,9 @@ pub trait Out {
 }
 
 /// Free TX bytes needed before a line byte is taken: the longest single reply (`$I` with its
-/// build-info string, the DMA cap and the step path's self-measurement line with its late fills, or `$N` with two stored
-/// lines).
-pub const REPLY_ROOM: usize = 352;
+/// build-info string, the DMA caps and the step path's self-measurement line with its late
+/// fills, or `$N` with two stored lines).
+pub const REPLY_ROOM: usize = 392;
 
 impl<const C: usize> Out for heapless::Vec<u8, C> {
     fn put(&mut self, bytes: &[u8]) {

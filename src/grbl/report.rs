@@ -291,6 +291,11 @@ pub fn build_info(out: &mut impl Out, info: &[u8], queue_moves: usize, r: &Rampe
     if r.dma {
         out.put(b" DMA");
     }
+    if r.junction_hz != 0 {
+        out.put(b"]\r\n[MSG:max junction rate ");
+        put_u32(out, r.junction_hz);
+        out.put(b" Hz");
+    }
     out.put(b"]\r\n[MSG:ramp ");
     put_u32(out, r.cfg.v0);
     out.put(b"-");
@@ -403,6 +408,7 @@ mod tests {
             table_limited: false,
             dual: false,
             dma: false,
+            junction_hz: 0,
         };
         let info = text(|o| build_info(o, b"", 15, &r));
         assert_eq!(
@@ -417,9 +423,9 @@ mod tests {
         let worst = crate::steptime::StepTimeReport { entries: 1, min: u32::MAX, mean: u32::MAX as f32, max: u32::MAX, load: 1.0, peak_load: 1.0, late: u32::MAX };
         let dual = text(|o| build_info(o, b"", 15, &Ramped { dual: true, ..r }));
         assert!(dual.contains("[MSG:max step rate 166666 Hz dual-edge]\r\n"), "{dual}");
-        let dma = text(|o| build_info(o, b"", 15, &Ramped { dma: true, ..r }));
-        assert!(dma.contains("[MSG:max step rate 166666 Hz DMA]\r\n"), "{dma}");
-        let r = Ramped { table_limited: true, dual: true, dma: true, ..r };
+        let dma = text(|o| build_info(o, b"", 15, &Ramped { dma: true, junction_hz: 300_000, ..r }));
+        assert!(dma.contains("[MSG:max step rate 166666 Hz DMA]\r\n[MSG:max junction rate 300000 Hz]\r\n"), "{dma}");
+        let r = Ramped { table_limited: true, dual: true, dma: true, junction_hz: 1_000_000, ..r };
         let all = text(|o| {
             build_info(o, &[b'x'; crate::grbl::store::TEXT_LEN], 15, &r);
             step_time(o, &worst, true);
@@ -446,9 +452,10 @@ mod tests {
             table_limited: true,
             dual: true,
             dma: true,
+            junction_hz: 5,
         };
         let all = text(|o| build_info(o, b"i", 5, &r));
-        assert!(all.ends_with("[MSG:max step rate 4 Hz dual-edge DMA]\r\n[MSG:ramp 1-2 Hz 3 Hz/s S-curve (table-limited)]\r\n"), "{all}");
+        assert!(all.ends_with("[MSG:max step rate 4 Hz dual-edge DMA]\r\n[MSG:max junction rate 5 Hz]\r\n[MSG:ramp 1-2 Hz 3 Hz/s S-curve (table-limited)]\r\n"), "{all}");
     }
 
     #[test]

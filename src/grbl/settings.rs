@@ -254,13 +254,17 @@ pub struct Ramped {
     pub dual: bool,
     /// The cap is DMA burst mode's (`$581`).
     pub dma: bool,
+    /// DMA burst mode: the fastest master rate at a junction joined at speed (one axis;
+    /// `Timing::max_junction_rate_for`); 0 in the other modes (the move's own cap).
+    pub junction_hz: u32,
 }
 
 impl Ramped {
     /// What `s` asks for on `axes` axes, before the table is built.
     pub fn wanted(s: &Settings, axes: usize) -> Ramped {
         let timing = s.timing();
-        Ramped { cfg: s.ramp_config(axes, &timing), max_rate_hz: timing.max_rate_hz(), table_limited: false, dual: timing.dual, dma: timing.dma }
+        let junction_hz = if timing.dma { timing.max_junction_rate_for(0) } else { 0 };
+        Ramped { cfg: s.ramp_config(axes, &timing), max_rate_hz: timing.max_rate_hz(), table_limited: false, dual: timing.dual, dma: timing.dma, junction_hz }
     }
 }
 
@@ -573,7 +577,8 @@ impl Settings {
                 Ok(()) => break,
             }
         }
-        Ramped { cfg, max_rate_hz: timing.max_rate_hz(), table_limited, dual: timing.dual, dma: timing.dma }
+        let junction_hz = if timing.dma { timing.max_junction_rate_for(0) } else { 0 };
+        Ramped { cfg, max_rate_hz: timing.max_rate_hz(), table_limited, dual: timing.dual, dma: timing.dma, junction_hz }
     }
 
     /// The flash image: magic, version, fields (little-endian, where [`LOW`] and

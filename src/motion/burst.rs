@@ -132,10 +132,16 @@ impl<'a, const N: usize, const L: usize> Burst<'a, N, L> {
         while i < len {
             if self.quick {
                 let at = i;
-                i += self.step.quick_entries(tail(words, i), tail(periods, i));
+                let made = self.step.quick_entries(tail(words, i), tail(periods, i));
+                i += made;
                 if core::mem::replace(&mut self.step.slave_major, false) {
                     // DMA must not have reached the lane's first entry before its last pass.
                     late |= played() > at;
+                }
+                if made != 0 && self.ramp_work() {
+                    // (A lane ended the ramp millisecond: its walk, then the fast path again.)
+                    late |= played() > i;
+                    continue;
                 }
                 if i >= len {
                     break;

@@ -152,6 +152,18 @@ impl Timing {
         (crate::TIMER_HZ / self.min_period_for(slaves).max(1)).min(MAX_RATE_HZ)
     }
 
+    /// Fastest master rate (steps/s) at a junction joined at speed, for moves with up to
+    /// `slaves` slave axes: in DMA burst mode a move change runs inside a buffer fill (the
+    /// step half's two ticks and the ramp half's work twice), which must end before DMA
+    /// reaches the entries after it ([`DMA_JUNCTION_BASE_TICKS`]); elsewhere the move's own cap.
+    pub fn max_junction_rate_for(&self, slaves: u32) -> u32 {
+        let rate = self.max_rate_for(slaves);
+        if !self.dma {
+            return rate;
+        }
+        rate.min(crate::TIMER_HZ / (DMA_JUNCTION_BASE_TICKS + DMA_JUNCTION_PER_SLAVE_TICKS * slaves))
+    }
+
     /// Fastest master rate (steps/s) this timing allows any move (a single axis).
     pub fn max_rate_hz(&self) -> u32 {
         self.max_rate_for(0)
@@ -233,6 +245,21 @@ pub const DMA_DUAL_PER_SLAVE_TICKS: u32 = 10;
 pub const DMA_LANE_TICKS: u32 = 72;
 /// Extra fill ticks per slave axis in DMA burst mode.
 pub const DMA_PER_SLAVE_TICKS: u32 = 13;
+/// DMA burst mode: the shortest master period at a junction joined at speed, timer ticks, plus
+/// [`DMA_JUNCTION_PER_SLAVE_TICKS`] per slave (the more slaves of the two moves). A move change
+/// runs in one buffer fill: the last step's whole tick, the ramp half's work on the move
+/// entered, the next tick entering it (with a direction change: its own event) and the ramp
+/// half's work again, about 5 000 modeled cycles on one axis, where a half of 24 entries at
+/// 818 kHz lasts 2 112: back-to-back moves at the cruise caps had DMA read entries before the
+/// fill wrote them at some sender timings (1 axis at 814 kHz: 7 of 24 timings; with the
+/// sender waiting 0–104 000 cycles before each line). With junctions at 72 MHz / 150 ticks
+/// one timing of 12 still came late on one axis; at 180 none. 200 + 20 per slave (360, 300 and
+/// 225 kHz on 1, 3 and 7 axes): no late fill at any of 14 timings on 1, 3 and 7 axes in both
+/// edge modes at the cruise caps (`tests/firmware_dma.rs` runs several). `$I` prints the
+/// one-axis figure (`[MSG:max junction rate N Hz]`).
+pub const DMA_JUNCTION_BASE_TICKS: u32 = 200;
+/// Extra junction ticks per slave axis in DMA burst mode (see [`DMA_JUNCTION_BASE_TICKS`]).
+pub const DMA_JUNCTION_PER_SLAVE_TICKS: u32 = 20;
 /// Shortest period in DMA burst mode: 72 ticks, 1 MHz (the ramp tables' top rate).
 pub const DMA_FLOOR_TICKS: u32 = 72;
 /// DMA burst mode: the spread of a DMA store's latency after its timer event (arbitration,

@@ -75,8 +75,9 @@ pub struct Planned<const N: usize> {
 pub struct Planner<const N: usize> {
     mm: [f32; N],
     steps: [i64; N],
-    /// Direction of the last planned move (for the junction).
-    prev: Option<[f32; N]>,
+    /// The last planned move (for the junction): its direction, master steps per mm and
+    /// slave count.
+    prev: Option<([f32; N], f32, u32)>,
 }
 
 impl<const N: usize> Default for Planner<N> {
@@ -178,11 +179,16 @@ impl<const N: usize> Planner<N> {
         mv.ovr = ovr;
         // Junction deviation only: the look-ahead caps it by both moves' speeds under the
         // overrides in force.
+        // And the step path's move change: at most the mode's junction rate on both sides
+        // (`Timing::max_junction_rate_for`: DMA mode changes moves inside a buffer fill).
         let junction = match self.prev {
-            Some(pu) => junction_speed(&pu, &unit, &lim.accel, lim.junction_dev),
+            Some((pu, pshare, pslaves)) => {
+                let jcap = lim.timing.max_junction_rate_for(slaves.max(pslaves)) as f32;
+                junction_speed(&pu, &unit, &lim.accel, lim.junction_dev).min(jcap / share.max(pshare))
+            }
             None => 0.0,
         };
-        self.prev = Some(unit);
+        self.prev = Some((unit, share, slaves));
         let path = Path {
             share: share as f32,
             accel: accel.min(1e12),

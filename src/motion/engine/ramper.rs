@@ -39,6 +39,10 @@ pub struct Ramper<'a, const N: usize, const L: usize = RAMP_LEN> {
     /// published in the link.
     published_at: u32,
     published_succ: usize,
+    /// What the successor was last primed from (its slot, the walk's index, the hold, whether
+    /// a move follows it, its exit): the same again primes the same values, so a pass skips
+    /// it (cleared when the walk enters a move: only then can the slot be reused).
+    primed: (usize, u32, bool, bool, u32),
     /// The ring as this pass saw it ([`Self::look`]).
     succ: Option<*const Prepared<N>>,
     succ_next: bool,
@@ -71,6 +75,7 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
             resting: false,
             published_at: 0,
             published_succ: 0,
+            primed: (0, 0, false, false, 0),
             succ: None,
             succ_next: false,
             seen_ms: link.ms.load(Relaxed),
@@ -108,6 +113,7 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
                 let p = if next != 0 { next as *const Prepared<N> } else { self.shared.running() };
                 if p.is_null() {
                     self.cur = p;
+                    self.primed.0 = 0;
                     self.walk = Walk::REST;
                     self.resting = false;
                 } else if p != self.cur {
@@ -162,6 +168,7 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
     /// from rest after the walk was reset).
     fn enter(&mut self, p: *const Prepared<N>) {
         self.cur = p;
+        self.primed.0 = 0;
         // SAFETY: a published slot the step half runs (or is about to); plain fields.
         unsafe {
             self.plan = (*p).ramp;
@@ -303,7 +310,10 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
         }
         self.shared.link.idx.store(self.walk.idx, Relaxed);
         let next = self.succ;
-        if let Some(n) = next {
+        // SAFETY: as below.
+        let key = next.map(|n| (n as usize, self.walk.idx, self.hold, self.succ_next, unsafe { (*n).exit_q.load(Relaxed) }));
+        if let Some((n, key)) = next.zip(key).filter(|(_, k)| *k != self.primed) {
+            self.primed = key;
             // SAFETY: a published slot after the running one; plain fields the step half never
             // writes and atomics, through the pointer (the step half may enter it meanwhile).
             let (ramp, min) = unsafe { ((*n).ramp, (*n).min_period) };
@@ -316,7 +326,7 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
                 0
             } else {
                 // SAFETY: as above.
-                let target = if self.succ_next { unsafe { (*n).exit_q.load(Relaxed) }.min(ramp.cruise_q) } else { 0 };
+                let target = if self.succ_next { key.4.min(ramp.cruise_q) } else { 0 };
                 w.settle_trigger(&ramp, target, table);
                 // SAFETY: as above.
                 unsafe { (*n).down_period.store(self.down_period(&ramp, min, target), Relaxed) };

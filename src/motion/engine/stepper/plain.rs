@@ -20,7 +20,8 @@
 
 use core::sync::atomic::Ordering::Relaxed;
 
-use super::{piece, slave_bits, toggle, Phase, Stepper};
+use super::{bump, piece, slave_bits, toggle, Phase, Stepper};
+use crate::TICKS_PER_MS;
 use crate::burst::tail;
 use crate::prepared::Slave;
 
@@ -183,6 +184,10 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
         while k > 0 && ((frac + k as u32 * period) >> 4) as i32 >= ms_left {
             k -= 1;
         }
+        // And the step whose gap ends the millisecond, last (`elapse`'s work on it below: the
+        // fill runs the ramp half before the next entry), rather than a whole tick for it.
+        let ms_end = k < len;
+        k += ms_end as usize;
         if k == 0 {
             return 0;
         }
@@ -211,7 +216,14 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
                 k -= 1;
             }
         }
-        (self.frac, self.ms_left, self.gap_in) = (sum & 15, ms_left - (sum >> 4) as i32, acc >> 4);
+        let mut ms = ms_left - (sum >> 4) as i32;
+        if ms_end {
+            // (At most 0 here: a new millisecond, which the ramp half walks.)
+            ms += TICKS_PER_MS as i32;
+            bump(&self.shared.link.ms);
+            self.pend();
+        }
+        (self.frac, self.ms_left, self.gap_in) = (sum & 15, ms, acc >> 4);
         self.left -= made as u32;
         let mut last = on;
         // Entry 0 is the edge that was about to happen; the steps' words but the last are
