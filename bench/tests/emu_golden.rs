@@ -3,7 +3,7 @@
 //! change that moves a pulse shows up in review.
 //!
 //! Compared exactly: rising edges and net steps per axis, replies, overruns. Within a tolerance:
-//! max rate per axis (0.5 %), slave deviation (≤ golden + 0.1 step), step-ISR mean/max modeled
+//! max rate per axis (0.5 %; a slave also one master period per 1 ms bin), slave deviation (≤ golden + 0.1 step), step-ISR mean/max modeled
 //! cycles (±25 %: they follow code size and layout). Checked against the settings, not the
 //! golden: step high ≥ 3 µs (`$0` default), dir setup ≥ 5 µs (`$29` default). Timings that
 //! legitimately move with the code (pulse widths, BSRR offsets) are recorded in the file for
@@ -133,13 +133,19 @@ fn paper_demo_matches_the_golden_trace() {
     check(want["overruns"] == got["overruns"], format!("overruns {}", got["overruns"]));
     let (wa, ga) = (want["axes"].as_object().unwrap(), got["axes"].as_object().unwrap());
     check(wa.keys().eq(ga.keys()), format!("moving axes {:?} -> {:?}", wa.keys().collect::<Vec<_>>(), ga.keys().collect::<Vec<_>>()));
+    // The master's rate: the fastest axis's.
+    let master_hz = wa.values().map(|w| f(&w["max_rate_hz"])).fold(0.0, f64::max);
     for (name, w) in wa {
         let g = &got["axes"][name];
         for key in ["rising_edges", "net_steps"] {
             check(w[key] == g[key], format!("{name}.{key}: {} -> {}", w[key], g[key]));
         }
         let (wr, gr) = (f(&w["max_rate_hz"]), f(&g["max_rate_hz"]));
-        check((gr - wr).abs() <= RATE_TOLERANCE * wr, format!("{name}.max_rate_hz: {wr} -> {gr} (±{} %)", RATE_TOLERANCE * 100.0));
+        // A slave's periods are whole master periods (2 or 3 for Z at 5:2), so the mean over a
+        // 1 ms bin moves by up to a master period per bin with where the bin's edges fall (the
+        // code's placement shifts them): that much more room for slaves.
+        let tol = if wr < master_hz { RATE_TOLERANCE + 1000.0 / master_hz } else { RATE_TOLERANCE };
+        check((gr - wr).abs() <= tol * wr, format!("{name}.max_rate_hz: {wr} -> {gr} (±{:.1} %)", tol * 100.0));
         check(f(&g["min_high_ns"]) >= MIN_HIGH_NS, format!("{name}.min_high_ns {} < {MIN_HIGH_NS}", g["min_high_ns"]));
         check(f(&g["min_dir_setup_ns"]) >= MIN_DIR_SETUP_NS, format!("{name}.min_dir_setup_ns {} < {MIN_DIR_SETUP_NS}", g["min_dir_setup_ns"]));
     }
