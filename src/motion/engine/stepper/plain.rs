@@ -5,7 +5,8 @@
 //! step: the move is running, the control word has not changed (it cannot change during a
 //! fill: the fill interrupt preempts every context that writes it), and neither the
 //! deceleration trigger nor the move's last step is reached. No plain entry ends a ramp
-//! millisecond (that asks for the ramp half). Within a run the period is the one the ramp half
+//! millisecond (that asks for the ramp half), but the last of a slave-major run may: the fill
+//! then runs the ramp half before the next entry. Within a run the period is the one the ramp half
 //! last published (only the ramp half writes it, and in DMA mode it runs inside the fill,
 //! between runs), so a run needs no shared load per entry. The first entry that is not plain
 //! is left to [`Stepper::tick`].
@@ -80,8 +81,8 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
             return 0;
         }
         let left = self.left;
-        // Gaps that never need a second entry take the lanes without the split; one axis with
-        // full pulses the lanes without slaves.
+        // Gaps that never need a second entry take the lanes without the split; one axis the
+        // lanes without slaves (in dual-edge mode flipping its words).
         let made = match (n == 0, self.dual, (period + 15) >> 4 <= max) {
             (true, false, true) => self.lane::<false, false, false>(words, periods, period, master_on, room),
             (true, false, false) => self.lane::<true, false, false>(words, periods, period, master_on, room),
@@ -159,7 +160,7 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
         }
         if FLIP && steps & 1 != 0 {
             // (An odd number of toggles of the pin.)
-            level ^= flip & on;
+            level ^= on;
         }
         (self.frac, self.ms_left, self.word, self.level, self.gap_in) = (frac, ms_left, word, level, gap_in);
         self.left -= steps;
@@ -170,7 +171,9 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
     /// path of 2 to 7 axes), slave-major: the master walks the steps (the periods, and its own
     /// bit in the words); then the slaves, three or two at a time with their accumulators in
     /// registers, walk the same steps and OR their bits into the words; in dual-edge mode a
-    /// last pass toggles them.
+    /// last pass toggles them. The run takes the step that ends a ramp millisecond too, last
+    /// (as `elapse` would: a new millisecond, the ramp half asked for; the fill runs it
+    /// before the next entry).
     #[inline(never)]
     #[cfg_attr(target_os = "none", link_section = ".data.ramfunc.slave_lane")]
     fn slave_lane(&mut self, words: &mut [u32], periods: &mut [u16], period: u32, on: u32, room: u32) -> usize {
