@@ -155,13 +155,13 @@ impl Timing {
     /// Fastest master rate (steps/s) at a junction joined at speed, for moves with up to
     /// `slaves` slave axes: in DMA burst mode a move change runs inside a buffer fill (the
     /// step half's two ticks and the ramp half's work twice), which must end before DMA
-    /// reaches the entries after it ([`DMA_JUNCTION_BASE_TICKS`]); elsewhere the move's own cap.
+    /// reaches the entries after it ([`DMA_JUNCTION_BASE_TICKS`]). Elsewhere no limit of its
+    /// own (`u32::MAX`: each move's cap binds, the step interrupt's long ticks are in it).
     pub fn max_junction_rate_for(&self, slaves: u32) -> u32 {
-        let rate = self.max_rate_for(slaves);
         if !self.dma {
-            return rate;
+            return u32::MAX;
         }
-        rate.min(crate::TIMER_HZ / (DMA_JUNCTION_BASE_TICKS + DMA_JUNCTION_PER_SLAVE_TICKS * slaves))
+        self.max_rate_for(slaves).min(crate::TIMER_HZ / (DMA_JUNCTION_BASE_TICKS + DMA_JUNCTION_PER_SLAVE_TICKS * slaves))
     }
 
     /// Fastest master rate (steps/s) this timing allows any move (a single axis).
