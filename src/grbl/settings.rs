@@ -255,7 +255,7 @@ pub struct Ramped {
     /// The cap is DMA burst mode's (`$581`).
     pub dma: bool,
     /// DMA burst mode: the fastest master rate at a junction joined at speed (one axis;
-    /// `Timing::max_junction_rate_for`); 0 in the other modes (the move's own cap).
+    /// `Timing::max_junction_rate_for`); 0 in the other modes (no junction limit of their own).
     pub junction_hz: u32,
 }
 
@@ -263,8 +263,13 @@ impl Ramped {
     /// What `s` asks for on `axes` axes, before the table is built.
     pub fn wanted(s: &Settings, axes: usize) -> Ramped {
         let timing = s.timing();
+        Ramped::of(s.ramp_config(axes, &timing), &timing, false)
+    }
+
+    /// The report of `cfg` under `timing`.
+    fn of(cfg: RampConfig, timing: &Timing, table_limited: bool) -> Ramped {
         let junction_hz = if timing.dma { timing.max_junction_rate_for(0) } else { 0 };
-        Ramped { cfg: s.ramp_config(axes, &timing), max_rate_hz: timing.max_rate_hz(), table_limited: false, dual: timing.dual, dma: timing.dma, junction_hz }
+        Ramped { cfg, max_rate_hz: timing.max_rate_hz(), table_limited, dual: timing.dual, dma: timing.dma, junction_hz }
     }
 }
 
@@ -577,8 +582,7 @@ impl Settings {
                 Ok(()) => break,
             }
         }
-        let junction_hz = if timing.dma { timing.max_junction_rate_for(0) } else { 0 };
-        Ramped { cfg, max_rate_hz: timing.max_rate_hz(), table_limited, dual: timing.dual, dma: timing.dma, junction_hz }
+        Ramped::of(cfg, &timing, table_limited)
     }
 
     /// The flash image: magic, version, fields (little-endian, where [`LOW`] and

@@ -278,6 +278,30 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
         scaled(base_at(down, &self.ramp.profile().ramp), down, plan, min).to_bits()
     }
 
+    /// Primes successor `n` (its exit `exit`) at the walk's index: its period, and its trigger
+    /// and the period one walk down for its own target (as `target` will find it).
+    #[inline(always)]
+    fn prime(&self, n: *const Prepared<N>, exit: u32) {
+        // SAFETY: a published slot after the running one; plain fields the step half never
+        // writes and atomics, through the pointer (the step half may enter it meanwhile).
+        let (ramp, min) = unsafe { ((*n).ramp, (*n).min_period) };
+        let table = &self.ramp.profile().ramp;
+        // SAFETY: as above.
+        unsafe { (*n).period.store(scaled(base_at(self.walk.idx, table), self.walk.idx, &ramp, min).to_bits(), Relaxed) };
+        let mut w = self.walk;
+        let at = if self.hold {
+            0
+        } else {
+            let target = if self.succ_next { exit.min(ramp.cruise_q) } else { 0 };
+            w.settle_trigger(&ramp, target, table);
+            // SAFETY: as above.
+            unsafe { (*n).down_period.store(self.down_period(&ramp, min, target), Relaxed) };
+            w.decel_at
+        };
+        // SAFETY: as above.
+        unsafe { (*n).decel_at.store(at, Relaxed) };
+    }
+
     /// Publishes the results in the slots: the running move's period and trigger (0 while
     /// decelerating, and the period 0 at rest under a hold), the walk's index, and the
     /// successor's period at this index.
@@ -310,30 +334,14 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
         }
         self.shared.link.idx.store(self.walk.idx, Relaxed);
         let next = self.succ;
-        // SAFETY: as below.
-        let key = next.map(|n| (n as usize, self.walk.idx, self.hold, self.succ_next, unsafe { (*n).exit_q.load(Relaxed) }));
-        if let Some((n, key)) = next.zip(key).filter(|(_, k)| *k != self.primed) {
-            self.primed = key;
-            // SAFETY: a published slot after the running one; plain fields the step half never
-            // writes and atomics, through the pointer (the step half may enter it meanwhile).
-            let (ramp, min) = unsafe { ((*n).ramp, (*n).min_period) };
-            let table = &self.ramp.profile().ramp;
-            // SAFETY: as above.
-            unsafe { (*n).period.store(scaled(base_at(self.walk.idx, table), self.walk.idx, &ramp, min).to_bits(), Relaxed) };
-            // Its trigger from here, for its own target (as `target` will find it).
-            let mut w = self.walk;
-            let at = if self.hold {
-                0
-            } else {
-                // SAFETY: as above.
-                let target = if self.succ_next { key.4.min(ramp.cruise_q) } else { 0 };
-                w.settle_trigger(&ramp, target, table);
-                // SAFETY: as above.
-                unsafe { (*n).down_period.store(self.down_period(&ramp, min, target), Relaxed) };
-                w.decel_at
-            };
-            // SAFETY: as above.
-            unsafe { (*n).decel_at.store(at, Relaxed) };
+        if let Some(n) = next {
+            // SAFETY: a published slot after the running one; an atomic field.
+            let exit = unsafe { (*n).exit_q.load(Relaxed) };
+            let key = (n as usize, self.walk.idx, self.hold, self.succ_next, exit);
+            if key != self.primed {
+                self.primed = key;
+                self.prime(n, exit);
+            }
         }
         // Only over the value this half left: if the step half entered the successor since
         // (and cleared it), the next pass primes the new one's.
