@@ -129,7 +129,9 @@ proptest! {
         for (x, y, z, f) in &moves {
             let line = format!("G1 X{x:.3} Y{y:.3} Z{z:.3} F{f:.0}");
             ok(&mut b, &line);
-            want = [x, y, z].map(|v| (format!("{v:.3}").parse::<f64>().unwrap() * 100.0).round() as i64);
+            // As the firmware (and Grbl) reads and rounds it: the nearest f32 to the decimal,
+            // times steps/mm in f32 (X4.595 is 459.49997 steps there: 459, where f64 gives 460).
+            want = [x, y, z].map(|v| (format!("{v:.3}").parse::<f32>().unwrap() * 100.0f32).round() as i64);
         }
         wait_idle(&mut b, 10.0);
         let n = net(&steps(&b));
