@@ -14,7 +14,7 @@
 //! - [`encoder`]: encoder feedback — TIM3 count extension, speed, step-loss detection.
 //! - [`steptime`]: the step interrupt's self-measurement (DWT cycles), reported by `$I`.
 //!
-//! The modules are also re-exported at the crate root (`ddastep::engine`, …).
+//! Nothing is re-exported at the crate root: a path names its layer (`ddastep::motion::engine`).
 #![no_std]
 #![cfg_attr(not(test), deny(warnings))]
 
@@ -27,9 +27,6 @@ pub mod planning;
 pub mod steptime;
 pub mod watchdog;
 
-pub use grbl::{controller, coords, gcode, jog, limits, protocol, report, settings, shell, spindle, store};
-pub use motion::{burst, control, engine, interp, prepared, queue, ramp, ring, sim, timing, walk};
-pub use planning::{arc, feeder, inverse_time, lookahead, planner};
 
 /// Timer clock of TIM2 (APB1 at 36 MHz, doubled for timers): one timer tick is 1/72 µs.
 pub const TIMER_HZ: u32 = 72_000_000;

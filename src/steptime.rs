@@ -98,7 +98,7 @@ impl StepTime {
     }
 
     /// DMA burst mode: DMA may have read an entry before the fill wrote it (the fill interrupt
-    /// only; `ddastep::burst::Burst::fill_watched`): entries may have played stale.
+    /// only; `ddastep::motion::burst::Burst::fill_watched`): entries may have played stale.
     pub fn note_late(&self) {
         self.late.store(self.late.load(Relaxed).wrapping_add(1), Relaxed);
     }

@@ -1,11 +1,11 @@
 //! Arcs (G2/G3) against their invariants: random arcs in the three planes, IJK and R forms,
 //! through the real interpreter and planner; and Grbl's error numbers for bad arcs.
 
-use ddastep::arc::{plane_axes, Arc, Segments};
-use ddastep::gcode::{parse, Modal};
-use ddastep::planner::{to_steps, Limits, Planner};
-use ddastep::protocol::Error;
-use ddastep::settings::Settings;
+use ddastep::planning::arc::{plane_axes, Arc, Segments};
+use ddastep::grbl::gcode::{parse, Modal};
+use ddastep::planning::planner::{to_steps, Limits, Planner};
+use ddastep::grbl::protocol::Error;
+use ddastep::grbl::settings::Settings;
 use proptest::prelude::*;
 use std::f64::consts::PI;
 

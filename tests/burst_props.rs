@@ -5,10 +5,10 @@
 mod common;
 
 use common::Rig;
-use ddastep::burst::{Layout, HALF_MAX};
-use ddastep::engine::IDLE_TICKS;
-use ddastep::queue::{Move, State};
-use ddastep::settings::Settings;
+use ddastep::motion::burst::{Layout, HALF_MAX};
+use ddastep::motion::engine::IDLE_TICKS;
+use ddastep::motion::queue::{Move, State};
+use ddastep::grbl::settings::Settings;
 use proptest::prelude::*;
 
 /// One update event as the pins see it: time (ticks) and the BSRR word.
@@ -33,7 +33,7 @@ impl Driver {
     }
 
     /// Before a real tick.
-    fn between(&mut self, shared: &ddastep::queue::Shared<3>, feeder: &mut ddastep::queue::Feeder<'static, 3>) {
+    fn between(&mut self, shared: &ddastep::motion::queue::Shared<3>, feeder: &mut ddastep::motion::queue::Feeder<'static, 3>) {
         if let Some((on, len)) = self.hold {
             let held = self.ticks >= on && self.held_ticks < len;
             if held {
@@ -52,7 +52,7 @@ impl Driver {
         self.preload = period;
     }
 
-    fn done(&self, shared: &ddastep::queue::Shared<3>, feeder: &ddastep::queue::Feeder<'static, 3>) -> bool {
+    fn done(&self, shared: &ddastep::motion::queue::Shared<3>, feeder: &ddastep::motion::queue::Feeder<'static, 3>) -> bool {
         feeder.pending() == 0
             && shared.state() == State::Idle
             && self.hold.is_none_or(|(_, len)| self.held_ticks >= len)
@@ -210,6 +210,6 @@ proptest! {
         prop_assert!(l.latency_ticks() <= ddastep::TICKS_PER_MS);
         prop_assert!((2..=HALF_MAX).contains(&l.half));
         prop_assert!(l.max_tick / 2 > fall);
-        prop_assert!(l.max_tick <= ddastep::engine::MAX_TICK);
+        prop_assert!(l.max_tick <= ddastep::motion::engine::MAX_TICK);
     }
 }

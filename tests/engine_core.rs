@@ -4,9 +4,9 @@
 mod common;
 
 use common::Rig;
-use ddastep::queue::{Move, MoveError, State};
-use ddastep::ramp::{hz_of_period, RampConfig, RampError, RampTable, Shape};
-use ddastep::timing::Timing;
+use ddastep::motion::queue::{Move, MoveError, State};
+use ddastep::motion::ramp::{hz_of_period, RampConfig, RampError, RampTable, Shape};
+use ddastep::motion::timing::Timing;
 use ddastep::TIMER_HZ;
 
 #[test]
@@ -159,12 +159,12 @@ fn bad_configuration_is_a_typed_error() {
     assert_eq!(t.build(cfg(1, 2_000_000, 10)), Err(RampError::RateOutOfRange));
     match t.build(cfg(100, 100_000, 1000)) {
         Err(RampError::TooLong { reachable_vmax }) => {
-            assert!(reachable_vmax < 100 + 1000 * ddastep::ramp::RAMP_LEN as u32 / 1000 + 1);
+            assert!(reachable_vmax < 100 + 1000 * ddastep::motion::ramp::RAMP_LEN as u32 / 1000 + 1);
             t.build(cfg(100, reachable_vmax, 1000)).expect("reachable vmax fits");
         }
         other => panic!("{other:?}"),
     }
-    assert!(t.len() <= ddastep::ramp::RAMP_LEN);
+    assert!(t.len() <= ddastep::motion::ramp::RAMP_LEN);
     assert_eq!(Move::<3>::new([0, 0, 0], 100), Err(MoveError::ZeroLength));
     assert_eq!(Move::<2>::new([1 << 31, 0], 100), Err(MoveError::TooManySteps));
     assert_eq!(Move::<2>::new([i64::MIN, 0], 100), Err(MoveError::TooManySteps));

@@ -4,8 +4,8 @@
 mod common;
 
 use common::Rig;
-use ddastep::queue::{Move, State};
-use ddastep::ramp::{RampConfig, RampTable, Shape};
+use ddastep::motion::queue::{Move, State};
+use ddastep::motion::ramp::{RampConfig, RampTable, Shape};
 use ddastep::TIMER_HZ;
 use proptest::prelude::*;
 
@@ -72,7 +72,7 @@ proptest! {
         prop_assert_eq!(pos.map(|p| p as i64), steps);
 
         // Slaves within ½ step of the ideal line at every master step.
-        let master = ddastep::interp::master_axis(&counts.iter().map(|&c| c as u32).collect::<Vec<_>>());
+        let master = ddastep::motion::interp::master_axis(&counts.iter().map(|&c| c as u32).collect::<Vec<_>>());
         let mut k = 0u64;
         let mut done = [0u64; 7];
         let mut by_time = rig.steps.iter().peekable();
@@ -134,7 +134,7 @@ proptest! {
                                                held_for in 0u64..5_000, shape in any::<bool>()) {
         let shape = if shape { Shape::SCurve } else { Shape::Trapezoid };
         let cfg = RampConfig { v0: 800, vmax: 120_000, accel: 800_000, shape };
-        let mut rig = Rig::<7>::new(cfg, ddastep::timing::Timing::DEFAULT);
+        let mut rig = Rig::<7>::new(cfg, ddastep::motion::timing::Timing::DEFAULT);
         let steps = steps.map(|s| s / 20); // a few seconds at most
         prop_assume!(steps.iter().any(|&s| s != 0));
         rig.push(steps, 100_000);
@@ -159,7 +159,7 @@ proptest! {
     #[test]
     fn direction_setup_holds_for_random_move_sequences(moves in prop::collection::vec(
             prop::array::uniform3(-300i64..300), 1..8), setup in 1u32..2000, pulse in 7u32..400) {
-        let timing = ddastep::timing::Timing::new(pulse, setup, 144);
+        let timing = ddastep::motion::timing::Timing::new(pulse, setup, 144);
         let cfg = RampConfig { v0: 1000, vmax: 200_000, accel: 1_000_000, shape: Shape::Trapezoid };
         let mut rig = Rig::<3>::new(cfg, timing);
         let mut want = [0i64; 3];
@@ -191,7 +191,7 @@ proptest! {
     fn chains_stay_exact_when_the_ramp_half_lags(moves in prop::collection::vec(
             prop::array::uniform3(-3000i64..3000), 1..12), lag in 0u32..60, cruise in 20_000u32..200_000,
             hold_at in prop::option::of(100u64..5_000)) {
-        use ddastep::settings::Settings;
+        use ddastep::grbl::settings::Settings;
         let mut s = Settings::BENCH;
         s.accel = [200_000.0; ddastep::MAX_AXES];
         let mut rig = Rig::<3>::with_settings(&s);
@@ -241,7 +241,7 @@ proptest! {
     fn dual_edge_toggles_once_per_step_and_keeps_the_pulse_apart(moves in prop::collection::vec(
             prop::array::uniform3(-3000i64..3000), 1..6), setup in 1u32..2000, pulse in 15u32..800,
             cruise in 1_000u32..400_000) {
-        use ddastep::timing::{Timing, STORE_JITTER_TICKS};
+        use ddastep::motion::timing::{Timing, STORE_JITTER_TICKS};
         let timing = Timing::new(pulse, setup, 144).dual_edge(0);
         let cfg = RampConfig { v0: 1000, vmax: 400_000, accel: 20_000_000, shape: Shape::Trapezoid };
         let mut rig = Rig::<3>::new(cfg, timing);
@@ -278,7 +278,7 @@ proptest! {
         let mut t: RampTable = RampTable::new();
         match t.build(RampConfig { v0, vmax, accel, shape }) {
             Ok(()) => {
-                prop_assert!(!t.is_empty() && t.len() <= ddastep::ramp::RAMP_LEN);
+                prop_assert!(!t.is_empty() && t.len() <= ddastep::motion::ramp::RAMP_LEN);
                 prop_assert!(t.periods().windows(2).all(|w| w[1] <= w[0]));
             }
             Err(_) => prop_assert!(t.is_empty()),
@@ -300,7 +300,7 @@ proptest! {
             axes in 1usize..=7, cruise in 1_000u32..400_000, pulse_us in 0.2f32..5.0, dual: bool,
             hold in prop::option::of((0u64..6_000, 1u64..3_000)),
             ovr in prop::option::of((0u64..6_000, 10u8..=200)), lag in 0u32..4) {
-        let mut s = ddastep::settings::Settings::BENCH;
+        let mut s = ddastep::grbl::settings::Settings::BENCH;
         s.accel = [300_000.0; ddastep::MAX_AXES];
         s.pulse_us = pulse_us;
         s.dual_edge = dual;

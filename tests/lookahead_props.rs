@@ -5,9 +5,9 @@
 mod common;
 
 use common::Rig;
-use ddastep::planner::{Limits, Planner};
-use ddastep::queue::State;
-use ddastep::settings::Settings;
+use ddastep::planning::planner::{Limits, Planner};
+use ddastep::motion::queue::State;
+use ddastep::grbl::settings::Settings;
 use proptest::prelude::*;
 
 const N: usize = 7;
@@ -99,7 +99,7 @@ fn plan(c: &Chain, s: &Settings, lim: &Limits<N>) -> Vec<Seen> {
         let len = d.iter().map(|x| x * x).sum::<f64>().sqrt();
         let master = steps.iter().map(|x| x.unsigned_abs()).max().unwrap() as f64;
         // The nominal path speed: the cruise rate over the master's share of the path.
-        let nominal = ddastep::ramp::hz_of_period(pl.mv.cruise()) as f64 / (master / len);
+        let nominal = ddastep::motion::ramp::hz_of_period(pl.mv.cruise()) as f64 / (master / len);
         out.push(Seen { steps, unit: core::array::from_fn(|i| d[i] / len), share: master / len, nominal });
         let _ = &pl;
     }

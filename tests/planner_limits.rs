@@ -1,9 +1,9 @@
 //! The planner never asks the step interrupt for more than it sustains: the ceiling falls
 //! with every slave axis a move adds (`Timing::max_rate_for`).
 
-use ddastep::planner::{Limits, Planner};
-use ddastep::ramp::hz_of_period;
-use ddastep::settings::Settings;
+use ddastep::planning::planner::{Limits, Planner};
+use ddastep::motion::ramp::hz_of_period;
+use ddastep::grbl::settings::Settings;
 
 #[test]
 fn cruise_is_clamped_to_the_ceiling_for_the_moves_axis_count() {
@@ -31,7 +31,7 @@ fn cruise_is_clamped_to_the_ceiling_for_the_moves_axis_count() {
 /// move's cap. Interrupt mode has no junction limit of its own (the moves' caps bind).
 #[test]
 fn dma_junctions_are_clamped_to_the_junction_rate() {
-    use ddastep::timing::{DMA_JUNCTION_BASE_TICKS, DMA_JUNCTION_PER_SLAVE_TICKS};
+    use ddastep::motion::timing::{DMA_JUNCTION_BASE_TICKS, DMA_JUNCTION_PER_SLAVE_TICKS};
     for dma in [true, false] {
         let mut s = Settings { dma_burst: dma, ..Settings::BENCH };
         s.set(0, 0.5, 7).unwrap();

@@ -4,7 +4,7 @@
 #[path = "protocol_rig/mod.rs"]
 mod protocol_rig;
 
-use ddastep::settings::Settings;
+use ddastep::grbl::settings::Settings;
 use protocol_rig::Bench;
 
 /// F (mm/min) that runs X at `x_hz` on a 50:30:20 move at 100 steps/mm: the path is
@@ -64,7 +64,7 @@ fn paper_532_at_200_khz() {
     // 1 µs pulses (as bench/demo/fast_532.gcode): the period floor is a low time of 1 µs
     // after the latest falling edge (twice the pulse plus the store latency and the step
     // handler's cost stay below it).
-    let limit = 72_000_000 / (ddastep::timing::HANDLER_FALL_TICKS + 72);
+    let limit = 72_000_000 / (ddastep::motion::timing::HANDLER_FALL_TICKS + 72);
     assert!(limit >= 200_000, "{limit}");
     assert!(info.contains(&format!("[MSG:max step rate {limit} Hz]")), "{info}");
     // The table is in path units (100 steps/mm): up to √3 × 2500 mm/s, at twice the
@@ -90,7 +90,7 @@ fn paper_532_at_200_khz() {
 fn default_pulse_width_caps_the_master_at_its_pulse_limit() {
     // 3 µs pulses need 6 µs plus the store latency: asking for 200 kHz runs at the
     // documented limit (142.9 kHz).
-    let limit = 72_000_000 / (2 * 216 + ddastep::timing::STORE_LATENCY_TICKS);
+    let limit = 72_000_000 / (2 * 216 + ddastep::motion::timing::STORE_LATENCY_TICKS);
     let mut b = bench();
     for l in ["$110=150000", "$111=150000", "$112=150000", "$120=100000", "$121=100000", "$122=100000"] {
         b.line(l);

@@ -4,7 +4,7 @@
 #[path = "protocol_rig/mod.rs"]
 mod protocol_rig;
 
-use ddastep::settings::Settings;
+use ddastep::grbl::settings::Settings;
 use proptest::prelude::*;
 use protocol_rig::Bench;
 

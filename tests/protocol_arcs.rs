@@ -3,8 +3,8 @@
 mod protocol_rig;
 
 use ddastep::board::pin_map;
-use ddastep::inverse_time;
-use ddastep::settings::Settings;
+use ddastep::planning::inverse_time;
+use ddastep::grbl::settings::Settings;
 use ddastep::TIMER_HZ;
 use proptest::prelude::*;
 use protocol_rig::{replies, Bench};
@@ -124,7 +124,7 @@ fn g93_duration(settings: Settings, line: &str) -> (u64, u64, Bench<3>) {
     b.send(line);
     b.send("\n");
     let mut ms = 0;
-    while b.ctl.busy() || b.ctl.pending_moves() > 0 || b.shared.state() != ddastep::queue::State::Idle {
+    while b.ctl.busy() || b.ctl.pending_moves() > 0 || b.shared.state() != ddastep::motion::queue::State::Idle {
         run_recording(&mut b, 10, &mut steps);
         ms += 10;
         assert!(ms < 200_000);
@@ -137,7 +137,7 @@ fn g93_duration(settings: Settings, line: &str) -> (u64, u64, Bench<3>) {
 /// The ramp the engine walks for a move of `steps` (per axis) on the settings `s` and the
 /// table `cfg`, from its geometry: the master's steps per mm of path and the path acceleration
 /// every moving axis allows (`min $120+i / |unitᵢ|`), as Grbl limits a move.
-fn master_ramp(s: &Settings, steps: [u32; 3], cfg: &ddastep::ramp::RampConfig) -> inverse_time::MasterRamp {
+fn master_ramp(s: &Settings, steps: [u32; 3], cfg: &ddastep::motion::ramp::RampConfig) -> inverse_time::MasterRamp {
     let d: Vec<f64> = (0..3).map(|i| steps[i] as f64 / s.steps_per_mm[i] as f64).collect();
     let len = d.iter().map(|v| v * v).sum::<f64>().sqrt();
     let accel = (0..3).filter(|&i| steps[i] != 0).map(|i| s.accel[i] as f64 * len / d[i]).fold(f64::MAX, f64::min);

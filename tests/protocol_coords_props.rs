@@ -5,8 +5,8 @@
 
 mod protocol_rig;
 
-use ddastep::settings::Settings;
-use ddastep::store::{Stored, Text, IMAGE_LEN, PAGE_LEN};
+use ddastep::grbl::settings::Settings;
+use ddastep::grbl::store::{Stored, Text, IMAGE_LEN, PAGE_LEN};
 use proptest::prelude::*;
 use protocol_rig::Bench;
 

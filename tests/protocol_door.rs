@@ -7,8 +7,8 @@
 
 mod protocol_rig;
 
-use ddastep::queue::State;
-use ddastep::settings::Settings;
+use ddastep::motion::queue::State;
+use ddastep::grbl::settings::Settings;
 use protocol_rig::Bench;
 
 fn state(b: &mut Bench<3>) -> String {

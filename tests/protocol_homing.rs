@@ -6,7 +6,7 @@
 
 mod protocol_rig;
 
-use ddastep::settings::Settings;
+use ddastep::grbl::settings::Settings;
 use proptest::prelude::*;
 use protocol_rig::Bench;
 

@@ -3,7 +3,7 @@
 
 mod protocol_rig;
 
-use ddastep::queue::State;
+use ddastep::motion::queue::State;
 use protocol_rig::Bench;
 
 #[test]
@@ -104,7 +104,7 @@ fn jog_cancel_when_idle_does_nothing() {
 #[test]
 fn queued_jogs_join_at_speed_and_a_cancel_decelerates_across_them() {
     // 200 mm/s² on every axis (100 steps/mm): X's master changes by 20 Hz per ms.
-    let mut s = ddastep::settings::Settings::BENCH;
+    let mut s = ddastep::grbl::settings::Settings::BENCH;
     s.accel = [200.0; ddastep::MAX_AXES];
     let mut b = Bench::<3>::new(s);
     b.take();

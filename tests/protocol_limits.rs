@@ -4,8 +4,8 @@
 
 mod protocol_rig;
 
-use ddastep::queue::State;
-use ddastep::settings::Settings;
+use ddastep::motion::queue::State;
+use ddastep::grbl::settings::Settings;
 use proptest::prelude::*;
 use protocol_rig::Bench;
 

@@ -2,8 +2,8 @@
 
 mod protocol_rig;
 
-use ddastep::queue::State;
-use ddastep::settings::Settings;
+use ddastep::motion::queue::State;
+use ddastep::grbl::settings::Settings;
 use protocol_rig::{replies, Bench};
 
 #[test]
@@ -169,7 +169,7 @@ fn settings_list_change_and_refuse_while_moving() {
     b.run_ms(2);
     assert!(b.actions.iter().any(|a| a.pulse_ticks == Some(144)), "{:?}", b.actions);
     // 2 µs: the low time after the latest falling edge binds the rate.
-    let limit = 72_000_000 / (ddastep::timing::HANDLER_FALL_TICKS + 144);
+    let limit = 72_000_000 / (ddastep::motion::timing::HANDLER_FALL_TICKS + 144);
     assert!(b.line("$I").contains(&format!("[MSG:max step rate {limit} Hz]")));
 }
 
@@ -192,7 +192,7 @@ fn build_info_names_us_and_the_rate_limit() {
     let mut b = Bench::<3>::with_defaults();
     b.take();
     // 3 µs pulses: the period floor is 2 × 216 ticks plus the store latency.
-    let limit = 72_000_000 / (2 * 216 + ddastep::timing::STORE_LATENCY_TICKS);
+    let limit = 72_000_000 / (2 * 216 + ddastep::motion::timing::STORE_LATENCY_TICKS);
     assert_eq!(
         b.line("$I"),
         format!(
@@ -209,7 +209,7 @@ fn build_info_names_us_and_the_rate_limit() {
     }
     b.run_ms(2);
     let info = b.line("$I");
-    let len = ddastep::ramp::RAMP_LEN as u64;
+    let len = ddastep::motion::ramp::RAMP_LEN as u64;
     let ramp = info.lines().find(|l| l.starts_with("[MSG:ramp ")).expect("ramp line");
     let nums: Vec<u64> = ramp["[MSG:ramp ".len()..]
         .split(|c: char| !c.is_ascii_digit())

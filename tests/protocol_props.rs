@@ -3,10 +3,10 @@
 
 mod protocol_rig;
 
-use ddastep::gcode::parse_number;
-use ddastep::protocol::Error;
-use ddastep::ramp::Shape;
-use ddastep::settings::{Settings, SETTINGS_LEN};
+use ddastep::grbl::gcode::parse_number;
+use ddastep::grbl::protocol::Error;
+use ddastep::motion::ramp::Shape;
+use ddastep::grbl::settings::{Settings, SETTINGS_LEN};
 use proptest::prelude::*;
 use protocol_rig::Bench;
 

@@ -1,8 +1,8 @@
 //! Settings: Grbl's `$N=` rules, the flash image, and the profile derived for the engine.
 
-use ddastep::protocol::Error;
-use ddastep::ramp::RampSlot;
-use ddastep::settings::{crc32, Change, Settings, RAMP_SHAPE, SETTINGS_LEN};
+use ddastep::grbl::protocol::Error;
+use ddastep::motion::ramp::RampSlot;
+use ddastep::grbl::settings::{crc32, Change, Settings, RAMP_SHAPE, SETTINGS_LEN};
 
 #[test]
 fn defaults_survive_flash_and_bad_images_fall_back() {
@@ -79,7 +79,7 @@ fn profile_is_in_path_units_at_twice_the_fastest_accel() {
     s.set(120, 1.0, 3).unwrap();
     s.set(120, 10_000.0, 3).unwrap();
     let t = s.timing();
-    let floor = 2 * 216 + ddastep::timing::STORE_LATENCY_TICKS;
+    let floor = 2 * 216 + ddastep::motion::timing::STORE_LATENCY_TICKS;
     assert_eq!((t.pulse_ticks, t.dir_setup_ticks, t.min_period_ticks), (216, 360, floor));
     let cfg = s.ramp_config(3, &t);
     // Rate = path speed × 100 steps/mm; top √(600² + 600² + 1000²) mm/s; 2 × 10 000 mm/s².
@@ -98,7 +98,7 @@ fn profile_is_in_path_units_at_twice_the_fastest_accel() {
     // Whatever the table's length: the built ramp fits in it and reaches its top there, and
     // it either lowers the top to what fits (said by `table_limited`) or keeps the top and
     // steepens the table (each move walks it at its own, smaller fraction).
-    let len = ddastep::ramp::RAMP_LEN as u32;
+    let len = ddastep::motion::ramp::RAMP_LEN as u32;
     assert!(g.ramp.len() as u32 <= len, "{}", g.ramp.len());
     if r.cfg.vmax < wanted.vmax {
         assert!(r.table_limited);
@@ -115,12 +115,12 @@ fn profile_is_in_path_units_at_twice_the_fastest_accel() {
     let r = Settings::BENCH.build_profile(3, &mut g);
     assert!(!r.table_limited);
     assert_eq!((r.cfg.vmax, g.ramp.len()), (103_923, 53));
-    assert_eq!(g.ramp.periods()[52], ddastep::ramp::period_of_hz(103_923));
+    assert_eq!(g.ramp.periods()[52], ddastep::motion::ramp::period_of_hz(103_923));
 }
 
 #[test]
 fn short_pulses_raise_the_rate_limit() {
-    use ddastep::timing::{
+    use ddastep::motion::timing::{
         HANDLER_BASE_TICKS as BASE, HANDLER_FALL_TICKS as FALL, HANDLER_GAP_TICKS as GAP, HANDLER_LONG_TICKS as LONG,
         HANDLER_PER_SLAVE_TICKS as SLAVE, HANDLER_TAIL_TICKS as TAIL, STORE_LATENCY_TICKS as LAT,
     };
@@ -157,8 +157,8 @@ fn short_pulses_raise_the_rate_limit() {
 
 #[test]
 fn dual_edge_is_a_pin_setting_with_its_own_rate_rule() {
-    use ddastep::settings::DUAL_EDGE;
-    use ddastep::timing::{DUAL_BASE_TICKS as BASE, DUAL_LONG_TICKS as LONG, HANDLER_PER_SLAVE_TICKS as SLAVE, STORE_JITTER_TICKS as JIT};
+    use ddastep::grbl::settings::DUAL_EDGE;
+    use ddastep::motion::timing::{DUAL_BASE_TICKS as BASE, DUAL_LONG_TICKS as LONG, HANDLER_PER_SLAVE_TICKS as SLAVE, STORE_JITTER_TICKS as JIT};
     let mut s = Settings::BENCH;
     assert_eq!(s.get(DUAL_EDGE, 3), Some((0.0, 0)));
     // Like `$2`: the engine's pin map changes, so the MCU restarts.
@@ -202,8 +202,8 @@ fn dual_edge_is_a_pin_setting_with_its_own_rate_rule() {
 
 #[test]
 fn dma_burst_is_a_restarting_flag_whose_cap_is_the_fill_cost() {
-    use ddastep::settings::DMA_BURST;
-    use ddastep::timing::{DMA_BASE_TICKS, DMA_DUAL_BASE_TICKS, DMA_DUAL_PER_SLAVE_TICKS, DMA_FLOOR_TICKS, DMA_LANE_TICKS, DMA_MARGIN_TICKS, DMA_PER_SLAVE_TICKS};
+    use ddastep::grbl::settings::DMA_BURST;
+    use ddastep::motion::timing::{DMA_BASE_TICKS, DMA_DUAL_BASE_TICKS, DMA_DUAL_PER_SLAVE_TICKS, DMA_FLOOR_TICKS, DMA_LANE_TICKS, DMA_MARGIN_TICKS, DMA_PER_SLAVE_TICKS};
     let mut s = Settings::BENCH;
     assert_eq!(s.get(DMA_BURST, 3), Some((0.0, 0)));
     // Like `$580`: the step output changes how it is built, so the MCU restarts.
@@ -235,6 +235,6 @@ fn dma_burst_is_a_restarting_flag_whose_cap_is_the_fill_cost() {
         }
     }
     // `$I` names the mode with its cap.
-    let r = ddastep::settings::Ramped::wanted(&s, 3);
+    let r = ddastep::grbl::settings::Ramped::wanted(&s, 3);
     assert!(r.dma && r.max_rate_hz == s.timing().max_rate_hz());
 }

@@ -2,14 +2,14 @@
 
 mod protocol_rig;
 
-use ddastep::queue::{Overrides, State};
-use ddastep::settings::Settings;
-use ddastep::spindle::{duty, PwmTiming};
+use ddastep::motion::queue::{Overrides, State};
+use ddastep::grbl::settings::Settings;
+use ddastep::grbl::spindle::{duty, PwmTiming};
 use protocol_rig::{replies, Bench};
 
 const ARR: u16 = 35_999; // $33 = 1000 Hz
 
-fn out(b: &Bench<3>) -> ddastep::spindle::SpindleOut {
+fn out(b: &Bench<3>) -> ddastep::grbl::spindle::SpindleOut {
     b.actions.last().expect("polled").spindle
 }
 

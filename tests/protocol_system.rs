@@ -3,7 +3,7 @@
 
 mod protocol_rig;
 
-use ddastep::settings::Settings;
+use ddastep::grbl::settings::Settings;
 use protocol_rig::Bench;
 
 const BANNER: &str = "\r\nGrbl 1.1h ['$' for help]\r\n";

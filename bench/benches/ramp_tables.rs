@@ -2,7 +2,7 @@
 
 use std::time::Instant;
 
-use ddastep::ramp::{RampConfig, RampTable, Shape};
+use ddastep::motion::ramp::{RampConfig, RampTable, Shape};
 
 fn main() {
     println!("ramp table: {} bytes of RAM ({} entries max)", RampTable::<1024>::size_bytes(), 1024);

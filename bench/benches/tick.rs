@@ -5,11 +5,11 @@
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use ddastep::board::pin_map;
-use ddastep::engine::Engine;
-use ddastep::queue::{Feeder, Move, Shared};
-use ddastep::ramp::{RampConfig, RampSlot, Shape};
-use ddastep::timing::Timing;
-use ddastep::ring::MoveRing;
+use ddastep::motion::engine::Engine;
+use ddastep::motion::queue::{Feeder, Move, Shared};
+use ddastep::motion::ramp::{RampConfig, RampSlot, Shape};
+use ddastep::motion::timing::Timing;
+use ddastep::motion::ring::MoveRing;
 
 /// Ticks through `n` long moves on `N` axes, measuring each tick.
 fn bench_axes<const N: usize>(c: &mut Criterion, name: &str) {
@@ -23,7 +23,7 @@ fn bench_axes<const N: usize>(c: &mut Criterion, name: &str) {
     }
     let q: &'static mut MoveRing<N> = Box::leak(Box::new(MoveRing::new()));
     let (prod, cons) = q.split();
-    let mut feeder = Feeder::new(prod, Box::leak(Box::new(ddastep::lookahead::Buffer::new())), shared, slot, pin_map::<N>(0, 0));
+    let mut feeder = Feeder::new(prod, Box::leak(Box::new(ddastep::planning::lookahead::Buffer::new())), shared, slot, pin_map::<N>(0, 0));
     let mut engine = Engine::new(shared, cons, slot, pin_map::<N>(0, 0));
     let steps: [i64; N] = core::array::from_fn(|i| 1_000_000_000 / (i as i64 + 2) * 2 - i as i64);
     feeder.push(Move::new(steps, 400_000).expect("move")).expect("room");

@@ -82,7 +82,7 @@ fn plan(cmd: &str) -> Option<Plan> {
             Skip("a benchmark: numbers only, a minute of the emulator")
         }
         "cargo build --release && arm-none-eabi-size target/thumbv7m-none-eabi/release/ddastep" => {
-            Skip("run from the repository root by tests/firmware_size.rs (the same size check)")
+            Skip("run from the repository root by bench/tests/firmware_size.rs (the same size check)")
         }
         "cargo sim -- --point 7@200000" => Run(&[]),
         "cargo sim -- --floor" => Run(&[]),

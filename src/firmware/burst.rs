@@ -1,5 +1,5 @@
 //! DMA burst step output (`$581=1`): TIM2 paces every edge and DMA stores the words the engine
-//! buffered (`ddastep::burst`); no interrupt runs per edge.
+//! buffered (`ddastep::motion::burst`); no interrupt runs per edge.
 //!
 //! TIM2's update event requests DMA1 channel 2, which stores the next step word into GPIOB's
 //! BSRR; its compare 3 event, one tick later, requests channel 1, which stores the next period
@@ -19,7 +19,7 @@ use core::cell::UnsafeCell;
 use core::mem::MaybeUninit;
 use core::sync::atomic::{AtomicU32, Ordering::Relaxed};
 
-use ddastep::burst::{Burst, Layout, HALF_MAX};
+use ddastep::motion::burst::{Burst, Layout, HALF_MAX};
 use ddastep::steptime::STEP_TIME;
 use stm32f1xx_hal::pac::{self, interrupt};
 
@@ -66,7 +66,7 @@ pub fn active() -> bool {
 /// The compare value of the falling edge for a pulse of `ticks` in DMA mode, if the buffers'
 /// layout holds it (else the layout must change: a restart).
 pub fn fall_ticks(ticks: u32) -> Option<u32> {
-    let fall = ticks + ddastep::timing::DMA_MARGIN_TICKS;
+    let fall = ticks + ddastep::motion::timing::DMA_MARGIN_TICKS;
     (fall < MAX_TICK.load(Relaxed) / 2).then_some(fall)
 }
 
@@ -118,7 +118,7 @@ fn DMA1_CHANNEL1() {
             };
             // Where DMA's word channel (the first to read an entry) is in this half (0 while it
             // plays the other one).
-            let played = || ddastep::burst::dma_played(dma.ch2().ndtr().read().bits(), 2 * half, at, half);
+            let played = || ddastep::motion::burst::dma_played(dma.ch2().ndtr().read().bits(), 2 * half, at, half);
             // Late when DMA is in the half already as the fill starts, catches up with it during
             // the fill, or has played all of it when the fill ends (its own flag set again).
             let late = played() > 0;

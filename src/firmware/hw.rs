@@ -3,10 +3,10 @@
 
 use cortex_m::peripheral::syst::SystClkSource;
 use ddastep::board;
-use ddastep::engine::IDLE_TICKS;
-use ddastep::settings::Settings;
-use ddastep::spindle::{PwmTiming, SpindleOut};
-use ddastep::store::{Stored, IMAGE_LEN, PAGE_LEN};
+use ddastep::motion::engine::IDLE_TICKS;
+use ddastep::grbl::settings::Settings;
+use ddastep::grbl::spindle::{PwmTiming, SpindleOut};
+use ddastep::grbl::store::{Stored, IMAGE_LEN, PAGE_LEN};
 use stm32f1xx_hal::flash;
 use stm32f1xx_hal::pac;
 use stm32f1xx_hal::prelude::*;
@@ -53,7 +53,7 @@ pub struct Board {
     pub flash: flash::Parts,
 }
 
-/// The persistent image lives in the last two 1 KiB flash pages, A/B (`ddastep::store`):
+/// The persistent image lives in the last two 1 KiB flash pages, A/B (`ddastep::grbl::store`):
 /// memory.x keeps the program out of them.
 const STORE_OFFSETS: [u32; 2] = [62 * 1024, 63 * 1024];
 
@@ -109,7 +109,7 @@ pub fn set_pulse_ticks(ticks: u32) -> bool {
         if dier & SR_CC1IF == 0 {
             return true;
         }
-        ticks + ddastep::timing::STORE_LATENCY_TICKS
+        ticks + ddastep::motion::timing::STORE_LATENCY_TICKS
     };
     tim2().ccr1().write(|w| unsafe { w.bits(ccr.min(0xFFFF)) });
     true
@@ -127,7 +127,7 @@ pub fn dma1() -> &'static pac::dma1::RegisterBlock {
     unsafe { &*pac::DMA1::ptr() }
 }
 
-/// DMA burst mode (`ddastep::burst`): TIM2 without interrupts, its update event storing
+/// DMA burst mode (`ddastep::motion::burst`): TIM2 without interrupts, its update event storing
 /// `words[k]` into GPIOB's BSRR (channel 2), its compare 3 event storing `periods[k]` into ARR
 /// (channel 1, with the fill interrupt at each half), and with full pulses its compare 1
 /// event, `fall` ticks after the update, storing `*off` into BSRR (channel 5). `n` entries,
@@ -316,7 +316,7 @@ fn setup_tim2(rcc: &mut stm32f1xx_hal::rcc::Rcc) {
     t.arr().write(|w| unsafe { w.bits(IDLE_TICKS - 1) });
     // Compare 1 "frozen" (no pin), CCR1 preloaded so a new pulse width starts at an update.
     t.ccmr1_output().write(|w| unsafe { w.bits(1 << 3) });
-    t.ccr1().write(|w| unsafe { w.bits(ddastep::timing::Timing::DEFAULT.pulse_ticks + ddastep::timing::STORE_LATENCY_TICKS) });
+    t.ccr1().write(|w| unsafe { w.bits(ddastep::motion::timing::Timing::DEFAULT.pulse_ticks + ddastep::motion::timing::STORE_LATENCY_TICKS) });
     t.egr().write(|w| w.ug().set_bit());
     t.sr().write(|w| unsafe { w.bits(0) });
     t.dier().write(|w| unsafe { w.bits(SR_UIF | SR_CC1IF) });

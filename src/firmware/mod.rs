@@ -17,13 +17,13 @@ mod app {
     use core::sync::atomic::{AtomicBool, AtomicU32, Ordering::Relaxed};
 
     use ddastep::board;
-    use ddastep::controller::Controller;
-    use ddastep::engine::Engine;
-    use ddastep::shell::{dispatch, idle_step, Requests};
-    use ddastep::queue::{Feeder, Shared};
-    use ddastep::lookahead::Buffer;
-    use ddastep::ring::MoveRing;
-    use ddastep::ramp::RampSlot;
+    use ddastep::grbl::controller::Controller;
+    use ddastep::motion::engine::Engine;
+    use ddastep::grbl::shell::{dispatch, idle_step, Requests};
+    use ddastep::motion::queue::{Feeder, Shared};
+    use ddastep::planning::lookahead::Buffer;
+    use ddastep::motion::ring::MoveRing;
+    use ddastep::motion::ramp::RampSlot;
     use ddastep::steptime::STEP_TIME;
     use heapless::spsc::{Consumer, Producer, Queue};
     use stm32f1xx_hal::pac;
@@ -117,9 +117,9 @@ mod app {
         if settings.dma_burst {
             // DMA burst output (`$581`, fixed until the next boot: a change restarts).
             let dual = settings.dual_edge;
-            let fall = if dual { 0 } else { settings.timing().pulse_ticks + ddastep::timing::DMA_MARGIN_TICKS };
-            let layout = ddastep::burst::Layout::for_pulse(fall);
-            let engine = ddastep::burst::Burst::new(engine, &SHARED, layout.max_tick);
+            let fall = if dual { 0 } else { settings.timing().pulse_ticks + ddastep::motion::timing::DMA_MARGIN_TICKS };
+            let layout = ddastep::motion::burst::Layout::for_pulse(fall);
+            let engine = ddastep::motion::burst::Burst::new(engine, &SHARED, layout.max_tick);
             burst::install(engine, layout, fall, dual, &mut core.NVIC);
         } else {
             step::install(engine, &mut core.NVIC);
@@ -209,7 +209,7 @@ mod app {
         let rx_out = cx.local.rx_out;
         // Spindle outputs last written: peripheral stores only on a change (each APB store can
         // stall the step interrupt's first register access).
-        let mut spindle = ddastep::spindle::SpindleOut::default();
+        let mut spindle = ddastep::grbl::spindle::SpindleOut::default();
         ctl.welcome(tx_in);
         let mut life = ddastep::watchdog::Liveness::new(MILLIS.load(Relaxed), STEP_TIME.entries());
         let mut hard_reported = false;
@@ -241,7 +241,7 @@ mod app {
             ctl.encoder(counts, window, tx_in);
             let act = idle_step(ctl, rx_out, tx_in, now, &REQUESTS);
             // After the poll: a homing pass it just queued is watched before its move starts.
-            limits::arm(ctl.settings().hard_limits, invert, ddastep::limits::active_pins(idr, invert), ctl.homing_watch());
+            limits::arm(ctl.settings().hard_limits, invert, ddastep::grbl::limits::active_pins(idr, invert), ctl.homing_watch());
             hw::ENABLE_OFF_HIGH.store(!ctl.settings().enable_invert, Relaxed);
             hw::set_enable(act.enable_pin_high);
             let mut restart = act.restart;

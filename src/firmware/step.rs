@@ -11,7 +11,7 @@
 use core::cell::UnsafeCell;
 use core::mem::MaybeUninit;
 
-use ddastep::engine::{Engine, Ramper, Stepper};
+use ddastep::motion::engine::{Engine, Ramper, Stepper};
 use ddastep::steptime::STEP_TIME;
 use stm32f1xx_hal::pac::{self, interrupt};
 

@@ -1,7 +1,7 @@
 //! The Grbl 1.1 front end: line bytes in, replies out, moves into the queue.
 //!
 //! Who uses it: the firmware's serial task. The RX interrupt sorts bytes with
-//! [`crate::protocol::realtime`]: `!`/`~` go straight to `Shared::set_hold`, `?` to
+//! [`crate::grbl::protocol::realtime`]: `!`/`~` go straight to `Shared::set_hold`, `?` to
 //! [`Controller::status_request`], 0x85 to [`Controller::jog_cancel`], Ctrl-X to
 //! [`Controller::soft_reset`] (the shell also empties its RX ring), the rest into an RX ring of
 //! at least 128 bytes. The task feeds that ring to [`Controller::byte`] while it returns
@@ -27,18 +27,18 @@ mod status;
 mod system;
 mod tool;
 
-use crate::arc::Segments;
-use crate::coords::Offsets;
-use crate::gcode::{self, Modal, Stop};
-use crate::inverse_time;
-use crate::planner::{Limits, Planned, Planner};
-use crate::protocol::{put_error, put_ok, Error, LineBuf, LineEvent, Out, LINE_LEN, REPLY_ROOM, RX_BUFFER_LEN};
-use crate::queue::{Feeder, Overrides, Shared, State};
-use crate::ramp::{RampConfig, RampSlot};
-use crate::report;
-use crate::settings::{Ramped, Settings};
-use crate::spindle::{Power, PwmTiming, SpindleDir, SpindleOut};
-use crate::store::{Stored, IMAGE_LEN, STARTUP_LINES};
+use crate::planning::arc::Segments;
+use crate::grbl::coords::Offsets;
+use crate::grbl::gcode::{self, Modal, Stop};
+use crate::planning::inverse_time;
+use crate::planning::planner::{Limits, Planned, Planner};
+use crate::grbl::protocol::{put_error, put_ok, Error, LineBuf, LineEvent, Out, LINE_LEN, REPLY_ROOM, RX_BUFFER_LEN};
+use crate::motion::queue::{Feeder, Overrides, Shared, State};
+use crate::motion::ramp::{RampConfig, RampSlot};
+use crate::grbl::report;
+use crate::grbl::settings::{Ramped, Settings};
+use crate::grbl::spindle::{Power, PwmTiming, SpindleDir, SpindleOut};
+use crate::grbl::store::{Stored, IMAGE_LEN, STARTUP_LINES};
 use soft_limits::SoftLimit;
 
 /// Time from enabling the drivers to the first step, in poll milliseconds (2 ≥ 1 ms real).
@@ -403,7 +403,7 @@ impl<'a, const N: usize> Controller<'a, N> {
     /// The limit inputs as the shell read them (GPIOA's input register), for `Pn:` in status
     /// reports; `$5` applies here.
     pub fn set_limit_inputs(&mut self, gpioa_idr: u32) {
-        self.limit_pins = crate::limits::active_pins(gpioa_idr, self.settings.limit_invert);
+        self.limit_pins = crate::grbl::limits::active_pins(gpioa_idr, self.settings.limit_invert);
     }
 
     /// The start-up banner (also after a soft reset).
@@ -644,7 +644,7 @@ impl<'a, const N: usize> Controller<'a, N> {
             return false;
         }
         self.feed_ring[self.pushed as usize % FEED_RING] = pl.mm_per_step;
-        let cruise_hz = crate::ramp::hz_of_period(pl.mv.cruise());
+        let cruise_hz = crate::motion::ramp::hz_of_period(pl.mv.cruise());
         self.power_ring[self.pushed as usize % FEED_RING] = Power { cruise_hz, ..power };
         self.pushed = self.pushed.wrapping_add(1);
         self.idle_since = None;

@@ -2,7 +2,7 @@
 //! length offset (volatile, cleared by a reset as in Grbl 1.1).
 //!
 //! Who uses it: the G-code interpreter (targets, G10, G92, G28/G30, G43.1), reports (`$#`,
-//! `WCO:`) and the persistent store (`crate::store`).
+//! `WCO:`) and the persistent store (`crate::grbl::store`).
 //!
 //! Everything is in machine millimetres. Grbl's relation holds on every axis:
 //! `WPos = MPos − WCS[selected] − G92 − TLO` (TLO on Z only), and `WCO` is the sum of the three.
@@ -56,7 +56,7 @@ impl Coords {
     pub fn to_bytes(&self) -> [u8; COORDS_LEN] {
         let mut b = [0u8; COORDS_LEN];
         for (w, v) in b.chunks_exact_mut(4).zip(self.slots.iter().flatten()) {
-            crate::settings::put4(w, 0, v.to_le_bytes());
+            crate::grbl::settings::put4(w, 0, v.to_le_bytes());
         }
         b
     }

@@ -1,6 +1,6 @@
 //! G-code: numbers, blocks and the modal state, for Grbl 1.1's lines, arcs, offsets and feed modes.
 //!
-//! Who uses it: the controller, on each line from [`crate::protocol::LineBuf`] (upper case, no
+//! Who uses it: the controller, on each line from [`crate::grbl::protocol::LineBuf`] (upper case, no
 //! whitespace, no comments).
 //!
 //! A block is checked in full before anything happens (Grbl's rule): [`parse`] reads the words
@@ -9,11 +9,11 @@
 //! Numbers are read exactly: up to 15 significant digits as an integer, then the nearest `f32`
 //! to the decimal (as `str::parse` gives; [`decimal_f32`]).
 
-use crate::arc::{Arc, Center};
-use crate::coords::{Offsets, G28};
+use crate::planning::arc::{Arc, Center};
+use crate::grbl::coords::{Offsets, G28};
 use crate::num::{round_u32, u32_of};
-use crate::protocol::Error;
-use crate::spindle::{SpindleDir, FLOOD, MIST};
+use crate::grbl::protocol::Error;
+use crate::grbl::spindle::{SpindleDir, FLOOD, MIST};
 use crate::AXIS_NAMES;
 
 /// Largest axis target accepted, mm (beyond it: `error:33`).
@@ -643,11 +643,11 @@ impl Modal {
         }
         if let Some(on) = b.tool_length {
             // G43.1 takes exactly the tool length axis.
-            let only_z = words.iter().enumerate().all(|(i, w)| w.is_some() == (i == crate::coords::TLO_AXIS));
+            let only_z = words.iter().enumerate().all(|(i, w)| w.is_some() == (i == crate::grbl::coords::TLO_AXIS));
             if on && !only_z {
                 return Err(Error::G43DynamicAxisError);
             }
-            fx.tlo = Some(if on { words.get(crate::coords::TLO_AXIS).copied().flatten().unwrap_or(0.0) } else { 0.0 });
+            fx.tlo = Some(if on { words.get(crate::grbl::coords::TLO_AXIS).copied().flatten().unwrap_or(0.0) } else { 0.0 });
         }
         match nm {
             Some(NonModal::SetCoordData) => fx.coord_write = Some(set_coord_data(b, &words, pos, off, m.coord)?),
@@ -756,7 +756,7 @@ fn arc<const N: usize>(b: &Block<N>, m: &Modal, pos: &[f32; N], target: [f32; N]
     if !b.has_axes() {
         return Err(Error::NoAxisWords);
     }
-    let (p, q) = crate::arc::plane_axes(m.plane);
+    let (p, q) = crate::planning::arc::plane_axes(m.plane);
     if b.axes.get(p).copied().flatten().is_none() && b.axes.get(q).copied().flatten().is_none() {
         return Err(Error::NoAxisWordsInPlane);
     }

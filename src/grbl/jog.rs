@@ -6,9 +6,9 @@
 //! planned like any move, so queued jogs run through the same path as G-code motion; 0x85 (or
 //! `!` while jogging) cancels them (see the controller).
 
-use crate::coords::Offsets;
-use crate::gcode::{group, parse, Block, Modal, Motion, NonModal};
-use crate::protocol::Error;
+use crate::grbl::coords::Offsets;
+use crate::grbl::gcode::{group, parse, Block, Modal, Motion, NonModal};
+use crate::grbl::protocol::Error;
 
 /// A checked jog: machine target (mm) and feed (mm/min).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -46,7 +46,7 @@ pub fn plan<const N: usize>(
     }
     // G1 at the jog's own feed; the modal state itself is not kept.
     let jog_modal = Modal { motion: Motion::Linear, feed: 0.0, ..*modal };
-    let mut fx = crate::gcode::Effects::none();
+    let mut fx = crate::grbl::gcode::Effects::none();
     let m = jog_modal.interpret_into(&b, pos, off, &mut fx)?;
     Ok(Jog { target: fx.motion.map_or(*pos, |(t, _)| t), feed: m.feed })
 }

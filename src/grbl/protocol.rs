@@ -2,7 +2,7 @@
 //! replies go to.
 //!
 //! Who uses it: the firmware's USART RX interrupt calls [`realtime`] on every byte and keeps the
-//! others for [`crate::controller::Controller::byte`]; the controller uses the rest.
+//! others for [`crate::grbl::controller::Controller::byte`]; the controller uses the rest.
 //!
 //! Flow control is Grbl's character counting: a sender keeps at most 128 unacknowledged bytes in
 //! flight and counts one `ok`/`error:N` per line, so every line (also an empty one, and `\r\n`
@@ -16,21 +16,21 @@ pub const RX_BUFFER_LEN: usize = 128;
 /// A realtime command: acted on in the RX interrupt, never part of a line.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Realtime {
-    /// `?`: status report ([`crate::controller::Controller::status_request`]).
+    /// `?`: status report ([`crate::grbl::controller::Controller::status_request`]).
     Status,
     /// `!`: feed hold (`Shared::set_hold(true)`).
     Hold,
     /// `~`: cycle start / resume (`Shared::set_hold(false)`).
     Resume,
-    /// Ctrl-X (0x18): soft reset ([`crate::controller::Controller::soft_reset`]).
+    /// Ctrl-X (0x18): soft reset ([`crate::grbl::controller::Controller::soft_reset`]).
     Reset,
     /// 0x85: cancel the running and queued jogs
-    /// ([`crate::controller::Controller::jog_cancel`]).
+    /// ([`crate::grbl::controller::Controller::jog_cancel`]).
     JogCancel,
-    /// 0x84: the safety door opened ([`crate::controller::Controller::door_command`]).
+    /// 0x84: the safety door opened ([`crate::grbl::controller::Controller::door_command`]).
     Door,
     /// Grbl's other extended realtime bytes (0x80..=0xFF): overrides 0x90–0x9D act
-    /// ([`crate::queue::Overrides::apply`]), the others are ignored.
+    /// ([`crate::motion::queue::Overrides::apply`]), the others are ignored.
     Extended(u8),
 }
 

@@ -4,13 +4,13 @@
 //! them (UGS, CNCjs, bCNC): `\r\n` endings, positions with three decimals, feeds and speeds as
 //! integers.
 
-use crate::coords::{Offsets, G28, G30};
-use crate::gcode::{Modal, Motion};
-use crate::spindle::{SpindleDir, FLOOD, MIST};
-use crate::protocol::{put_fixed, put_u32, Out, RX_BUFFER_LEN};
-use crate::queue::Overrides;
-use crate::ramp::Shape;
-use crate::settings::Ramped;
+use crate::grbl::coords::{Offsets, G28, G30};
+use crate::grbl::gcode::{Modal, Motion};
+use crate::grbl::spindle::{SpindleDir, FLOOD, MIST};
+use crate::grbl::protocol::{put_fixed, put_u32, Out, RX_BUFFER_LEN};
+use crate::motion::queue::Overrides;
+use crate::motion::ramp::Shape;
+use crate::grbl::settings::Ramped;
 
 /// What a sender looks for after a reset.
 pub const BANNER: &[u8] = b"\r\nGrbl 1.1h ['$' for help]\r\n";
@@ -367,7 +367,7 @@ pub fn param<const N: usize>(out: &mut impl Out, i: usize, off: &Offsets<N>, axe
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::ramp::RampConfig;
+    use crate::motion::ramp::RampConfig;
 
     type Buf = heapless::Vec<u8, 512>;
 
@@ -416,7 +416,7 @@ mod tests {
             "[VER:1.1h.ddastep:]\r\n[OPT:VMH+,15,128]\r\n[MSG:max step rate 166666 Hz]\r\n\
              [MSG:ramp 1000-60000 Hz 1000000 Hz/s trapezoid]\r\n"
         );
-        assert!(info.len() <= crate::protocol::REPLY_ROOM);
+        assert!(info.len() <= crate::grbl::protocol::REPLY_ROOM);
         let t = crate::steptime::StepTimeReport { entries: 9, min: 190, mean: 191.44, max: 1402, load: 0.0812, peak_load: 0.156, late: 2 };
         assert_eq!(text(|o| step_time(o, &t, false)), "[MSG:step isr 190/191.4/1402 cycles min/mean/max, load 8.1 % peak 15.6 %]\r\n");
         assert_eq!(text(|o| step_time(o, &t, true)), "[MSG:step fill 190/191.4/1402 cycles min/mean/max, load 8.1 % peak 15.6 %, late 2]\r\n");
@@ -431,7 +431,7 @@ mod tests {
             step_time(o, &worst, true);
             o.put(b"ok\r\n");
         });
-        assert!(all.len() <= crate::protocol::REPLY_ROOM, "{}", all.len());
+        assert!(all.len() <= crate::grbl::protocol::REPLY_ROOM, "{}", all.len());
     }
 
     #[test]

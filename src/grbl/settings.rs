@@ -10,13 +10,13 @@
 //! Each move walks it at its own acceleration's fraction (from the axes it moves) and scales
 //! it to its master's share of the path, so axes that do not move never slow a move down.
 
-use crate::protocol::Error;
+use crate::grbl::protocol::Error;
 use crate::encoder::{self, EncoderSettings};
-use crate::ramp::{Profile, RampConfig, RampError, RampTable, Shape, MAX_RATE_HZ};
+use crate::motion::ramp::{Profile, RampConfig, RampError, RampTable, Shape, MAX_RATE_HZ};
 #[allow(unused_imports)]
-use crate::ramp::MAX_RATE_HZ as _;
+use crate::motion::ramp::MAX_RATE_HZ as _;
 use crate::num::{round_u32, u32_of};
-use crate::timing::{ns_to_ticks, Timing};
+use crate::motion::timing::{ns_to_ticks, Timing};
 use crate::MAX_AXES;
 
 /// Bytes of the flash image.
@@ -219,7 +219,7 @@ pub struct Settings {
     /// TMC22xx `dedge`); `$2` does not apply then.
     pub dual_edge: bool,
     /// `$581` DMA burst step output: TIM2's events have DMA store the step words and periods
-    /// the engine buffered (`crate::burst`); a change restarts the MCU.
+    /// the engine buffered (`crate::motion::burst`); a change restarts the MCU.
     pub dma_burst: bool,
 }
 
@@ -524,7 +524,7 @@ impl Settings {
 
     /// The ramp table's top on `axes` axes once built (what the planner's limits take).
     pub fn wanted_vmax(s: &Settings, axes: usize) -> u32 {
-        let mut p: Profile = Profile { ramp: crate::ramp::RampTable::new(), timing: Timing::UNSET, per_mm: 0.0 };
+        let mut p: Profile = Profile { ramp: crate::motion::ramp::RampTable::new(), timing: Timing::UNSET, per_mm: 0.0 };
         s.build_profile(axes, &mut p).cfg.vmax
     }
 
@@ -547,7 +547,7 @@ impl Settings {
             top2 += v * v;
         }
         let accel = accel * c;
-        let vmax = u32_of(crate::planner::sqrt(top2) * c).max(1).min(crate::ramp::MAX_RATE_HZ);
+        let vmax = u32_of(crate::planning::planner::sqrt(top2) * c).max(1).min(crate::motion::ramp::MAX_RATE_HZ);
         RampConfig {
             v0: self.ramp_start_hz.max(1).min(vmax),
             vmax,

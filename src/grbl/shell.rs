@@ -7,9 +7,9 @@ use core::sync::atomic::{AtomicBool, Ordering::Relaxed};
 
 use heapless::spsc::Consumer;
 
-use crate::controller::{Actions, Controller};
-use crate::protocol::{realtime, Out, Realtime};
-use crate::queue::Shared;
+use crate::grbl::controller::{Actions, Controller};
+use crate::grbl::protocol::{realtime, Out, Realtime};
+use crate::motion::queue::Shared;
 
 /// Requests the RX interrupt leaves for the idle loop (lock-free flags).
 pub struct Requests {

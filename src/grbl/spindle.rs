@@ -22,7 +22,7 @@ pub enum SpindleDir {
     Ccw,
 }
 
-/// Coolant bits of [`crate::gcode::Modal::coolant`].
+/// Coolant bits of [`crate::grbl::gcode::Modal::coolant`].
 pub const MIST: u8 = 1;
 pub const FLOOD: u8 = 2;
 

@@ -1,7 +1,7 @@
 //! What survives a power cut: settings, coordinate systems, `$N` startup lines and the `$I`
 //! build-info string, kept as one image in *two* flash pages (A/B).
 //!
-//! Who uses it: the firmware shell (load at boot, save after [`crate::controller::Actions::save`])
+//! Who uses it: the firmware shell (load at boot, save after [`crate::grbl::controller::Actions::save`])
 //! and the controller (which owns the [`Stored`] copy and bumps its sequence number).
 //!
 //! Invariant: a save never touches the page holding the newest valid image. It erases the
@@ -11,8 +11,8 @@
 //! coordinates are never lost when settings change, and settings never when coordinates do.
 //! Each page sees every second write, halving flash wear per page.
 
-use crate::coords::{Coords, COORDS_LEN};
-use crate::settings::{copy_bytes, crc32, put4, Settings, SETTINGS_LEN};
+use crate::grbl::coords::{Coords, COORDS_LEN};
+use crate::grbl::settings::{copy_bytes, crc32, put4, Settings, SETTINGS_LEN};
 
 /// Bytes a stored text line can hold (Grbl keeps 80 with its terminator).
 pub const TEXT_LEN: usize = 79;

@@ -8,12 +8,12 @@
 //! compare event just after it DMA stores the next entry of the period buffer into TIM2's
 //! (preloaded) ARR; with full pulses a second compare event `pulse` after each update has DMA
 //! store the constant falling-edge word. Entry `k` of the two buffers is exactly what the
-//! interrupt handler stores at update event `k`: the word ([`crate::engine::Stepper::word`])
-//! and the ARR the tick returns ([`crate::engine::Stepper::tick`]). Both buffers are circular;
+//! interrupt handler stores at update event `k`: the word ([`crate::motion::engine::Stepper::word`])
+//! and the ARR the tick returns ([`crate::motion::engine::Stepper::tick`]). Both buffers are circular;
 //! when DMA has played one half, its interrupt fills that half again ([`Burst::fill`]).
 //!
 //! The same engine. [`Burst`] holds both halves of the engine and runs them as the host's
-//! [`crate::engine::Engine`] does, the ramp half's work right after the tick that asked for
+//! [`crate::motion::engine::Engine`] does, the ramp half's work right after the tick that asked for
 //! it, so the buffers carry the same edges at the same times as the interrupt engine: the
 //! property tests check it entry by entry. Counts and ratios are the engine's.
 //!
@@ -31,9 +31,9 @@
 //! entries balance the fill's cost per half against splitting: entries up to 1500 ticks keep a
 //! step one entry from 48 kHz up. Modeled figures: bench/RESULTS.md, "DMA burst mode".
 
-use crate::engine::{Engine, Ramper, Stepper};
-use crate::queue::Shared;
-use crate::ramp::RAMP_LEN;
+use crate::motion::engine::{Engine, Ramper, Stepper};
+use crate::motion::queue::Shared;
+use crate::motion::ramp::RAMP_LEN;
 use crate::TICKS_PER_MS;
 
 /// Entries per buffer half, at most: 24 (both buffers 288 bytes; entries up to 1500 ticks: one

@@ -27,7 +27,7 @@
 //! words in the running move's slot (period, trigger), so neither side ever waits for the
 //! other and the step interrupt preempts the ramp work at every edge.
 //!
-//! Moves arrive prepared ([`crate::prepared`]) in a ring and run in their slot. A move change
+//! Moves arrive prepared ([`crate::motion::prepared`]) in a ring and run in their slot. A move change
 //! in the step half is a pointer switch, a position-record swap and the new move's period,
 //! which the ramp half computed beforehand (its period at the walk's index, primed in the
 //! successor's slot at every ramp millisecond); its trigger follows when the ramp half has seen
@@ -49,9 +49,9 @@
 use core::sync::atomic::{AtomicBool, AtomicU32, AtomicUsize};
 
 use crate::board::PinMap;
-use crate::queue::Shared;
-use crate::ramp::{RampSlot, RAMP_LEN};
-use crate::ring::RingConsumer;
+use crate::motion::queue::Shared;
+use crate::motion::ramp::{RampSlot, RAMP_LEN};
+use crate::motion::ring::RingConsumer;
 use crate::TICKS_PER_MS;
 
 mod ramper;

@@ -15,10 +15,10 @@
 use core::sync::atomic::AtomicU32;
 
 use crate::board::PinMap;
-use crate::interp::Dda;
-use crate::queue::Rates;
-use crate::ramp::Period;
-use crate::timing::{Timing, STORE_JITTER_TICKS};
+use crate::motion::interp::Dda;
+use crate::motion::queue::Rates;
+use crate::motion::ramp::Period;
+use crate::motion::timing::{Timing, STORE_JITTER_TICKS};
 
 /// One slave axis of a move.
 #[derive(Clone, Copy, Debug)]
@@ -51,7 +51,7 @@ impl RampPlan {
     /// A move whose master is the table (scale 1, full walk rate) cruising at `cruise`, from
     /// and to a stop: the seed paper's single move.
     pub const fn lone(cruise_q: u32, cruise: Period) -> Self {
-        RampPlan { cruise_q, exit_q: 0, walk_q: crate::ramp::IDX_ONE, scale: 1 << 16, dist_q: 1 << 16, cruise }
+        RampPlan { cruise_q, exit_q: 0, walk_q: crate::motion::ramp::IDX_ONE, scale: 1 << 16, dist_q: 1 << 16, cruise }
     }
 }
 

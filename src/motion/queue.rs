@@ -10,11 +10,11 @@
 
 use core::sync::atomic::{fence, AtomicI32, AtomicU32, AtomicU8, AtomicUsize, Ordering::{Acquire, Relaxed, Release}};
 
-use crate::control::Control;
-pub use crate::feeder::Feeder;
-use crate::interp::master_axis;
-use crate::prepared::Prepared;
-use crate::ramp::{period_of_millihz, Period, MAX_RATE_HZ, MIN_RATE_HZ};
+use crate::motion::control::Control;
+pub use crate::planning::feeder::Feeder;
+use crate::motion::interp::master_axis;
+use crate::motion::prepared::Prepared;
+use crate::motion::ramp::{period_of_millihz, Period, MAX_RATE_HZ, MIN_RATE_HZ};
 
 /// What the engine is doing, as published in [`Shared::state`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -245,7 +245,7 @@ pub struct Shared<const N: usize> {
     /// Override percentages: feed | rapid << 8 | spindle << 16.
     ovr: AtomicU32,
     /// The engine's step half to its ramp half.
-    pub(crate) link: crate::engine::Link,
+    pub(crate) link: crate::motion::engine::Link,
     /// Probe cycle: [`PROBE_ARMED`], [`PROBE_AWAY`], [`PROBE_TRIPPED`] bits.
     probe: AtomicU8,
 }
@@ -277,7 +277,7 @@ impl<const N: usize> Shared<N> {
             starved: AtomicU32::new(0),
             ovr: AtomicU32::new(100 | 100 << 8 | 100 << 16),
             probe: AtomicU8::new(0),
-            link: crate::engine::Link::new(),
+            link: crate::motion::engine::Link::new(),
         }
     }
 

@@ -24,7 +24,7 @@ use core::sync::atomic::{AtomicBool, Ordering};
 use fixed::types::U28F4;
 
 use crate::num::{f32_of_u64, i32_of, u32_of, u64_of};
-use crate::timing::Timing;
+use crate::motion::timing::Timing;
 use crate::TIMER_HZ;
 
 /// A timer period in ticks with four fractional bits: the engine dithers the fraction so the
@@ -34,7 +34,7 @@ pub type Period = U28F4;
 /// Lowest rate a table or move may use (steps/s): 1 step/s is 72 M ticks, well inside [`Period`].
 pub const MIN_RATE_HZ: u32 = 1;
 /// Highest rate a table or move may describe (steps/s); what the step interrupt sustains is
-/// lower and is enforced by the engine's timing ([`crate::timing::Timing`]).
+/// lower and is enforced by the engine's timing ([`crate::motion::timing::Timing`]).
 pub const MAX_RATE_HZ: u32 = 1_000_000;
 /// Entries (milliseconds) in the firmware's table.
 pub const RAMP_LEN: usize = 512;

@@ -14,7 +14,7 @@ use core::cell::UnsafeCell;
 use core::mem::MaybeUninit;
 use core::sync::atomic::{AtomicU32, Ordering::{Acquire, Relaxed, Release}};
 
-use crate::prepared::Prepared;
+use crate::motion::prepared::Prepared;
 
 /// Prepared moves the ring holds (a power of two). The look-ahead keeps its own, longer
 /// buffer of moves not yet prepared; this only needs to cover the feeder's poll interval.

@@ -4,7 +4,7 @@
 //! firmware exactly: at each update event the shadow ARR takes the preloaded value, the handler
 //! stores the engine's word and preloads the ARR the engine returns.
 
-use crate::engine::Engine;
+use crate::motion::engine::Engine;
 
 /// One update event: time in timer ticks and the BSRR word stored at it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -28,7 +28,7 @@ impl Default for TimerSim {
 impl TimerSim {
     /// Timer at time 0 with the idle period preloaded (as the firmware starts it).
     pub fn new() -> Self {
-        TimerSim { t: 0, preload: (crate::engine::IDLE_TICKS - 1) as u16 }
+        TimerSim { t: 0, preload: (crate::motion::engine::IDLE_TICKS - 1) as u16 }
     }
 
     /// Time of the next update event (ticks).

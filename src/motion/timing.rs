@@ -3,7 +3,7 @@
 //! Who uses it: settings defaults and docs; the engine itself only sees timer ticks
 //! ([`Timing`]). Figures are the minimums from each driver's datasheet.
 
-use crate::ramp::MAX_RATE_HZ;
+use crate::motion::ramp::MAX_RATE_HZ;
 use crate::TIMER_HZ;
 
 /// Minimum timing a step/dir driver needs, in nanoseconds.
@@ -190,14 +190,14 @@ pub const HANDLER_TAIL_TICKS: u32 = 10;
 /// the longest handler at speed (a move's last step, which finds its successor) stores it at
 /// its end when the compare event came during it. A low time of at least the pulse then needs
 /// the period to be this plus the pulse. The bench's back-to-back moves at the cap with 2 µs
-/// pulses (`tests/firmware_lookahead.rs`) put it at 241 ticks on one axis (the lowest low time,
+/// pulses (`bench/tests/firmware_lookahead.rs`) put it at 241 ticks on one axis (the lowest low time,
 /// 2.19 µs at a 404-tick period) and 212 + 17 per slave on three; 250 leaves a margin.
 pub const HANDLER_FALL_TICKS: u32 = 250;
 
 /// The shortest time from a step handler's falling store to the next handler's rising store
 /// when a long handler delays the next update's (they run back to back: the rest of the first
 /// handler after its falling store, a tail-chain, the second's entry and its code before the
-/// store), timer ticks: the bench's back-to-back moves at the cap (`tests/firmware_lookahead.rs`)
+/// store), timer ticks: the bench's back-to-back moves at the cap (`bench/tests/firmware_lookahead.rs`)
 /// measure lows of at least 68 ticks (944 ns) there; 48 leaves a margin. A pulse up to this
 /// needs no room for a low time after a long handler's late falling edge
 /// ([`HANDLER_FALL_TICKS`]).
@@ -214,7 +214,7 @@ pub const DUAL_BASE_TICKS: u32 = 245;
 /// over the period, so two toggles of a pin come `2 × period − this` apart at the least (plus
 /// [`HANDLER_PER_SLAVE_TICKS`] per slave), and the period is at least half of this plus the
 /// pulse. The bench's back-to-back moves at 293.9 kHz with 3 µs pulses
-/// (tests/firmware_dual_edge.rs) measured toggles 192 cycles apart at a 246-tick period: 300
+/// (bench/tests/firmware_dual_edge.rs) measured toggles 192 cycles apart at a 246-tick period: 300
 /// on one axis; 320 leaves a margin.
 pub const DUAL_LONG_TICKS: u32 = 320;
 
@@ -223,7 +223,7 @@ pub const DUAL_LONG_TICKS: u32 = 320;
 /// `idle` counted: the sweep in DMA mode with the caps lifted (`cargo sim -- --sweep --dma`;
 /// the slave lane's walks run from SRAM) holds the CPU ≤ 95 % busy up to 696, 686, 680, 574,
 /// 548 and 542 kHz on 2 to 7 axes (one straight move). Back-to-back moves at speed
-/// (`tests/firmware_dma.rs`) bind harder: the slave-major lane's words are whole only at its
+/// (`bench/tests/firmware_dma.rs`) bind harder: the slave-major lane's words are whole only at its
 /// end, and a fill that starts late after a long one (a move change) has DMA reach them first
 /// (the firmware counts it, `$I`'s `late`); on 7 axes that happened at 416 kHz and above, not
 /// at 402 kHz. 100 + 13 per slave: 637, 571, 516, 471, 433 and 404 kHz on 2 to 7 axes.
@@ -239,7 +239,7 @@ pub const DMA_DUAL_PER_SLAVE_TICKS: u32 = 10;
 /// DMA burst mode, one axis (the fill's lane of its own, entry by entry; in dual-edge mode its
 /// words alternate between setting and resetting the pin): at 1 MHz the busiest millisecond
 /// of the cruise has the CPU 80.3 % busy with full pulses, the fill with DMA's stores 76.1 %
-/// (tests/firmware_dma.rs, `one_axis_runs_at_the_dma_cap`), 83 % in dual-edge mode (`cargo sim
+/// (bench/tests/firmware_dma.rs, `one_axis_runs_at_the_dma_cap`), 83 % in dual-edge mode (`cargo sim
 /// -- --point 1@1000000 --dma --dual-edge`), and back-to-back moves at 995 kHz see no late
 /// fill: the cost does not bind below the 1 MHz floor ([`DMA_FLOOR_TICKS`]).
 pub const DMA_LANE_TICKS: u32 = 72;
@@ -255,7 +255,7 @@ pub const DMA_PER_SLAVE_TICKS: u32 = 13;
 /// sender waiting 0–104 000 cycles before each line). With junctions at 72 MHz / 150 ticks
 /// one timing of 12 still came late on one axis; at 180 none. 200 + 20 per slave (360, 300 and
 /// 225 kHz on 1, 3 and 7 axes): no late fill at any of 14 timings on 1, 3 and 7 axes in both
-/// edge modes at the cruise caps (`tests/firmware_dma.rs` runs several). `$I` prints the
+/// edge modes at the cruise caps (`bench/tests/firmware_dma.rs` runs several). `$I` prints the
 /// one-axis figure (`[MSG:max junction rate N Hz]`).
 pub const DMA_JUNCTION_BASE_TICKS: u32 = 200;
 /// Extra junction ticks per slave axis in DMA burst mode (see [`DMA_JUNCTION_BASE_TICKS`]).

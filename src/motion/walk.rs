@@ -2,7 +2,7 @@
 //!
 //! Who uses it: the step engine, at each millisecond of timer time and when a move starts.
 //!
-//! The index (Q20) is a path speed, the same across moves (see [`crate::prepared`]), so it
+//! The index (Q20) is a path speed, the same across moves (see [`crate::motion::prepared`]), so it
 //! simply carries over from one move to the next. Each millisecond the walk moves it by the
 //! running move's walk rate: up towards the move's cruise index while accelerating, down
 //! towards the exit index once decelerating (to 0 under a feed hold or when no successor is
@@ -22,8 +22,8 @@
 //! a walk up) are left pending ([`Walk::pending`]) until the ramp half settles them before it
 //! publishes the trigger.
 
-use crate::prepared::RampPlan;
-use crate::ramp::{Period, RampTable};
+use crate::motion::prepared::RampPlan;
+use crate::motion::ramp::{Period, RampTable};
 
 /// Steps added to the deceleration distance (0: an early start would leave steps to crawl at
 /// the table's first entry; a late one ends at most a step's worth of walk high).

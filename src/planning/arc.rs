@@ -24,9 +24,9 @@
 //! the start-to-target differences, not from the rounded center, so a full circle's travel is
 //! exactly a turn.)
 
-use crate::gcode::MAX_MM;
-use crate::planner::to_steps;
-use crate::protocol::Error;
+use crate::grbl::gcode::MAX_MM;
+use crate::planning::planner::to_steps;
+use crate::grbl::protocol::Error;
 use crate::planning::trig::{atan2, sin_cos};
 use core::f32::consts::PI;
 
@@ -293,5 +293,5 @@ fn hypot(x: f32, y: f32) -> f32 {
 }
 
 fn sqrt(x: f32) -> f32 {
-    crate::planner::sqrt(x)
+    crate::planning::planner::sqrt(x)
 }

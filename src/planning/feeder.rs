@@ -19,11 +19,11 @@
 //! cruise is below its exit leaves at its cruise).
 
 use crate::board::PinMap;
-use crate::lookahead::{cruise_for, replan, Block, Buffer, Tail, LOOKAHEAD};
-use crate::prepared::{DirState, Prepared};
-use crate::queue::{Move, Overrides, Shared, State};
-use crate::ramp::RampSlot;
-use crate::ring::{RingProducer, RING};
+use crate::planning::lookahead::{cruise_for, replan, Block, Buffer, Tail, LOOKAHEAD};
+use crate::motion::prepared::{DirState, Prepared};
+use crate::motion::queue::{Move, Overrides, Shared, State};
+use crate::motion::ramp::RampSlot;
+use crate::motion::ring::{RingProducer, RING};
 use core::sync::atomic::Ordering::{Relaxed, Release};
 
 /// Motion the feeder keeps prepared ahead of the engine, µs (several poll intervals).

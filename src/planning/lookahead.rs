@@ -4,7 +4,7 @@
 //! replans them whenever one arrives.
 //!
 //! Every speed is a Q20 index into the one ramp table (the table is in path units: see
-//! [`crate::prepared`]), and every distance is in the table's own distance sums, so planning
+//! [`crate::motion::prepared`]), and every distance is in the table's own distance sums, so planning
 //! is table lookups and one binary search per bound, whatever the table's shape. Per move:
 //! - its walk rate is its path acceleration (the smallest `$120+i / |unitᵢ|` over the axes it
 //!   moves) as a fraction of the table's;
@@ -19,11 +19,11 @@
 //! ends at rest, and a starved buffer never means an abrupt stop from speed.
 
 use crate::num::u32_of;
-use crate::prepared::RampPlan;
-use crate::queue::{Move, Overrides, Rates};
-use crate::ramp::{Period, Profile, RampTable, IDX_ONE};
-use crate::timing::Timing;
-use crate::walk::DECEL_MARGIN;
+use crate::motion::prepared::RampPlan;
+use crate::motion::queue::{Move, Overrides, Rates};
+use crate::motion::ramp::{Period, Profile, RampTable, IDX_ONE};
+use crate::motion::timing::Timing;
+use crate::motion::walk::DECEL_MARGIN;
 
 /// Moves the look-ahead buffers (beyond the few already prepared in the engine's ring).
 pub const LOOKAHEAD: usize = 16;
@@ -201,7 +201,7 @@ pub fn replan<const N: usize, const L: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::ramp::{period_of_hz, RampConfig, Shape};
+    use crate::motion::ramp::{period_of_hz, RampConfig, Shape};
 
     /// The cruise index is the lowest one at which the scaled table is at least as fast as
     /// the cruise, for random tables, scales and rates (also between entries, where rounding

@@ -14,13 +14,13 @@
 //! master's cruise rate is then clamped to what the step interrupt sustains for the move's
 //! slave count (`Timing::max_rate_for`) and to the ramp table's top (both printed by `$I`).
 //! Each move also carries its junction speed with the move before it (junction deviation
-//! `$11`, Grbl's formula); the look-ahead ([`crate::lookahead`]) does the rest.
+//! `$11`, Grbl's formula); the look-ahead ([`crate::planning::lookahead`]) does the rest.
 
 use crate::num::{f32_of_i64, f32_of_u64};
-use crate::protocol::Error;
-use crate::queue::{Move, Ovr, Path};
-use crate::settings::Settings;
-use crate::timing::Timing;
+use crate::grbl::protocol::Error;
+use crate::motion::queue::{Move, Ovr, Path};
+use crate::grbl::settings::Settings;
+use crate::motion::timing::Timing;
 
 /// Junction deviation `$11`, mm (Grbl's default; the setting is shown fixed at this value).
 pub const JUNCTION_DEVIATION_MM: f32 = 0.010;
@@ -161,7 +161,7 @@ impl<const N: usize> Planner<N> {
                 accel = accel.min(lim.accel[i] / u);
             }
         }
-        // The overrides scale the asked speed later, in the feeder ([`crate::queue::Rates`]).
+        // The overrides scale the asked speed later, in the feeder ([`crate::motion::queue::Rates`]).
         let (asked, ovr) = match feed {
             Some(f) => (f / 60.0, Ovr::Feed),
             None => (vmax, Ovr::Rapid),
@@ -173,7 +173,7 @@ impl<const N: usize> Planner<N> {
         let top = (lim.timing.max_rate_for(slaves) as f32).min(lim.vmax_hz as f32 * share / lim.per_mm.max(1e-9));
         // max/min, not f32::clamp: its panic message would link float formatting into the firmware.
         // Milli-steps/s: G93 times need more than whole steps/s at low rates.
-        let top_millihz = crate::ramp::MAX_RATE_HZ as u64 * 1000;
+        let top_millihz = crate::motion::ramp::MAX_RATE_HZ as u64 * 1000;
         let cruise_millihz = crate::num::u64_of(libm::roundf(wanted_hz.max(1.0).min(top) * 1000.0)).min(top_millihz);
         let mut mv = Move::new_millihz(delta, cruise_millihz).map_err(|_| Error::InvalidTarget)?;
         mv.ovr = ovr;
@@ -293,7 +293,7 @@ pub fn to_steps(mm: f32, steps_per_mm: f32) -> Result<i64, Error> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::ramp::period_of_hz;
+    use crate::motion::ramp::period_of_hz;
 
     /// The bench settings with the table top the firmware would build for 3 axes.
     fn lim() -> Limits<3> {

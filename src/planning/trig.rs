@@ -1,6 +1,6 @@
 //! Sine, cosine and arctangent for arc planning, in a few hundred bytes of flash.
 //!
-//! Who uses it: [`crate::arc`] (angles within a few turns). `libm`'s versions handle any
+//! Who uses it: [`crate::planning::arc`] (angles within a few turns). `libm`'s versions handle any
 //! argument with a Payne–Hanek reduction and its 3 KB table; an arc's angles stay within
 //! ±2π plus a little, where a two-part π/2 reduction is exact to the last bit or two and
 //! Taylor series on ±π/4 (sine, cosine) or ±tan(π/12) (arctangent) converge below an

@@ -2,12 +2,12 @@
 #![allow(dead_code)]
 
 use ddastep::board::{pin_map, PinMap};
-use ddastep::engine::Engine;
-use ddastep::queue::{Feeder, Move, Shared, State};
-use ddastep::ramp::{RampConfig, RampSlot, Shape};
-use ddastep::sim::{apply_bsrr, Edge, TimerSim};
-use ddastep::timing::Timing;
-use ddastep::ring::MoveRing;
+use ddastep::motion::engine::Engine;
+use ddastep::motion::queue::{Feeder, Move, Shared, State};
+use ddastep::motion::ramp::{RampConfig, RampSlot, Shape};
+use ddastep::motion::sim::{apply_bsrr, Edge, TimerSim};
+use ddastep::motion::timing::Timing;
+use ddastep::motion::ring::MoveRing;
 
 /// One step edge of one axis.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -42,13 +42,13 @@ impl<const N: usize> Rig<N> {
     }
 
     /// A rig whose profile (table in path units, timing) comes from Grbl settings.
-    pub fn with_settings(s: &ddastep::settings::Settings) -> Self {
+    pub fn with_settings(s: &ddastep::grbl::settings::Settings) -> Self {
         Self::with_profile(|p| {
             s.build_profile(N, p);
         })
     }
 
-    fn with_profile(build: impl FnOnce(&mut ddastep::ramp::Profile)) -> Self {
+    fn with_profile(build: impl FnOnce(&mut ddastep::motion::ramp::Profile)) -> Self {
         let shared: &'static Shared<N> = Box::leak(Box::new(Shared::new()));
         let slot: &'static RampSlot = Box::leak(Box::new(RampSlot::new()));
         let dual = {
@@ -67,7 +67,7 @@ impl<const N: usize> Rig<N> {
         Rig {
             shared,
             slot,
-            feeder: Feeder::new(prod, Box::leak(Box::new(ddastep::lookahead::Buffer::new())), shared, slot, pins),
+            feeder: Feeder::new(prod, Box::leak(Box::new(ddastep::planning::lookahead::Buffer::new())), shared, slot, pins),
             engine,
             timer: TimerSim::new(),
             pins,
@@ -156,7 +156,7 @@ impl<const N: usize> Rig<N> {
     /// The same rig with its engine filling DMA buffers of entries at most `max_tick` long
     /// (the firmware's DMA burst mode) instead of running tick by tick.
     pub fn into_burst(self, max_tick: u32) -> BurstRig<N> {
-        let burst = ddastep::burst::Burst::new(self.engine, self.shared, max_tick);
+        let burst = ddastep::motion::burst::Burst::new(self.engine, self.shared, max_tick);
         BurstRig { shared: self.shared, feeder: self.feeder, burst, pins: self.pins }
     }
 }
@@ -165,6 +165,6 @@ impl<const N: usize> Rig<N> {
 pub struct BurstRig<const N: usize> {
     pub shared: &'static Shared<N>,
     pub feeder: Feeder<'static, N>,
-    pub burst: ddastep::burst::Burst<'static, N>,
+    pub burst: ddastep::motion::burst::Burst<'static, N>,
     pub pins: PinMap<N>,
 }

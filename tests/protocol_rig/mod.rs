@@ -3,17 +3,17 @@
 #![allow(dead_code)]
 
 use ddastep::board::pin_map;
-use ddastep::controller::{Actions, Controller};
-use ddastep::engine::Engine;
-use ddastep::protocol::Out;
-use ddastep::shell::{dispatch, idle_step, Requests};
+use ddastep::grbl::controller::{Actions, Controller};
+use ddastep::motion::engine::Engine;
+use ddastep::grbl::protocol::Out;
+use ddastep::grbl::shell::{dispatch, idle_step, Requests};
 use heapless::spsc::{Consumer, Producer, Queue};
-use ddastep::queue::{Feeder, Shared, State};
-use ddastep::ramp::RampSlot;
-use ddastep::settings::Settings;
-use ddastep::sim::TimerSim;
+use ddastep::motion::queue::{Feeder, Shared, State};
+use ddastep::motion::ramp::RampSlot;
+use ddastep::grbl::settings::Settings;
+use ddastep::motion::sim::TimerSim;
 use ddastep::TICKS_PER_MS;
-use ddastep::ring::MoveRing;
+use ddastep::motion::ring::MoveRing;
 
 /// A TX ring: bytes beyond `cap` are dropped, as the firmware's would be.
 pub struct Tx {
@@ -99,13 +99,13 @@ impl<const N: usize> Bench<N> {
 
     /// A rig whose controller boots from a persistent image (settings, coordinates, startup
     /// lines, build info), as the firmware does from flash.
-    pub fn with_stored(stored: impl Into<ddastep::store::Stored>) -> Self {
+    pub fn with_stored(stored: impl Into<ddastep::grbl::store::Stored>) -> Self {
         let shared: &'static Shared<N> = Box::leak(Box::new(Shared::new()));
         let slot: &'static RampSlot = Box::leak(Box::new(RampSlot::new()));
         let q: &'static mut MoveRing<N> = Box::leak(Box::new(MoveRing::new()));
         let (prod, cons) = q.split();
         let engine = Engine::new(shared, cons, slot, pin_map::<N>(0, 0));
-        let ctl = Controller::new(Feeder::new(prod, Box::leak(Box::new(ddastep::lookahead::Buffer::new())), shared, slot, pin_map::<N>(0, 0)), shared, slot, stored);
+        let ctl = Controller::new(Feeder::new(prod, Box::leak(Box::new(ddastep::planning::lookahead::Buffer::new())), shared, slot, pin_map::<N>(0, 0)), shared, slot, stored);
         let rxq: &'static mut Queue<u8, 256> = Box::leak(Box::new(Queue::new()));
         let (rx_in, rx_out) = rxq.split();
         let mut b = Bench {
@@ -307,7 +307,7 @@ impl<const N: usize> Bench<N> {
 /// Moves the controller buffers (look-ahead plus prepared ring): `[OPT:]`'s block count and
 /// `Bf:`'s free blocks at rest.
 #[allow(dead_code, reason = "not every test file uses it")]
-pub const BLOCKS: usize = ddastep::lookahead::LOOKAHEAD + ddastep::ring::RING;
+pub const BLOCKS: usize = ddastep::planning::lookahead::LOOKAHEAD + ddastep::motion::ring::RING;
 
 /// Counts `ok` and `error:` replies.
 pub fn replies(text: &str) -> (usize, usize) {

@@ -40,7 +40,7 @@ pub fn readme_rows(s: &Sweep, flash_bytes: u64, ram_bytes: u64) -> Vec<(String, 
     push(
         SIZE_ROW,
         format!("{} B of 63 488 / {} B of 16 384", grouped(flash_bytes), grouped(ram_bytes)),
-        "`cargo build --release && arm-none-eabi-size target/thumbv7m-none-eabi/release/ddastep`; checked in CI by `tests/firmware_size.rs`",
+        "`cargo build --release && arm-none-eabi-size target/thumbv7m-none-eabi/release/ddastep`; checked in CI by `bench/tests/firmware_size.rs`",
     );
     let row = |axes: usize| s.rows.iter().find(|r| r.axes == axes);
     let rates: Vec<String> = [1, 3, 7].iter().filter_map(|&a| row(a).map(|r| format!("{} with {a} {}", rate(&r.cpu), if a == 1 { "axis" } else { "axes" }))).collect();

@@ -708,7 +708,7 @@ pub fn results_markdown(s: &Sweep, others: &[Sweep], command: &str, firmware: &s
         writeln!(m, "the end of a chain. Moves changing at the rate cap are measured below.\n")?;
     }
     writeln!(m, "### Moves changing at the rate cap\n")?;
-    writeln!(m, "`ddastep_bench::emu::changes::back_to_back`, as `tests/firmware_lookahead.rs` runs it: the")?;
+    writeln!(m, "`ddastep_bench::emu::changes::back_to_back`, as `bench/tests/firmware_lookahead.rs` runs it: the")?;
     writeln!(m, "sweep's settings, one long move, then {} short ones (200 master steps each) queued behind it,", super::changes::MOVES)?;
     writeln!(m, "at 0.5 % under `Timing::max_rate_for` for the axis count (steps in the sweep's ratio; on 3 and")?;
     writeln!(m, "7 axes Y reverses at every junction: a direction change at speed). The step ISR's runs at")?;
@@ -755,7 +755,7 @@ pub fn results_markdown(s: &Sweep, others: &[Sweep], command: &str, firmware: &s
         writeln!(m, "The same sweep with `$581=1` first (the MCU restarts): TIM2 paces every edge, DMA1 stores the")?;
         writeln!(m, "words the engine buffered (update event: the step word into GPIOB's BSRR; compare 3: the next")?;
         writeln!(m, "period into ARR; compare 1: the falling-edge word), and the step path is the buffer fill in")?;
-        writeln!(m, "DMA1 channel 1's half/complete interrupt (`src/firmware/burst.rs`, `ddastep::burst`). The")?;
+        writeln!(m, "DMA1 channel 1's half/complete interrupt (`src/firmware/burst.rs`, `ddastep::motion::burst`). The")?;
         writeln!(m, "\"ISR\" columns are that interrupt; DMA's own bus cycles are charged to the CPU while it runs")?;
         writeln!(m, "(the bench's DMA model, bench/src/emu/dma.rs: 7 cycles per store to GPIO, 9 to TIM2, the")?;
         writeln!(m, "bus-matrix share stolen from a running core). `$I` reports {} Hz with these settings", d.cap_hz)?;
@@ -888,7 +888,7 @@ const NOTES: &str = "\
 - The step interrupt includes its own DWT self-measurement (about 25 cycles per entry; `$I`).
 - The sweep measures one straight move per point. Back-to-back moves at the `$I` cap (moves
   changing at speed, a direction reversing at every junction) are the \"Moves changing at the
-  rate cap\" table above, also checked by `tests/firmware_lookahead.rs`
+  rate cap\" table above, also checked by `bench/tests/firmware_lookahead.rs`
   (`back_to_back_moves_at_the_rate_cap_keep_every_step`: every step, no overrun); the cap's
   long-tick and low-time terms come from there.
 - \"CPU\" includes the ramp interrupt (the engine's ramp half, pended by the step interrupt at

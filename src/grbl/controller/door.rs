@@ -10,9 +10,9 @@
 //! the door open get error:13.
 
 use super::Controller;
-use crate::protocol::Out;
-use crate::queue::State;
-use crate::spindle::SpindleDir;
+use crate::grbl::protocol::Out;
+use crate::motion::queue::State;
+use crate::grbl::spindle::SpindleDir;
 
 /// Grbl's spindle-restart delay after a door, ms (`SAFETY_DOOR_SPINDLE_DELAY`).
 const SPINDLE_DELAY_MS: u32 = 4000;
@@ -87,7 +87,7 @@ impl<const N: usize> Controller<'_, N> {
         let event = core::mem::take(&mut self.door_event) || self.door_pin;
         if event && self.homing.is_some() {
             // Grbl's ALARM:7: the door opened during the homing cycle.
-            return self.homing_fail(crate::report::ALARM_HOMING_DOOR, out);
+            return self.homing_fail(crate::grbl::report::ALARM_HOMING_DOOR, out);
         }
         if self.alarm || self.check || self.sleep {
             self.door = Door::Off;

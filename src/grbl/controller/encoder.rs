@@ -9,8 +9,8 @@
 
 use super::Controller;
 use crate::encoder::loss::Reading;
-use crate::protocol::{Error, Out};
-use crate::report;
+use crate::grbl::protocol::{Error, Out};
+use crate::grbl::report;
 
 impl<const N: usize> Controller<'_, N> {
     /// One encoder reading (call each idle-loop turn, before the poll): `counts` the extended count read

@@ -26,10 +26,10 @@
 
 use super::Controller;
 use crate::num::round_i32;
-use crate::protocol::{Error, Out};
-use crate::queue::State;
-use crate::report;
-use crate::spindle::Power;
+use crate::grbl::protocol::{Error, Out};
+use crate::motion::queue::State;
+use crate::grbl::report;
+use crate::grbl::spindle::Power;
 
 /// One homing cycle in progress (kept small: the controller lives in a static slot).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -3,10 +3,10 @@
 //! the planner takes the engine's exact position.
 
 use super::{Controller, Job, Jogging};
-use crate::jog;
-use crate::planner::Planned;
-use crate::protocol::{Error, Out};
-use crate::queue::State;
+use crate::grbl::jog;
+use crate::planning::planner::Planned;
+use crate::grbl::protocol::{Error, Out};
+use crate::motion::queue::State;
 
 impl<const N: usize> Controller<'_, N> {
     /// 0x85 arrived: cancel jogging (nothing happens unless jog moves are queued or running).
@@ -67,7 +67,7 @@ impl<const N: usize> Controller<'_, N> {
                 if self.job.is_some_and(|j| j.jog) {
                     // A jog line waiting for queue room is one of the queued jogs: flushed too.
                     self.job = None;
-                    crate::protocol::put_ok(out);
+                    crate::grbl::protocol::put_ok(out);
                 }
                 self.pushed = self.shared.moves_done();
                 self.planner.sync(self.shared.positions(), &self.limits);

@@ -1,5 +1,5 @@
 //! Soft limits in the controller, as Grbl 1.1's `limits_soft_check`: a G-code target outside
-//! the travel box (see [`crate::limits`]) feed-holds what is already moving, flushes the queue
+//! the travel box (see [`crate::grbl::limits`]) feed-holds what is already moving, flushes the queue
 //! once the machine has stopped (so the position stays exact), then reports ALARM:2 and
 //! `[MSG:Reset to continue]` and reads nothing more until Ctrl-X, after which the controller
 //! is in the alarm state (`$X` unlocks). The offending line gets no reply and moves nothing.
@@ -11,10 +11,10 @@
 //! at the Ctrl-X, which boots in the alarm state).
 
 use super::Controller;
-use crate::limits;
-use crate::protocol::Out;
-use crate::queue::State;
-use crate::report;
+use crate::grbl::limits;
+use crate::grbl::protocol::Out;
+use crate::motion::queue::State;
+use crate::grbl::report;
 
 /// Where a soft-limit trip stands.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -3,9 +3,9 @@
 //! 10th (20th) and after an override changes, but never in the same report as `WCO:`.
 
 use super::{Controller, Jogging, FEED_RING};
-use crate::protocol::Out;
-use crate::queue::State;
-use crate::report::{self, Status};
+use crate::grbl::protocol::Out;
+use crate::motion::queue::State;
+use crate::grbl::report::{self, Status};
 
 /// Reports between `WCO:` refreshes: idle, busy.
 const WCO_REFRESH: (u8, u8) = (10, 30);

@@ -3,14 +3,14 @@
 //! at a time as TX room appears.
 
 use super::{Controller, Job, Listing};
-use crate::coords::Coords;
-use crate::gcode;
+use crate::grbl::coords::Coords;
+use crate::grbl::gcode;
 use crate::num::u32_of;
-use crate::planner::Limits;
-use crate::protocol::{Error, Out};
-use crate::report::{self, PARAM_LINES, SETTING_LEN};
-use crate::settings::{Change, Settings};
-use crate::store::{Text, STARTUP_LINES};
+use crate::planning::planner::Limits;
+use crate::grbl::protocol::{Error, Out};
+use crate::grbl::report::{self, PARAM_LINES, SETTING_LEN};
+use crate::grbl::settings::{Change, Settings};
+use crate::grbl::store::{Text, STARTUP_LINES};
 
 impl<const N: usize> Controller<'_, N> {
     /// A `$` line (without the `$`).
@@ -65,7 +65,7 @@ impl<const N: usize> Controller<'_, N> {
                 need_idle(idle)?;
                 for (i, t) in self.stored.startup.iter().enumerate() {
                     out.put(b"$N");
-                    crate::protocol::put_u32(out, i as u32);
+                    crate::grbl::protocol::put_u32(out, i as u32);
                     out.put(b"=");
                     out.put(t.as_bytes());
                     out.put(b"\r\n");

@@ -9,9 +9,9 @@
 //! laser is on only under M3 in a G1/G2/G3 mode (focusing); during a feed hold it is off.
 
 use super::Controller;
-use crate::gcode::{Modal, Motion};
-use crate::queue::State;
-use crate::spindle::{duty, Power, SpindleDir, SpindleOut, FLOOD, MIST};
+use crate::grbl::gcode::{Modal, Motion};
+use crate::motion::queue::State;
+use crate::grbl::spindle::{duty, Power, SpindleDir, SpindleOut, FLOOD, MIST};
 
 impl<const N: usize> Controller<'_, N> {
     /// What a block with the new `modal` changes: the stage that waits for the queue, if any,
@@ -99,7 +99,7 @@ impl<const N: usize> Controller<'_, N> {
             0.0
         };
         let ov = self.shared.overrides().spindle as f32 / 100.0;
-        let arr = crate::spindle::PwmTiming::new(s.spindle_pwm_hz).arr;
+        let arr = crate::grbl::spindle::PwmTiming::new(s.spindle_pwm_hz).arr;
         SpindleOut {
             ccr: duty(speed * ov, s.spindle_min, s.spindle_max, arr),
             enable: true,

@@ -14,11 +14,11 @@
 
 use core::sync::atomic::Ordering::Relaxed;
 
-use crate::prepared::{Prepared, RampPlan};
-use crate::queue::Shared;
-use crate::ramp::{Period, RampSlot, RAMP_LEN};
-use crate::ring::RingPeek;
-use crate::walk::{base_at, scaled, Step as WalkStep, Walk, TRIGGER};
+use crate::motion::prepared::{Prepared, RampPlan};
+use crate::motion::queue::Shared;
+use crate::motion::ramp::{Period, RampSlot, RAMP_LEN};
+use crate::motion::ring::RingPeek;
+use crate::motion::walk::{base_at, scaled, Step as WalkStep, Walk, TRIGGER};
 
 /// The ramp half for `N` axes.
 pub struct Ramper<'a, const N: usize, const L: usize = RAMP_LEN> {

@@ -7,11 +7,11 @@ use core::sync::atomic::Ordering::Relaxed;
 
 use super::{Link, IDLE_TICKS, MAX_TICK, PRIME_TICKS};
 use crate::board::PinMap;
-use crate::control::Ctl;
-use crate::prepared::{Prepared, Slave};
-use crate::queue::{Shared, State};
-use crate::ramp::{RampSlot, RAMP_LEN};
-use crate::ring::RingConsumer;
+use crate::motion::control::Ctl;
+use crate::motion::prepared::{Prepared, Slave};
+use crate::motion::queue::{Shared, State};
+use crate::motion::ramp::{RampSlot, RAMP_LEN};
+use crate::motion::ring::RingConsumer;
 use crate::TICKS_PER_MS;
 
 /// [`Link::succ`] as the step half leaves it when it enters a move or goes idle: no successor
@@ -74,7 +74,7 @@ pub struct Stepper<'a, const N: usize, const L: usize = RAMP_LEN> {
     /// where [`super::Engine`] runs the ramp half after every tick anyway.
     pend: (*mut u32, u32),
     /// Set when a tick asked for the ramp half and no register is set to pend ([`Self::set_pend`]):
-    /// the DMA burst fill runs the ramp half itself ([`crate::burst`]).
+    /// the DMA burst fill runs the ramp half itself ([`crate::motion::burst`]).
     pended: bool,
     /// Longest period one event may have: [`MAX_TICK`] (the timer's 16 bits), less in DMA burst
     /// mode, where it bounds the time the buffers hold (longer periods are split into fillers).
@@ -83,7 +83,7 @@ pub struct Stepper<'a, const N: usize, const L: usize = RAMP_LEN> {
     /// and no period being split. Set by every whole tick; only ever conservative.
     quick: bool,
     /// The DMA fill's last run of plain entries took the slave-major lane (its words are whole
-    /// only at its end; [`crate::burst::Burst::fill_watched`] checks DMA against its start).
+    /// only at its end; [`crate::motion::burst::Burst::fill_watched`] checks DMA against its start).
     pub(crate) slave_major: bool,
 }
 

@@ -23,8 +23,8 @@ use core::sync::atomic::Ordering::Relaxed;
 
 use super::{bump, piece, slave_bits, toggle, Phase, Stepper};
 use crate::TICKS_PER_MS;
-use crate::burst::tail;
-use crate::prepared::Slave;
+use crate::motion::burst::tail;
+use crate::motion::prepared::Slave;
 
 impl<const N: usize, const L: usize> Stepper<'_, N, L> {
     /// Fills the front of `words` and `periods` with plain entries; returns how many (0 when
@@ -268,7 +268,7 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
 /// Slave-major walks: `walkK` runs the K slaves from `s` on over the steps whose words are
 /// `first..end` and then `last`, ORing their bits in. In registers each accumulator runs as
 /// `total − 1 − acc` (in `0..total`, `total` < 2^31), counted down: the slave steps when it
-/// goes below 0 (one subtraction and its sign, where [`crate::interp::Dda::step_mask`] adds
+/// goes below 0 (one subtraction and its sign, where [`crate::motion::interp::Dda::step_mask`] adds
 /// and compares). Out of line: each gets all the registers (a walk of three keeps 13 values).
 macro_rules! walks {
     ($($name:ident: $($j:literal $s:ident $d:ident $c:ident $o:ident),*;)*) => {$(

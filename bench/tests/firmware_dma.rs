@@ -3,11 +3,11 @@
 //! direction setup, moves at the mode's cap, feed hold and stop latency within the buffers'
 //! bound, and the setting itself.
 
-mod fil;
+mod firmware_rig;
 
-use ddastep::settings::Settings;
+use ddastep::grbl::settings::Settings;
 use ddastep_bench::emu::{gcode_lines, HZ};
-use fil::*;
+use firmware_rig::*;
 
 /// The late fills `$I`'s `step fill` line reports (`…, late N]`).
 fn late_fills(info: &str) -> Option<u32> {

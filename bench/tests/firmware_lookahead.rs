@@ -1,9 +1,9 @@
 //! Firmware in the loop, continuous motion: look-ahead junctions on the release ELF.
 
-mod fil;
+mod firmware_rig;
 
 use ddastep_bench::emu::{gcode_lines, HZ};
-use fil::*;
+use firmware_rig::*;
 
 /// Path speed (mm/s at 100 steps/mm) over each 10 ms window between `from` and `to` cycles.
 fn speeds(s: &[Step], from: u64, to: u64) -> Vec<f64> {
@@ -93,7 +93,7 @@ fn back_to_back_moves_at_the_rate_cap_keep_every_step() {
         let mut b = boot();
         // The cap for this move's slaves, from the firmware's own timing (as `$I` prints the
         // single-axis one).
-        let mut s = ddastep::settings::Settings::BENCH;
+        let mut s = ddastep::grbl::settings::Settings::BENCH;
         s.set(0, pulse_us as f32, 3).unwrap();
         let cap = s.timing().max_rate_for(axes as u32 - 1);
         let r = ddastep_bench::emu::changes::back_to_back_at(&mut b, axes, cap as f64 * 0.995, pulse_us).unwrap();

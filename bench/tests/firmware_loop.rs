@@ -1,10 +1,10 @@
 //! Firmware in the loop: the release ELF on the emulated Blue Pill, driven over its serial
 //! line like a G-code sender, its pins read like a logic analyzer.
 
-mod fil;
+mod firmware_rig;
 
 use ddastep_bench::emu::HZ;
-use fil::*;
+use firmware_rig::*;
 use proptest::prelude::*;
 
 #[test]

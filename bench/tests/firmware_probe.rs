@@ -2,13 +2,13 @@
 //! PC14, the firmware's EXTI14 handler stops the engine at its next tick, and `[PRB:]` is the
 //! position the pulses made.
 
-mod fil;
+mod firmware_rig;
 
-use ddastep::settings::Settings;
-use ddastep::store::Stored;
+use ddastep::grbl::settings::Settings;
+use ddastep::grbl::store::Stored;
 use ddastep_bench::emu::{firmware_elf, Board, HZ};
 use ddastep_bench::machine::{MachineSpec, VirtualMachine};
-use fil::*;
+use firmware_rig::*;
 
 /// X, Y, Z at 100 steps/mm, a probe on Z at `at_mm`; `Settings::BENCH` in flash; banner seen.
 fn boot_probe(at_mm: f64) -> Board {

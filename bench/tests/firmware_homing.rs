@@ -3,12 +3,12 @@
 //! every cycle ends with each carriage `$27` before its switch, to the step, from any start;
 //! a missing switch is ALARM:9; chattering contacts home to the same step; `$HX` alone.
 
-mod fil;
+mod firmware_rig;
 
-use ddastep::settings::Settings;
+use ddastep::grbl::settings::Settings;
 use ddastep_bench::emu::Board;
 use ddastep_bench::machine::{MachineSpec, VirtualMachine};
-use fil::*;
+use firmware_rig::*;
 
 /// Bench rates, homing on: 300 × 300 × 80 mm, seek 15 000 mm/min, locate 600 mm/min, 1 mm
 /// pull-off, 10 ms debounce.

@@ -2,8 +2,8 @@
 #![allow(dead_code)]
 
 use ddastep::board::{DIR_PINS, STEP_PINS};
-use ddastep::settings::Settings;
-use ddastep::store::{Stored, PAGE_LEN};
+use ddastep::grbl::settings::Settings;
+use ddastep::grbl::store::{Stored, PAGE_LEN};
 use ddastep_bench::emu::{firmware_elf, Board, HZ};
 
 /// Flash address of the persistent store's first page (A/B over the last two pages).

@@ -3,11 +3,11 @@
 //! resets the MCU: step pins low and drivers off first, `[MSG:Reset by watchdog]` after the
 //! banner, and the alarm state.
 
-mod fil;
+mod firmware_rig;
 
 use ddastep::board::{ENABLE_PIN, STEP_PINS};
 use ddastep_bench::emu::{firmware_elf, Port, HZ};
-use fil::*;
+use firmware_rig::*;
 use object::{Object, ObjectSymbol};
 
 /// RAM address of the firmware's stall hook.

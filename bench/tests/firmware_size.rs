@@ -1,7 +1,7 @@
 //! The release firmware fits its budget: flash ≤ 62 KiB (the chip's 64 KiB less the two last
 //! 1 KiB pages, which hold settings and coordinates), static RAM ≤ 16 KiB of the 20 KiB.
 
-mod fil;
+mod firmware_rig;
 
 use object::{Object, ObjectSection, SectionFlags};
 
@@ -49,22 +49,22 @@ fn release_firmware_fits_62k_flash_and_16k_static_ram() {
 /// through the look-ahead, a jog and its cancel, a soft reset. Prints the figure for README.
 #[test]
 fn stack_stays_clear_of_the_statics_through_a_session() {
-    let mut b = fil::boot();
+    let mut b = firmware_rig::boot();
     for q in ["$I", "$$", "$G", "$#", "$N"] {
-        fil::ok(&mut b, q);
+        firmware_rig::ok(&mut b, q);
     }
-    fil::ok(&mut b, "$110=30000");
-    fil::ok(&mut b, "G10 L20 P1 X0 Y0 Z0");
+    firmware_rig::ok(&mut b, "$110=30000");
+    firmware_rig::ok(&mut b, "G10 L20 P1 X0 Y0 Z0");
     for line in ["G21 G90 G17 F3000", "G1 X10 Y5", "G2 X20 Y5 I5 J0", "G3 X10 Y5 R5", "G18 G2 X20 Z0 I5 K0", "G0 X0 Y0 Z0"] {
-        fil::ok(&mut b, line);
+        firmware_rig::ok(&mut b, line);
     }
-    fil::wait_idle(&mut b, 10.0);
-    fil::ok(&mut b, "$J=G91 X5 F600");
+    firmware_rig::wait_idle(&mut b, 10.0);
+    firmware_rig::ok(&mut b, "$J=G91 X5 F600");
     b.serial_send(&[0x85]);
-    fil::wait_idle(&mut b, 5.0);
+    firmware_rig::wait_idle(&mut b, 5.0);
     b.serial_send(&[0x18]);
     b.run_seconds(0.05).expect("runs");
     let (used, room) = b.stack_peak().expect("ELF has _stack_end");
     println!("stack: {used} B used of {room} B between the statics and the top of RAM");
-    fil::assert_stack_fits(&b);
+    firmware_rig::assert_stack_fits(&b);
 }

@@ -1,10 +1,10 @@
 //! Firmware in the loop: what UGS and CNCjs send to set up, jog, zero, run and stop, over the
 //! emulated USART of the release ELF, with every reply checked against the pins.
 
-mod fil;
+mod firmware_rig;
 
 use ddastep_bench::emu::Board;
-use fil::*;
+use firmware_rig::*;
 
 /// MPos (or WPos) from a status line.
 fn pos(status: &str) -> Vec<f64> {
@@ -180,7 +180,7 @@ fn power_cut_during_a_coordinate_save_keeps_the_old_or_the_new_image() {
     let mut snaps: Vec<Vec<u8>> = Vec::new();
     while !b.serial_output()[mark..].contains("ok") {
         b.run_until(200, |_| false).unwrap();
-        let s = b.read_mem(STORE_ADDR, 2 * ddastep::store::PAGE_LEN);
+        let s = b.read_mem(STORE_ADDR, 2 * ddastep::grbl::store::PAGE_LEN);
         if snaps.last() != Some(&s) {
             snaps.push(s);
         }

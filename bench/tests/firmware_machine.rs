@@ -2,12 +2,12 @@
 //! follow the step pins exactly, limit switches drive PA0-PA2 with bounce, and the firmware
 //! shows them in `Pn:` (with `$5` inverting).
 
-mod fil;
+mod firmware_rig;
 
-use ddastep::settings::Settings;
+use ddastep::grbl::settings::Settings;
 use ddastep_bench::emu::Board;
 use ddastep_bench::machine::VirtualMachine;
-use fil::*;
+use firmware_rig::*;
 
 /// The firmware with gantry300's steps/mm, fast rates, wired to the virtual gantry.
 fn gantry() -> Board {

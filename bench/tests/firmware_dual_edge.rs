@@ -1,11 +1,11 @@
 //! Firmware in the loop, dual-edge step mode (`$580=1`): every step toggles its pin (drivers
 //! that step on both edges, TMC22xx `dedge`). Counts are every edge of a step pin.
 
-mod fil;
+mod firmware_rig;
 
-use ddastep::settings::Settings;
+use ddastep::grbl::settings::Settings;
 use ddastep_bench::emu::{gcode_lines, HZ};
-use fil::*;
+use firmware_rig::*;
 
 /// Steps per axis from the pins.
 fn counts(s: &[Step]) -> [usize; 7] {

@@ -1,10 +1,10 @@
 //! Firmware in the loop: a CAM-style job with arcs on the emulated Blue Pill (rapids, cuts,
 //! arcs in two planes, a helical full circle), checked against the ideal path.
 
-mod fil;
+mod firmware_rig;
 
 use ddastep_bench::emu::HZ;
-use fil::*;
+use firmware_rig::*;
 
 /// The job: (line, what the ideal path travels on X, Y, Z in mm for that line).
 const JOB: [(&str, [f64; 3]); 11] = [

@@ -2,13 +2,13 @@
 //! drives quadrature edges on PA6/PA7, the emulated TIM3 counts them in x4 encoder mode, and
 //! the firmware reports and checks them (`|Enc:` beside `MPos:`, step loss).
 
-mod fil;
+mod firmware_rig;
 
-use ddastep::settings::Settings;
-use ddastep::store::Stored;
+use ddastep::grbl::settings::Settings;
+use ddastep::grbl::store::Stored;
 use ddastep_bench::emu::{firmware_elf, Board, HZ};
 use ddastep_bench::machine::{MachineSpec, VirtualMachine};
-use fil::*;
+use firmware_rig::*;
 
 /// X, Y, Z at the paper bench's 100 steps/mm; an encoder of `cps` counts per step on X's
 /// motor (rotor `lag_us` behind its pulses), plus `extra` (faults) in TOML.

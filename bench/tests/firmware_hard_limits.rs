@@ -4,13 +4,13 @@
 //! Ctrl-X, which restarts the MCU into the alarm state, keeping the position (as Grbl keeps
 //! its position across a soft reset, but asks for `$H`/`$X`).
 
-mod fil;
+mod firmware_rig;
 
 use ddastep::board::STEP_PINS;
-use ddastep::settings::Settings;
+use ddastep::grbl::settings::Settings;
 use ddastep_bench::emu::{Board, HZ};
 use ddastep_bench::machine::VirtualMachine;
-use fil::*;
+use firmware_rig::*;
 
 /// The firmware with gantry300's steps/mm and `$21=1`, wired to the virtual gantry.
 fn gantry(hard: bool, pulse_us: f32) -> Board {

@@ -2,12 +2,12 @@
 //! during a move and closes it again; the move stops (`Door:2` → `Door:1`, `Pn:D`), `~` with
 //! the door open does nothing, and after it closes `~` finishes the move with every step.
 
-mod fil;
+mod firmware_rig;
 
-use ddastep::settings::Settings;
+use ddastep::grbl::settings::Settings;
 use ddastep_bench::emu::{Board, HZ};
 use ddastep_bench::machine::MachineSpec;
-use fil::*;
+use firmware_rig::*;
 
 /// X, Y, Z at 100 steps/mm; the door opens at `open_s` and closes at `close_s`.
 fn boot_door(open_s: f64, close_s: f64) -> Board {

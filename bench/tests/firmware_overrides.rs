@@ -1,12 +1,12 @@
 //! Firmware in the loop: Grbl's feed override bytes on the emulated board change the running
 //! move's step rate, measured from the pins, through the ramp (no jump), and `Ov:` shows them.
 
-mod fil;
+mod firmware_rig;
 
-use ddastep::settings::Settings;
-use ddastep::store::Stored;
+use ddastep::grbl::settings::Settings;
+use ddastep::grbl::store::Stored;
 use ddastep_bench::emu::{Board, HZ};
-use fil::*;
+use firmware_rig::*;
 
 /// X steps per second between two cycle counts, from the pins.
 fn x_rate(s: &[Step], from: u64, to: u64) -> f64 {
