@@ -99,10 +99,12 @@ fn DMA1_CHANNEL1() {
     let t0 = hw::cycles();
     let dma = hw::dma1();
     let flags = dma.isr().read().bits() & ISR_CH1;
+    // SAFETY: IFCR is write-1-to-clear; `flags` holds only channel 1's four flags (ISR_CH1).
     dma.ifcr().write(|w| unsafe { w.bits(flags) });
     let half = (HALF.load(Relaxed) as usize).min(HALF_MAX);
     // SAFETY: installed before the interrupt was unmasked; this handler is its only user.
     let s = unsafe { &mut *STATE.0.get() };
+    // SAFETY: `install` wrote the engine before unmasking this interrupt, the only user of the slot.
     let burst = unsafe { s.burst.assume_init_mut() };
     // The half just played: the first after a half transfer, the second after the transfer
     // complete (both when this interrupt came late; DMA is then in the first again).

@@ -29,9 +29,13 @@ pub fn setup(rcc: &mut stm32f1xx_hal::rcc::Rcc) {
     pac::TIM3::enable(rcc);
     pac::TIM3::reset(rcc);
     let t = tim3();
+    // SAFETY: CCMR1 (input): the capture selections and filters named in CCMR1_ENCODER, defined fields only; TIM3 just reset, stopped.
     t.ccmr1_input().write(|w| unsafe { w.bits(CCMR1_ENCODER) });
+    // SAFETY: SMCR: SMS = 011 (encoder mode 3), the other fields 0.
     t.smcr().write(|w| unsafe { w.bits(SMCR_X4) });
+    // SAFETY: ARR = 0xFFFF: the full 16-bit count range.
     t.arr().write(|w| unsafe { w.bits(0xFFFF) });
+    // SAFETY: CR1: CEN only: TIM3 counts from here.
     t.cr1().write(|w| unsafe { w.bits(CR1_CEN) });
 }
 

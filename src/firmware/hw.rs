@@ -91,6 +91,7 @@ pub static ENABLE_OFF_HIGH: core::sync::atomic::AtomicBool = core::sync::atomic:
 /// Drives the shared enable pin.
 pub fn set_enable(high: bool) {
     let bit = 1u32 << board::ENABLE_PIN;
+    // SAFETY: BSRR takes any word (low half sets, high half resets, atomically); this one drives only EN.
     gpiob().bsrr().write(|w| unsafe { w.bits(if high { bit } else { bit << 16 }) });
 }
 
@@ -111,6 +112,7 @@ pub fn set_pulse_ticks(ticks: u32) -> bool {
         }
         ticks + ddastep::motion::timing::STORE_LATENCY_TICKS
     };
+    // SAFETY: CCR1 is a 16-bit compare value and `ccr` is clamped to it; preloaded, so the step interrupt sees it only from the next update.
     tim2().ccr1().write(|w| unsafe { w.bits(ccr.min(0xFFFF)) });
     true
 }
@@ -137,15 +139,22 @@ pub fn setup_dma(words: u32, periods: u32, off: u32, n: u32, first: u32, fall: u
     // SAFETY: one bit of the clock enables, set once in init.
     unsafe { (*pac::RCC::ptr()).ahbenr().modify(|r, w| w.bits(r.bits() | 1)) };
     let t = tim2();
+    // SAFETY: DIER 0: every TIM2 interrupt and DMA request off (init, interrupts masked, TIM2 stopped).
     t.dier().write(|w| unsafe { w.bits(0) });
+    // SAFETY: ARR: `first` is the layout's longest entry, which fits the 16-bit counter.
     t.arr().write(|w| unsafe { w.bits(first - 1) });
     // Compare 3 frozen, not preloaded, one tick after the update: the period store.
+    // SAFETY: CCMR2 0: channels 3 and 4 frozen, no preload (a defined mode).
     t.ccmr2_output().write(|w| unsafe { w.bits(0) });
+    // SAFETY: CCR3 = 1: a compare value in range.
     t.ccr3().write(|w| unsafe { w.bits(1) });
+    // SAFETY: CCR1: the falling edge's compare value, inside the 16-bit period.
     t.ccr1().write(|w| unsafe { w.bits(fall) });
     t.egr().write(|w| w.ug().set_bit());
     // Counting starts past compare 3, so the first period store follows the first update.
+    // SAFETY: CNT = 2: a count in range; TIM2 stays stopped until `start_step_timer`.
     t.cnt().write(|w| unsafe { w.bits(2) });
+    // SAFETY: SR 0 clears every flag (the flags are rc_w0).
     t.sr().write(|w| unsafe { w.bits(0) });
     // CCR: memory to peripheral (DIR), circular, memory increment, very high priority, on.
     const DIR: u32 = 1 << 4;
@@ -161,10 +170,15 @@ pub fn setup_dma(words: u32, periods: u32, off: u32, n: u32, first: u32, fall: u
     let gpiob_bsrr = gpiob().bsrr().as_ptr() as u32;
     let dma = dma1();
     let channel = |ch: &pac::dma1::CH, par: u32, mar: u32, n: u32, cr: u32| {
+        // SAFETY: CR 0 turns the channel off first: PAR, MAR and NDTR are writable only while EN is 0.
         ch.cr().write(|w| unsafe { w.bits(0) });
+        // SAFETY: PAR: a 32-bit peripheral register (GPIOB_BSRR or TIM2_ARR) that DMA may store into.
         ch.par().write(|w| unsafe { w.bits(par) });
+        // SAFETY: MAR: a static buffer of `burst` (never freed) that DMA only reads.
         ch.mar().write(|w| unsafe { w.bits(mar) });
+        // SAFETY: NDTR: the entry count, at most 2 · HALF_MAX, within its 16 bits.
         ch.ndtr().write(|w| unsafe { w.bits(n) });
+        // SAFETY: CR: the named mode bits above (defined fields only) plus EN, which starts the channel.
         ch.cr().write(|w| unsafe { w.bits(cr | EN) });
     };
     channel(dma.ch2(), gpiob_bsrr, words, n, DIR | CIRC | MINC | P32 | M32 | VERY_HIGH);
@@ -174,12 +188,15 @@ pub fn setup_dma(words: u32, periods: u32, off: u32, n: u32, first: u32, fall: u
         channel(dma.ch5(), gpiob_bsrr, off, 1, DIR | CIRC | P32 | M32 | VERY_HIGH);
         dier |= DIER_CC1DE;
     }
+    // SAFETY: DIER: the DMA request enables named above, no interrupt enable.
     t.dier().write(|w| unsafe { w.bits(dier) });
 }
 
 /// Dual-edge mode: no compare event (interrupt off, CCR1 past every period the engine sets).
 pub fn no_falling_edge() {
+    // SAFETY: DIER bit 0 (UIE): the update interrupt only, TIM2 not counting yet (init).
     tim2().dier().write(|w| unsafe { w.bits(SR_UIF) });
+    // SAFETY: CCR1 = 0xFFFF: the largest compare value, past every period the engine sets.
     tim2().ccr1().write(|w| unsafe { w.bits(0xFFFF) });
 }
 
@@ -196,13 +213,16 @@ const TIM1_CR1_ARPE: u32 = 1 << 7;
 
 /// New spindle PWM frequency: prescaler and period, taken at the next update event.
 pub fn set_pwm_timing(t: PwmTiming) {
+    // SAFETY: PSC takes any 16-bit prescaler (`t.psc` is a u16); only `idle` writes TIM1 after init.
     tim1().psc().write(|w| unsafe { w.bits(t.psc as u32) });
+    // SAFETY: ARR takes any 16-bit period (`t.arr` is a u16); preloaded (ARPE), so a period is never cut.
     tim1().arr().write(|w| unsafe { w.bits(t.arr as u32) });
 }
 
 /// Spindle PWM compare value (preloaded: one whole period at a time) and the spindle and
 /// coolant pins (one atomic BSRR store).
 pub fn set_spindle(o: SpindleOut) {
+    // SAFETY: CCR1 takes any 16-bit compare value (`o.ccr` is a u16); preloaded.
     tim1().ccr1().write(|w| unsafe { w.bits(o.ccr as u32) });
     let pins = [
         (board::SPINDLE_ENABLE_PIN, o.enable),
@@ -213,6 +233,7 @@ pub fn set_spindle(o: SpindleOut) {
     let word = pins.iter().fold(0u32, |w, &(p, on)| w | if on { 1 << p } else { 1 << (p + 16) });
     // SAFETY: BSRR stores are atomic; only `idle` drives these GPIOA pins.
     let gpioa = unsafe { &*pac::GPIOA::ptr() };
+    // SAFETY: BSRR takes any word; this one drives only the four spindle and coolant pins.
     gpioa.bsrr().write(|w| unsafe { w.bits(word) });
 }
 
@@ -239,6 +260,7 @@ pub fn heartbeat(now_ms: u32) {
     let bit = 1u32 << board::LED_PIN;
     // SAFETY: BSRR stores are atomic; only idle drives PC13.
     let gpioc = unsafe { &*pac::GPIOC::ptr() };
+    // SAFETY: BSRR takes any word; this one drives only PC13.
     gpioc.bsrr().write(|w| unsafe { w.bits(if on { bit << 16 } else { bit }) });
 }
 
@@ -298,11 +320,16 @@ fn setup_pins() {
     // 0xB); PA9/PA10 as the HAL left them; PA11..PA14 untouched (USB, SWD); PA15 spindle
     // enable (output, low).
     let tool = 1 << board::SPINDLE_ENABLE_PIN | 1 << board::SPINDLE_DIR_PIN | 1 << board::COOLANT_FLOOD_PIN | 1 << board::COOLANT_MIST_PIN;
+    // SAFETY: BSRR: pull-ups on the limit and encoder inputs (ODR high) and the tool outputs low, before CRL/CRH make them inputs and outputs.
     a.bsrr().write(|w| unsafe { w.bits(board::LIMIT_INPUTS | board::ENCODER_INPUTS | tool << 16) });
+    // SAFETY: CRL: one defined mode nibble per pin, as listed above; init owns GPIOA.
     a.crl().write(|w| unsafe { w.bits(0x8822_2888) });
+    // SAFETY: CRH: PA8's and PA15's nibbles only; the others keep what the HAL and reset set.
     a.crh().modify(|r, w| unsafe { w.bits((r.bits() & !0xF000_000F) | 0x2000_000B) });
     // PC13 LED (active low): off. PC14 probe and PC15 door inputs, pulled up.
+    // SAFETY: BSRR: LED off (high), pull-ups on the probe and door inputs.
     c.bsrr().write(|w| unsafe { w.bits(1 << board::LED_PIN | 1 << board::PROBE_PIN | 1 << board::DOOR_PIN) });
+    // SAFETY: CRH: PC13..PC15's nibbles only (defined modes, listed above).
     c.crh().modify(|r, w| unsafe { w.bits((r.bits() & !(0xFFF << 20)) | 0x882 << 20) });
 }
 
@@ -312,15 +339,22 @@ fn setup_tim2(rcc: &mut stm32f1xx_hal::rcc::Rcc) {
     pac::TIM2::enable(rcc);
     pac::TIM2::reset(rcc);
     let t = tim2();
+    // SAFETY: PSC 0: no prescaler (TIM2 stopped, owned by init).
     t.psc().write(|w| unsafe { w.bits(0) });
+    // SAFETY: ARR: the idle period, which fits the 16-bit counter.
     t.arr().write(|w| unsafe { w.bits(IDLE_TICKS - 1) });
     // Compare 1 "frozen" (no pin), CCR1 preloaded so a new pulse width starts at an update.
+    // SAFETY: CCMR1: OC1PE only (compare 1 frozen, preloaded).
     t.ccmr1_output().write(|w| unsafe { w.bits(1 << 3) });
+    // SAFETY: CCR1: the default pulse's compare value, within 16 bits.
     t.ccr1().write(|w| unsafe { w.bits(ddastep::motion::timing::Timing::DEFAULT.pulse_ticks + ddastep::motion::timing::STORE_LATENCY_TICKS) });
     t.egr().write(|w| w.ug().set_bit());
+    // SAFETY: SR 0 clears every flag (rc_w0).
     t.sr().write(|w| unsafe { w.bits(0) });
+    // SAFETY: DIER: UIE and CC1IE (the same bit positions as SR's UIF and CC1IF).
     t.dier().write(|w| unsafe { w.bits(SR_UIF | SR_CC1IF) });
     // ARPE | URS; counting starts in `start_step_timer`.
+    // SAFETY: CR1: ARPE and URS, the counter still stopped.
     t.cr1().write(|w| unsafe { w.bits((1 << 7) | (1 << 2)) });
 }
 
@@ -332,19 +366,25 @@ fn setup_tim1(rcc: &mut stm32f1xx_hal::rcc::Rcc) {
     pac::TIM1::reset(rcc);
     set_pwm_timing(PwmTiming::new(Settings::DEFAULT.spindle_pwm_hz));
     let t = tim1();
+    // SAFETY: CCR1 0: duty 0 (TIM1 just reset, stopped).
     t.ccr1().write(|w| unsafe { w.bits(0) });
     // CCMR1: OC1M = 110 (PWM mode 1), OC1PE (preload).
+    // SAFETY: CCMR1: OC1M = 110 (PWM mode 1) and OC1PE, channel 1 an output.
     t.ccmr1_output().write(|w| unsafe { w.bits(0b110 << 4 | 1 << 3) });
     // CCER: CC1E (channel 1 output on, active high).
+    // SAFETY: CCER: CC1E only (channel 1 on, active high).
     t.ccer().write(|w| unsafe { w.bits(1) });
     // BDTR: MOE (an advanced timer's outputs stay off without it).
+    // SAFETY: BDTR: MOE only (no dead time, no break input).
     t.bdtr().write(|w| unsafe { w.bits(1 << 15) });
     t.egr().write(|w| w.ug().set_bit());
+    // SAFETY: CR1: ARPE and CEN: TIM1 counts from here.
     t.cr1().write(|w| unsafe { w.bits(TIM1_CR1_ARPE | TIM1_CR1_CEN) });
 }
 
 /// Starts TIM2 counting: the last thing `init` does, so the first update event does not wait
 /// behind the rest of init (which runs with interrupts off).
 pub fn start_step_timer() {
+    // SAFETY: CR1: sets CEN and keeps the rest; only init (interrupts off) and the limit handler write CR1.
     tim2().cr1().modify(|r, w| unsafe { w.bits(r.bits() | 1) });
 }

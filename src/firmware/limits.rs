@@ -47,18 +47,24 @@ fn exti() -> &'static pac::exti::RegisterBlock {
 /// Both edges of the three lines; masked until [`arm`].
 pub fn setup() {
     let e = exti();
+    // SAFETY: IMR: the probe line only, a line EXTI has (init, interrupts off).
     e.imr().write(|w| unsafe { w.bits(PROBE_LINE) });
+    // SAFETY: RTSR: rising edges on lines 0-2 and 14, lines EXTI has.
     e.rtsr().write(|w| unsafe { w.bits(LINES | PROBE_LINE) });
+    // SAFETY: FTSR: falling edges on the same lines.
     e.ftsr().write(|w| unsafe { w.bits(LINES | PROBE_LINE) });
+    // SAFETY: PR is write-1-to-clear: clears the pending flags of those lines only.
     e.pr().write(|w| unsafe { w.bits(LINES | PROBE_LINE) });
     // SAFETY: init only; AFIO's clock is on (the JTAG remap). EXTI14 from port C (0b0010).
     let afio = unsafe { &*pac::AFIO::ptr() };
+    // SAFETY: EXTICR4: EXTI14 from port C (field EXTI14 = 0b0010), the other lines of the register port A as at reset.
     afio.exticr4().write(|w| unsafe { w.bits(0b0010 << 8) });
 }
 
 /// The EXTI15_10 handler body: the probe input changed; a probe cycle's edge stops the engine
 /// at its next tick (see `Shared::probe_input`).
 pub fn on_probe_edge() {
+    // SAFETY: PR is write-1-to-clear: clears only the probe line's flag, this handler's own.
     exti().pr().write(|w| unsafe { w.bits(PROBE_LINE) });
     super::app::SHARED.probe_input(super::hw::probe_low() != PROBE_INVERT.load(Relaxed));
 }
@@ -69,12 +75,14 @@ pub fn arm(on: bool, invert: bool, active: u8, watch: Option<u8>) {
     let on = on && watch.is_none();
     let watch = watch.unwrap_or(0) as u32;
     ARMED.store(on as u32 | (invert as u32) << 1 | (active as u32) << 8 | watch << 16, Relaxed);
+    // SAFETY: IMR: lines 0-2 and 14 or line 14 alone; only `idle` writes IMR.
     exti().imr().write(|w| unsafe { w.bits(if on || watch != 0 { LINES | PROBE_LINE } else { PROBE_LINE }) });
 }
 
 /// The EXTI0/1/2 handler body: homing's stop for a watched switch, else (hard limits) stop
 /// all step output if a limit pin went active.
 pub fn on_edge<const N: usize>(shared: &ddastep::motion::queue::Shared<N>) {
+    // SAFETY: PR is write-1-to-clear: clears only lines 0-2, this handler's own.
     exti().pr().write(|w| unsafe { w.bits(LINES) });
     let armed = ARMED.load(Relaxed);
     let active = ddastep::grbl::limits::active_pins(super::hw::gpioa_idr(), armed & 2 != 0) as u32;
@@ -88,11 +96,15 @@ pub fn on_edge<const N: usize>(shared: &ddastep::motion::queue::Shared<N>) {
     }
     // TIM2 off (counter, interrupt enables, flags, NVIC pending), then the step pins low.
     let t = super::hw::tim2();
+    // SAFETY: CR1: clears CEN, keeps the rest; this handler (priority 3) preempts the only other writer, init's.
     t.cr1().modify(|r, w| unsafe { w.bits(r.bits() & !1) });
+    // SAFETY: DIER 0: every TIM2 interrupt and DMA request off.
     t.dier().write(|w| unsafe { w.bits(0) });
+    // SAFETY: SR 0 clears every flag (rc_w0).
     t.sr().write(|w| unsafe { w.bits(0) });
     cortex_m::peripheral::NVIC::unpend(pac::Interrupt::TIM2);
     let low = board::STEP_PINS.iter().fold(0u32, |w, &p| w | 1 << (p + 16));
+    // SAFETY: BSRR takes any word; this one resets only the step pins.
     super::hw::gpiob().bsrr().write(|w| unsafe { w.bits(low) });
     HALTED.store(true, Relaxed);
 }

@@ -1,5 +1,8 @@
 //! The RTIC application and its hardware glue (MCU only).
 
+// Every unsafe block says why it is sound (CI: bench/tests/firmware_clippy.rs).
+#![deny(clippy::undocumented_unsafe_blocks)]
+
 mod boot;
 mod burst;
 mod encoder;

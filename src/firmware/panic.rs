@@ -13,6 +13,7 @@ fn safe_outputs() {
     for p in board::STEP_PINS {
         word |= 1 << (p + 16);
     }
+    // SAFETY: BSRR takes any word (an atomic set/reset); this one drives only EN and the step pins.
     super::hw::gpiob().bsrr().write(|w| unsafe { w.bits(word) });
 }
 

@@ -75,14 +75,19 @@ fn TIM2() {
     let engine = unsafe { (*STEPPER.0.get()).assume_init_mut() };
     let sr = hw::tim2().sr().read().bits();
     if sr & hw::SR_UIF != 0 {
+        // SAFETY: BSRR takes any word; the engine's word sets and resets only its own step and direction pins.
         hw::gpiob().bsrr().write(|w| unsafe { w.bits(engine.word()) });
+        // SAFETY: SR is rc_w0: writing 0 to UIF and 1 elsewhere clears only the update flag.
         hw::tim2().sr().write(|w| unsafe { w.bits(!hw::SR_UIF) });
         let arr = engine.tick_quick();
+        // SAFETY: ARR: the engine's next period, a u16, fits the 16-bit counter.
         hw::tim2().arr().write(|w| unsafe { w.bits(arr as u32) });
     }
     // The compare event ends the pulse; if it came while we computed, end it now.
     if hw::tim2().sr().read().bits() & hw::SR_CC1IF != 0 {
+        // SAFETY: BSRR takes any word; `step_off` resets only the step pins.
         hw::gpiob().bsrr().write(|w| unsafe { w.bits(engine.step_off()) });
+        // SAFETY: SR is rc_w0: writing 0 to CC1IF and 1 elsewhere clears only the compare 1 flag.
         hw::tim2().sr().write(|w| unsafe { w.bits(!hw::SR_CC1IF) });
     }
     STEP_TIME.record(hw::cycles().wrapping_sub(t0));

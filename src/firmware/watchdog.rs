@@ -27,6 +27,7 @@ pub fn take_reset_cause() -> bool {
     // SAFETY: RCC_CSR is read and its flags cleared once, first thing in `init`.
     let rcc = unsafe { &*pac::RCC::ptr() };
     let by_watchdog = rcc.csr().read().bits() & CSR_IWDGRSTF != 0;
+    // SAFETY: CSR: sets RMVF (clears the reset flags) and keeps the rest; init only.
     rcc.csr().modify(|r, w| unsafe { w.bits(r.bits() | CSR_RMVF) });
     by_watchdog
 }
@@ -34,15 +35,21 @@ pub fn take_reset_cause() -> bool {
 /// Starts the watchdog with `ddastep::watchdog`'s timeout (it cannot be stopped again).
 pub fn start() {
     let w = iwdg();
+    // SAFETY: KR: the unlock key (RM0008 19.4.1), which enables writes to PR and RLR.
     w.kr().write(|k| unsafe { k.bits(KEY_UNLOCK) });
+    // SAFETY: PR: `ddastep::watchdog`'s prescaler code, within its 3 bits.
     w.pr().write(|k| unsafe { k.bits(IWDG_PR) });
+    // SAFETY: RLR: `ddastep::watchdog`'s reload value, within its 12 bits.
     w.rlr().write(|k| unsafe { k.bits(IWDG_RLR) });
+    // SAFETY: KR: the reload key.
     w.kr().write(|k| unsafe { k.bits(KEY_RELOAD) });
+    // SAFETY: KR: the start key (the IWDG cannot be stopped again; that is the point).
     w.kr().write(|k| unsafe { k.bits(KEY_START) });
 }
 
 /// Reloads the counter.
 pub fn feed() {
+    // SAFETY: KR: the reload key; only `idle` feeds, after `init` started the IWDG.
     iwdg().kr().write(|k| unsafe { k.bits(KEY_RELOAD) });
 }
 
