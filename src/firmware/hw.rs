@@ -99,23 +99,26 @@ pub fn set_enable(high: bool) {
 /// Nothing in dual-edge mode ([`no_falling_edge`]: the compare interrupt is off). `false` when
 /// DMA burst mode's buffers cannot hold the pulse (their layout follows it: a restart).
 pub fn set_pulse_ticks(ticks: u32) -> bool {
-    let dier = tim2().dier().read().bits();
+    let dier = tim2().dier().read();
     let ccr = if super::burst::active() {
-        if dier & DIER_CC1DE == 0 {
+        if dier.cc1de().bit_is_clear() {
             return true;
         }
         let Some(fall) = super::burst::fall_ticks(ticks) else { return false };
         fall
     } else {
-        if dier & SR_CC1IF == 0 {
+        if dier.cc1ie().bit_is_clear() {
             return true;
         }
         ticks + ddastep::motion::timing::STORE_LATENCY_TICKS
     };
-    // SAFETY: CCR1 is a 16-bit compare value and `ccr` is clamped to it; preloaded, so the step interrupt sees it only from the next update.
-    tim2().ccr1().write(|w| unsafe { w.bits(ccr.min(0xFFFF)) });
+    // (Preloaded: the step interrupt's period sees it from the next update.)
+    tim2().ccr1().write(|w| w.ccr().set(ccr.min(0xFFFF) as u16));
     true
 }
+
+/// DMA mode: compare 3 (the period store) one tick after the update.
+const PERIOD_STORE_TICK: u16 = 1;
 
 /// TIM2 DIER: DMA requests on update, compare 1, compare 3.
 const DIER_UDE: u32 = 1 << 8;
@@ -135,27 +138,24 @@ pub fn dma1() -> &'static pac::dma1::RegisterBlock {
 /// event, `fall` ticks after the update, storing `*off` into BSRR (channel 5). `n` entries,
 /// circular; the first period is `first` ticks.
 pub fn setup_dma(words: u32, periods: u32, off: u32, n: u32, first: u32, fall: u32, dual: bool) {
-    // RCC_AHBENR.DMA1EN.
-    // SAFETY: one bit of the clock enables, set once in init.
-    unsafe { (*pac::RCC::ptr()).ahbenr().modify(|r, w| w.bits(r.bits() | 1)) };
+    // SAFETY: one bit of the clock enables (DMA1EN), set once in init, interrupts off.
+    unsafe { (*pac::RCC::ptr()).ahbenr().modify(|_, w| w.dma1en().set_bit()) };
     let t = tim2();
-    // SAFETY: DIER 0: every TIM2 interrupt and DMA request off (init, interrupts masked, TIM2 stopped).
-    t.dier().write(|w| unsafe { w.bits(0) });
+    // Every TIM2 interrupt and DMA request off (DIER's reset value).
+    t.dier().reset();
     // SAFETY: ARR: `first` is the layout's longest entry, which fits the 16-bit counter.
     t.arr().write(|w| unsafe { w.bits(first - 1) });
-    // Compare 3 frozen, not preloaded, one tick after the update: the period store.
-    // SAFETY: CCMR2 0: channels 3 and 4 frozen, no preload (a defined mode).
-    t.ccmr2_output().write(|w| unsafe { w.bits(0) });
-    // SAFETY: CCR3 = 1: a compare value in range.
-    t.ccr3().write(|w| unsafe { w.bits(1) });
+    // Compare 3 frozen, not preloaded (CCMR2's reset value), one tick after the update: the
+    // period store.
+    t.ccmr2_output().reset();
+    t.ccr3().write(|w| w.ccr().set(PERIOD_STORE_TICK));
     // SAFETY: CCR1: the falling edge's compare value, inside the 16-bit period.
     t.ccr1().write(|w| unsafe { w.bits(fall) });
     t.egr().write(|w| w.ug().set_bit());
     // Counting starts past compare 3, so the first period store follows the first update.
-    // SAFETY: CNT = 2: a count in range; TIM2 stays stopped until `start_step_timer`.
-    t.cnt().write(|w| unsafe { w.bits(2) });
-    // SAFETY: SR 0 clears every flag (the flags are rc_w0).
-    t.sr().write(|w| unsafe { w.bits(0) });
+    t.cnt().write(|w| w.cnt().set(PERIOD_STORE_TICK + 1));
+    // Every flag cleared (SR's reset value).
+    t.sr().reset();
     // CCR: memory to peripheral (DIR), circular, memory increment, very high priority, on.
     const DIR: u32 = 1 << 4;
     const CIRC: u32 = 1 << 5;
@@ -170,8 +170,8 @@ pub fn setup_dma(words: u32, periods: u32, off: u32, n: u32, first: u32, fall: u
     let gpiob_bsrr = gpiob().bsrr().as_ptr() as u32;
     let dma = dma1();
     let channel = |ch: &pac::dma1::CH, par: u32, mar: u32, n: u32, cr: u32| {
-        // SAFETY: CR 0 turns the channel off first: PAR, MAR and NDTR are writable only while EN is 0.
-        ch.cr().write(|w| unsafe { w.bits(0) });
+        // Channel off first (CR's reset value): PAR, MAR and NDTR are writable only while EN is 0.
+        ch.cr().reset();
         // SAFETY: PAR: a 32-bit peripheral register (GPIOB_BSRR or TIM2_ARR) that DMA may store into.
         ch.par().write(|w| unsafe { w.bits(par) });
         // SAFETY: MAR: a static buffer of `burst` (never freed) that DMA only reads.
@@ -194,10 +194,8 @@ pub fn setup_dma(words: u32, periods: u32, off: u32, n: u32, first: u32, fall: u
 
 /// Dual-edge mode: no compare event (interrupt off, CCR1 past every period the engine sets).
 pub fn no_falling_edge() {
-    // SAFETY: DIER bit 0 (UIE): the update interrupt only, TIM2 not counting yet (init).
-    tim2().dier().write(|w| unsafe { w.bits(SR_UIF) });
-    // SAFETY: CCR1 = 0xFFFF: the largest compare value, past every period the engine sets.
-    tim2().ccr1().write(|w| unsafe { w.bits(0xFFFF) });
+    tim2().dier().write(|w| w.uie().set_bit());
+    tim2().ccr1().write(|w| w.ccr().set(u16::MAX));
 }
 
 /// TIM1's registers (written only by `idle` after init).
@@ -207,23 +205,17 @@ fn tim1() -> &'static pac::tim1::RegisterBlock {
     unsafe { &*pac::TIM1::ptr() }
 }
 
-/// TIM1 CR1: counter enable, ARR preload.
-const TIM1_CR1_CEN: u32 = 1 << 0;
-const TIM1_CR1_ARPE: u32 = 1 << 7;
-
 /// New spindle PWM frequency: prescaler and period, taken at the next update event.
 pub fn set_pwm_timing(t: PwmTiming) {
-    // SAFETY: PSC takes any 16-bit prescaler (`t.psc` is a u16); only `idle` writes TIM1 after init.
-    tim1().psc().write(|w| unsafe { w.bits(t.psc as u32) });
-    // SAFETY: ARR takes any 16-bit period (`t.arr` is a u16); preloaded (ARPE), so a period is never cut.
-    tim1().arr().write(|w| unsafe { w.bits(t.arr as u32) });
+    tim1().psc().write(|w| w.psc().set(t.psc));
+    // (Preloaded, ARPE: a period is never cut.)
+    tim1().arr().write(|w| w.arr().set(t.arr));
 }
 
 /// Spindle PWM compare value (preloaded: one whole period at a time) and the spindle and
 /// coolant pins (one atomic BSRR store).
 pub fn set_spindle(o: SpindleOut) {
-    // SAFETY: CCR1 takes any 16-bit compare value (`o.ccr` is a u16); preloaded.
-    tim1().ccr1().write(|w| unsafe { w.bits(o.ccr as u32) });
+    tim1().ccr1().write(|w| w.ccr().set(o.ccr));
     let pins = [
         (board::SPINDLE_ENABLE_PIN, o.enable),
         (board::SPINDLE_DIR_PIN, o.ccw),
@@ -309,29 +301,87 @@ impl Board {
     }
 }
 
+/// A pin's mode in CRL/CRH (RM0008 §9.2.1): its CNF and MODE bits, one nibble per pin.
+#[derive(Clone, Copy)]
+pub enum PinMode {
+    /// Input, floating (CNF 01, MODE 00): the reset state.
+    InputFloating = 0b0100,
+    /// Input with pull-up or pull-down, as ODR says (CNF 10, MODE 00).
+    InputPull = 0b1000,
+    /// Push-pull output, 2 MHz (CNF 00, MODE 10).
+    Output2MHz = 0b0010,
+    /// Push-pull output, 50 MHz (CNF 00, MODE 11).
+    Output50MHz = 0b0011,
+    /// Alternate function push-pull output, 50 MHz (CNF 10, MODE 11).
+    Alternate50MHz = 0b1011,
+}
+
+/// The CRL (`high` false: pins 0–7) or CRH (pins 8–15) bits of `pins`: (the mask of their
+/// nibbles, their modes).
+pub const fn config_word(pins: &[(u8, PinMode)], high: bool) -> (u32, u32) {
+    let (mut mask, mut word) = (0, 0);
+    let mut i = 0;
+    while i < pins.len() {
+        let (pin, mode) = pins[i];
+        if (pin >= 8) == high {
+            let at = (pin % 8) * 4;
+            mask |= 0xF << at;
+            word |= (mode as u32) << at;
+        }
+        i += 1;
+    }
+    (mask, word)
+}
+
+/// GPIOA: limits X, Y, Z pulled up; mist, flood, spindle direction outputs (low); encoder A/B
+/// (TIM3) pulled up (open-collector encoders; not 5 V tolerant); the spindle PWM (TIM1_CH1);
+/// spindle enable (output, low). PA9/PA10 stay as the HAL left them (USART1), PA11..PA14
+/// untouched (USB, SWD).
+const GPIOA_PINS: [(u8, PinMode); 10] = [
+    (board::LIMIT_PINS[0], PinMode::InputPull),
+    (board::LIMIT_PINS[1], PinMode::InputPull),
+    (board::LIMIT_PINS[2], PinMode::InputPull),
+    (board::COOLANT_MIST_PIN, PinMode::Output2MHz),
+    (board::COOLANT_FLOOD_PIN, PinMode::Output2MHz),
+    (board::SPINDLE_DIR_PIN, PinMode::Output2MHz),
+    (board::ENCODER_PINS[0], PinMode::InputPull),
+    (board::ENCODER_PINS[1], PinMode::InputPull),
+    (board::SPINDLE_PWM_PIN, PinMode::Alternate50MHz),
+    (board::SPINDLE_ENABLE_PIN, PinMode::Output2MHz),
+];
+const GPIOA_CRL: (u32, u32) = config_word(&GPIOA_PINS, false);
+const GPIOA_CRH: (u32, u32) = config_word(&GPIOA_PINS, true);
+// CRL is written whole: every pin of it has a mode above.
+const _: () = assert!(GPIOA_CRL.0 == u32::MAX);
+
+/// GPIOC: the LED (active low, output), the probe and door inputs pulled up.
+const GPIOC_PINS: [(u8, PinMode); 3] =
+    [(board::LED_PIN, PinMode::Output2MHz), (board::PROBE_PIN, PinMode::InputPull), (board::DOOR_PIN, PinMode::InputPull)];
+const GPIOC_CRH: (u32, u32) = config_word(&GPIOC_PINS, true);
+
 /// Limit inputs, spindle and coolant outputs and the LED (GPIOB is set up by `boot.rs`),
-/// written as whole CRL/CRH words (one nibble per pin: 0x3 push-pull 50 MHz, 0x2 push-pull 2 MHz, 0x8 input with pull, 0x4 input
-/// floating). The HAL's per-pin calls cost ~1 KiB of flash for the same result.
+/// written as whole CRL/CRH words. The HAL's per-pin calls cost ~1 KiB of flash for the same
+/// result.
 fn setup_pins() {
     // SAFETY: init owns the GPIO ports; the HAL configured only PA9/PA10 (USART1).
     let (a, c) = unsafe { (&*pac::GPIOA::ptr(), &*pac::GPIOC::ptr()) };
-    // Limits PA0..PA2 pulled up; PA3/PA4/PA5 mist, flood, spindle direction (outputs, low);
-    // PA6/PA7 encoder A/B (TIM3) pulled up (open-collector encoders; not 5 V tolerant); PA8 TIM1_CH1 (alternate function push-pull 50 MHz,
-    // 0xB); PA9/PA10 as the HAL left them; PA11..PA14 untouched (USB, SWD); PA15 spindle
-    // enable (output, low).
     let tool = 1 << board::SPINDLE_ENABLE_PIN | 1 << board::SPINDLE_DIR_PIN | 1 << board::COOLANT_FLOOD_PIN | 1 << board::COOLANT_MIST_PIN;
     // SAFETY: BSRR: pull-ups on the limit and encoder inputs (ODR high) and the tool outputs low, before CRL/CRH make them inputs and outputs.
     a.bsrr().write(|w| unsafe { w.bits(board::LIMIT_INPUTS | board::ENCODER_INPUTS | tool << 16) });
-    // SAFETY: CRL: one defined mode nibble per pin, as listed above; init owns GPIOA.
-    a.crl().write(|w| unsafe { w.bits(0x8822_2888) });
-    // SAFETY: CRH: PA8's and PA15's nibbles only; the others keep what the HAL and reset set.
-    a.crh().modify(|r, w| unsafe { w.bits((r.bits() & !0xF000_000F) | 0x2000_000B) });
-    // PC13 LED (active low): off. PC14 probe and PC15 door inputs, pulled up.
+    // SAFETY: CRL: a defined mode nibble for every pin (`GPIOA_PINS`); init owns GPIOA.
+    a.crl().write(|w| unsafe { w.bits(GPIOA_CRL.1) });
+    // SAFETY: CRH: defined modes for the `GPIOA_PINS` nibbles only; the others keep theirs.
+    a.crh().modify(|r, w| unsafe { w.bits((r.bits() & !GPIOA_CRH.0) | GPIOA_CRH.1) });
     // SAFETY: BSRR: LED off (high), pull-ups on the probe and door inputs.
     c.bsrr().write(|w| unsafe { w.bits(1 << board::LED_PIN | 1 << board::PROBE_PIN | 1 << board::DOOR_PIN) });
-    // SAFETY: CRH: PC13..PC15's nibbles only (defined modes, listed above).
-    c.crh().modify(|r, w| unsafe { w.bits((r.bits() & !(0xFFF << 20)) | 0x882 << 20) });
+    // SAFETY: CRH: defined modes for the `GPIOC_PINS` nibbles only; the others keep theirs.
+    c.crh().modify(|r, w| unsafe { w.bits((r.bits() & !GPIOC_CRH.0) | GPIOC_CRH.1) });
 }
+
+/// The idle period (ARR) and the default pulse's falling edge (CCR1) TIM2 starts with.
+const IDLE_ARR: u16 = (IDLE_TICKS - 1) as u16;
+const DEFAULT_CCR1: u16 = (ddastep::motion::timing::Timing::DEFAULT.pulse_ticks + ddastep::motion::timing::STORE_LATENCY_TICKS) as u16;
+const _: () = assert!(IDLE_TICKS - 1 <= 0xFFFF && DEFAULT_CCR1 as u32 == ddastep::motion::timing::Timing::DEFAULT.pulse_ticks + ddastep::motion::timing::STORE_LATENCY_TICKS);
 
 /// TIM2 as the step timer: 72 MHz, no prescaler, buffered ARR, update and compare-1 interrupts.
 fn setup_tim2(rcc: &mut stm32f1xx_hal::rcc::Rcc) {
@@ -339,23 +389,16 @@ fn setup_tim2(rcc: &mut stm32f1xx_hal::rcc::Rcc) {
     pac::TIM2::enable(rcc);
     pac::TIM2::reset(rcc);
     let t = tim2();
-    // SAFETY: PSC 0: no prescaler (TIM2 stopped, owned by init).
-    t.psc().write(|w| unsafe { w.bits(0) });
-    // SAFETY: ARR: the idle period, which fits the 16-bit counter.
-    t.arr().write(|w| unsafe { w.bits(IDLE_TICKS - 1) });
+    t.psc().write(|w| w.psc().set(0));
+    t.arr().write(|w| w.arr().set(IDLE_ARR));
     // Compare 1 "frozen" (no pin), CCR1 preloaded so a new pulse width starts at an update.
-    // SAFETY: CCMR1: OC1PE only (compare 1 frozen, preloaded).
-    t.ccmr1_output().write(|w| unsafe { w.bits(1 << 3) });
-    // SAFETY: CCR1: the default pulse's compare value, within 16 bits.
-    t.ccr1().write(|w| unsafe { w.bits(ddastep::motion::timing::Timing::DEFAULT.pulse_ticks + ddastep::motion::timing::STORE_LATENCY_TICKS) });
+    t.ccmr1_output().write(|w| w.oc1pe().enabled());
+    t.ccr1().write(|w| w.ccr().set(DEFAULT_CCR1));
     t.egr().write(|w| w.ug().set_bit());
-    // SAFETY: SR 0 clears every flag (rc_w0).
-    t.sr().write(|w| unsafe { w.bits(0) });
-    // SAFETY: DIER: UIE and CC1IE (the same bit positions as SR's UIF and CC1IF).
-    t.dier().write(|w| unsafe { w.bits(SR_UIF | SR_CC1IF) });
-    // ARPE | URS; counting starts in `start_step_timer`.
-    // SAFETY: CR1: ARPE and URS, the counter still stopped.
-    t.cr1().write(|w| unsafe { w.bits((1 << 7) | (1 << 2)) });
+    t.sr().reset();
+    t.dier().write(|w| w.uie().enabled().cc1ie().enabled());
+    // Counting starts in `start_step_timer`.
+    t.cr1().write(|w| w.arpe().enabled().urs().counter_only());
 }
 
 /// TIM1 as the spindle PWM on PA8: PWM mode 1 on channel 1 with CCR1 preloaded, main output
@@ -366,25 +409,18 @@ fn setup_tim1(rcc: &mut stm32f1xx_hal::rcc::Rcc) {
     pac::TIM1::reset(rcc);
     set_pwm_timing(PwmTiming::new(Settings::DEFAULT.spindle_pwm_hz));
     let t = tim1();
-    // SAFETY: CCR1 0: duty 0 (TIM1 just reset, stopped).
-    t.ccr1().write(|w| unsafe { w.bits(0) });
-    // CCMR1: OC1M = 110 (PWM mode 1), OC1PE (preload).
-    // SAFETY: CCMR1: OC1M = 110 (PWM mode 1) and OC1PE, channel 1 an output.
-    t.ccmr1_output().write(|w| unsafe { w.bits(0b110 << 4 | 1 << 3) });
-    // CCER: CC1E (channel 1 output on, active high).
-    // SAFETY: CCER: CC1E only (channel 1 on, active high).
-    t.ccer().write(|w| unsafe { w.bits(1) });
-    // BDTR: MOE (an advanced timer's outputs stay off without it).
-    // SAFETY: BDTR: MOE only (no dead time, no break input).
-    t.bdtr().write(|w| unsafe { w.bits(1 << 15) });
+    t.ccr1().write(|w| w.ccr().set(0));
+    t.ccmr1_output().write(|w| w.oc1m().pwm_mode1().oc1pe().enabled());
+    // Channel 1 output on, active high.
+    t.ccer().write(|w| w.cc1e().set_bit());
+    // Main output on: an advanced timer's outputs stay off without it.
+    t.bdtr().write(|w| w.moe().set_bit());
     t.egr().write(|w| w.ug().set_bit());
-    // SAFETY: CR1: ARPE and CEN: TIM1 counts from here.
-    t.cr1().write(|w| unsafe { w.bits(TIM1_CR1_ARPE | TIM1_CR1_CEN) });
+    t.cr1().write(|w| w.arpe().enabled().cen().enabled());
 }
 
 /// Starts TIM2 counting: the last thing `init` does, so the first update event does not wait
 /// behind the rest of init (which runs with interrupts off).
 pub fn start_step_timer() {
-    // SAFETY: CR1: sets CEN and keeps the rest; only init (interrupts off) and the limit handler write CR1.
-    tim2().cr1().modify(|r, w| unsafe { w.bits(r.bits() | 1) });
+    tim2().cr1().modify(|_, w| w.cen().enabled());
 }

@@ -55,10 +55,10 @@ pub fn setup() {
     e.ftsr().write(|w| unsafe { w.bits(LINES | PROBE_LINE) });
     // SAFETY: PR is write-1-to-clear: clears the pending flags of those lines only.
     e.pr().write(|w| unsafe { w.bits(LINES | PROBE_LINE) });
-    // SAFETY: init only; AFIO's clock is on (the JTAG remap). EXTI14 from port C (0b0010).
+    // SAFETY: init only; AFIO's clock is on (the JTAG remap).
     let afio = unsafe { &*pac::AFIO::ptr() };
-    // SAFETY: EXTICR4: EXTI14 from port C (field EXTI14 = 0b0010), the other lines of the register port A as at reset.
-    afio.exticr4().write(|w| unsafe { w.bits(0b0010 << 8) });
+    // EXTI14 from port C (the register's other lines port A, as at reset).
+    afio.exticr4().write(|w| w.exti14().pc());
 }
 
 /// The EXTI15_10 handler body: the probe input changed; a probe cycle's edge stops the engine
@@ -96,12 +96,9 @@ pub fn on_edge<const N: usize>(shared: &ddastep::motion::queue::Shared<N>) {
     }
     // TIM2 off (counter, interrupt enables, flags, NVIC pending), then the step pins low.
     let t = super::hw::tim2();
-    // SAFETY: CR1: clears CEN, keeps the rest; this handler (priority 3) preempts the only other writer, init's.
-    t.cr1().modify(|r, w| unsafe { w.bits(r.bits() & !1) });
-    // SAFETY: DIER 0: every TIM2 interrupt and DMA request off.
-    t.dier().write(|w| unsafe { w.bits(0) });
-    // SAFETY: SR 0 clears every flag (rc_w0).
-    t.sr().write(|w| unsafe { w.bits(0) });
+    t.cr1().modify(|_, w| w.cen().disabled());
+    t.dier().reset();
+    t.sr().reset();
     cortex_m::peripheral::NVIC::unpend(pac::Interrupt::TIM2);
     let low = board::STEP_PINS.iter().fold(0u32, |w, &p| w | 1 << (p + 16));
     // SAFETY: BSRR takes any word; this one resets only the step pins.
