@@ -6,7 +6,7 @@
 
 use ddastep::board::{DIR_PINS, ENABLE_PIN, STEP_PINS};
 
-use super::hw::{config_word, PinMode};
+use super::gpio::{config_word, PinMode};
 
 /// GPIOB BSRR word: every pin low except EN, which goes high.
 const SAFE_BSRR: u32 = (0xFFFF & !(1 << ENABLE_PIN)) << 16 | 1 << ENABLE_PIN;
