@@ -16,8 +16,9 @@ pub const SR_CC1IF: u32 = 1 << 1;
 /// TIM2's registers (owned by the step interrupt after `init`).
 #[inline(always)]
 pub fn tim2() -> &'static pac::tim2::RegisterBlock {
-    // SAFETY: after init only the step interrupt writes TIM2's SR/ARR; settings code writes
-    // CCR1 only while the engine is parked.
+    // SAFETY: a shared reference to MMIO; every access is one volatile load or store. After
+    // init the step interrupt writes SR and ARR, `pulse` (idle) only CCR1, which is preloaded,
+    // and the limit handler stops the timer (CR1, DIER, SR).
     unsafe { &*pac::TIM2::ptr() }
 }
 
@@ -60,7 +61,7 @@ pub fn setup_dma(words: u32, periods: u32, off: u32, n: u32, first: u32, fall: u
     t.cnt().write(|w| w.cnt().set(PERIOD_STORE_TICK + 1));
     // Every flag cleared (SR's reset value).
     t.sr().reset();
-    // CCR: memory to peripheral (DIR), circular, memory increment, very high priority, on.
+    // DMA CCRx: memory to peripheral (DIR), circular, memory increment, very high priority, on.
     const DIR: u32 = 1 << 4;
     const CIRC: u32 = 1 << 5;
     const MINC: u32 = 1 << 7;
