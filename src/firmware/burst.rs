@@ -23,8 +23,9 @@ use ddastep::motion::burst::{Burst, Layout, HALF_MAX};
 use ddastep::steptime::STEP_TIME;
 use stm32f1xx_hal::pac::{self, interrupt};
 
-use super::app::AXES;
-use super::hw;
+use super::axes::AXES;
+use super::dwt::cycles;
+use super::tim2::{dma1, setup_dma};
 
 /// The engine and the buffers DMA reads, owned by the fill interrupt after `init`.
 struct State {
@@ -71,7 +72,7 @@ pub fn fall_ticks(ticks: u32) -> Option<u32> {
 }
 
 /// Fills both halves, hands the engine to the fill interrupt, starts DMA1 (in `init`,
-/// interrupts off; TIM2 starts counting later, in `hw::start_step_timer`).
+/// interrupts off; TIM2 starts counting later, in `tim2::start`).
 pub fn install(burst: Burst<'static, AXES>, layout: Layout, fall: u32, dual: bool, nvic: &mut cortex_m::peripheral::NVIC) {
     let n = 2 * layout.half;
     // SAFETY: interrupts are off and DMA is not running yet: no other access.
@@ -81,7 +82,7 @@ pub fn install(burst: Burst<'static, AXES>, layout: Layout, fall: u32, dual: boo
     burst.fill(s.words.get_mut(..n).unwrap_or_default(), s.periods.get_mut(..n).unwrap_or_default());
     HALF.store(layout.half as u32, Relaxed);
     MAX_TICK.store(layout.max_tick, Relaxed);
-    hw::setup_dma(s.words.as_ptr() as u32, s.periods.as_ptr() as u32, &s.off as *const u32 as u32, n as u32, layout.max_tick, fall, dual);
+    setup_dma(s.words.as_ptr() as u32, s.periods.as_ptr() as u32, &s.off as *const u32 as u32, n as u32, layout.max_tick, fall, dual);
     // SAFETY: RTIC's lowest priority (with SysTick), below the serial interrupt: a fill runs
     // for a whole half (up to ~150 µs near the cap), longer than one byte's time at 115200
     // baud, so above the USART it would lose received bytes; the serial interrupt is short
@@ -96,13 +97,15 @@ pub fn install(burst: Burst<'static, AXES>, layout: Layout, fall: u32, dual: boo
 /// interrupt (`$I`: cycles per fill of one half).
 #[interrupt]
 fn DMA1_CHANNEL1() {
-    let t0 = hw::cycles();
-    let dma = hw::dma1();
+    let t0 = cycles();
+    let dma = dma1();
     let flags = dma.isr().read().bits() & ISR_CH1;
+    // SAFETY: IFCR is write-1-to-clear; `flags` holds only channel 1's four flags (ISR_CH1).
     dma.ifcr().write(|w| unsafe { w.bits(flags) });
     let half = (HALF.load(Relaxed) as usize).min(HALF_MAX);
     // SAFETY: installed before the interrupt was unmasked; this handler is its only user.
     let s = unsafe { &mut *STATE.0.get() };
+    // SAFETY: `install` wrote the engine before unmasking this interrupt, the only user of the slot.
     let burst = unsafe { s.burst.assume_init_mut() };
     // The half just played: the first after a half transfer, the second after the transfer
     // complete (both when this interrupt came late; DMA is then in the first again).
@@ -128,5 +131,5 @@ fn DMA1_CHANNEL1() {
             }
         }
     }
-    STEP_TIME.record(hw::cycles().wrapping_sub(t0));
+    STEP_TIME.record(cycles().wrapping_sub(t0));
 }

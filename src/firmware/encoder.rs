@@ -13,9 +13,6 @@ static ENC: Published = Published::new();
 /// counts once it held for 8 samples of the 72 MHz timer clock (111 ns), so glitches shorter
 /// than that are ignored and each input may change every ~111 ns (≤ 18 M counts/s in x4).
 const CCMR1_ENCODER: u32 = 0b01 | 0b0011 << 4 | 0b01 << 8 | 0b0011 << 12;
-/// SMCR: SMS = 011, encoder mode 3 (counts on both TI1 and TI2 edges: x4).
-const SMCR_X4: u32 = 0b011;
-const CR1_CEN: u32 = 1;
 
 #[inline(always)]
 fn tim3() -> &'static pac::tim3::RegisterBlock {
@@ -29,10 +26,12 @@ pub fn setup(rcc: &mut stm32f1xx_hal::rcc::Rcc) {
     pac::TIM3::enable(rcc);
     pac::TIM3::reset(rcc);
     let t = tim3();
+    // SAFETY: CCMR1 (input): the capture selections and filters named in CCMR1_ENCODER, defined fields only; TIM3 just reset, stopped.
     t.ccmr1_input().write(|w| unsafe { w.bits(CCMR1_ENCODER) });
-    t.smcr().write(|w| unsafe { w.bits(SMCR_X4) });
-    t.arr().write(|w| unsafe { w.bits(0xFFFF) });
-    t.cr1().write(|w| unsafe { w.bits(CR1_CEN) });
+    // Encoder mode 3: counts on both TI1 and TI2 edges (x4).
+    t.smcr().write(|w| w.sms().encoder_mode_3());
+    t.arr().write(|w| w.arr().set(u16::MAX));
+    t.cr1().write(|w| w.cen().enabled());
 }
 
 /// The raw 16-bit count.

@@ -16,6 +16,9 @@ use core::sync::atomic::{AtomicBool, AtomicU32, Ordering::Relaxed};
 use ddastep::board;
 use stm32f1xx_hal::pac;
 
+use super::gpio;
+use super::tim2::tim2;
+
 /// The limit interrupt stopped the step output (cleared only by the restart).
 pub static HALTED: AtomicBool = AtomicBool::new(false);
 /// Bit 0: `$21` on; bit 1: `$5` (pins inverted); bits 8–10: pins already active at the last
@@ -33,7 +36,7 @@ pub static PROBE_INVERT: AtomicBool = AtomicBool::new(false);
 /// Marker in RAM the startup code leaves alone: "restarted after a hard limit".
 const LOST_MAGIC: u32 = 0x4C49_4D54;
 /// Axes whose position survives the restart.
-const AXES: usize = super::app::AXES;
+const AXES: usize = super::axes::AXES;
 /// The marker, then the engine's position at the restart.
 #[link_section = ".uninit.DDASTEP_LOST"]
 static mut LOST: MaybeUninit<[u32; 1 + AXES]> = MaybeUninit::uninit();
@@ -47,20 +50,26 @@ fn exti() -> &'static pac::exti::RegisterBlock {
 /// Both edges of the three lines; masked until [`arm`].
 pub fn setup() {
     let e = exti();
+    // SAFETY: IMR: the probe line only, a line EXTI has (init, interrupts off).
     e.imr().write(|w| unsafe { w.bits(PROBE_LINE) });
+    // SAFETY: RTSR: rising edges on lines 0-2 and 14, lines EXTI has.
     e.rtsr().write(|w| unsafe { w.bits(LINES | PROBE_LINE) });
+    // SAFETY: FTSR: falling edges on the same lines.
     e.ftsr().write(|w| unsafe { w.bits(LINES | PROBE_LINE) });
+    // SAFETY: PR is write-1-to-clear: clears the pending flags of those lines only.
     e.pr().write(|w| unsafe { w.bits(LINES | PROBE_LINE) });
-    // SAFETY: init only; AFIO's clock is on (the JTAG remap). EXTI14 from port C (0b0010).
+    // SAFETY: init only; AFIO's clock is on (the JTAG remap).
     let afio = unsafe { &*pac::AFIO::ptr() };
-    afio.exticr4().write(|w| unsafe { w.bits(0b0010 << 8) });
+    // EXTI14 from port C (the register's other lines port A, as at reset).
+    afio.exticr4().write(|w| w.exti14().pc());
 }
 
 /// The EXTI15_10 handler body: the probe input changed; a probe cycle's edge stops the engine
 /// at its next tick (see `Shared::probe_input`).
-pub fn on_probe_edge() {
+pub fn on_probe_edge<const N: usize>(shared: &ddastep::motion::queue::Shared<N>) {
+    // SAFETY: PR is write-1-to-clear: clears only the probe line's flag, this handler's own.
     exti().pr().write(|w| unsafe { w.bits(PROBE_LINE) });
-    super::app::SHARED.probe_input(super::hw::probe_low() != PROBE_INVERT.load(Relaxed));
+    shared.probe_input(gpio::probe_low() != PROBE_INVERT.load(Relaxed));
 }
 
 /// Follows `$21` and `$5`, the pins active now, and homing (`watch`: `Some(axes)` while a
@@ -69,15 +78,17 @@ pub fn arm(on: bool, invert: bool, active: u8, watch: Option<u8>) {
     let on = on && watch.is_none();
     let watch = watch.unwrap_or(0) as u32;
     ARMED.store(on as u32 | (invert as u32) << 1 | (active as u32) << 8 | watch << 16, Relaxed);
+    // SAFETY: IMR: lines 0-2 and 14 or line 14 alone; only `idle` writes IMR.
     exti().imr().write(|w| unsafe { w.bits(if on || watch != 0 { LINES | PROBE_LINE } else { PROBE_LINE }) });
 }
 
 /// The EXTI0/1/2 handler body: homing's stop for a watched switch, else (hard limits) stop
 /// all step output if a limit pin went active.
 pub fn on_edge<const N: usize>(shared: &ddastep::motion::queue::Shared<N>) {
+    // SAFETY: PR is write-1-to-clear: clears only lines 0-2, this handler's own.
     exti().pr().write(|w| unsafe { w.bits(LINES) });
     let armed = ARMED.load(Relaxed);
-    let active = ddastep::grbl::limits::active_pins(super::hw::gpioa_idr(), armed & 2 != 0) as u32;
+    let active = ddastep::grbl::limits::active_pins(gpio::gpioa_idr(), armed & 2 != 0) as u32;
     if active & armed >> 16 != 0 {
         // Homing: the engine ends its move at its next tick, the position exact.
         shared.stop_now();
@@ -87,13 +98,14 @@ pub fn on_edge<const N: usize>(shared: &ddastep::motion::queue::Shared<N>) {
         return;
     }
     // TIM2 off (counter, interrupt enables, flags, NVIC pending), then the step pins low.
-    let t = super::hw::tim2();
-    t.cr1().modify(|r, w| unsafe { w.bits(r.bits() & !1) });
-    t.dier().write(|w| unsafe { w.bits(0) });
-    t.sr().write(|w| unsafe { w.bits(0) });
+    let t = tim2();
+    t.cr1().modify(|_, w| w.cen().disabled());
+    t.dier().reset();
+    t.sr().reset();
     cortex_m::peripheral::NVIC::unpend(pac::Interrupt::TIM2);
     let low = board::STEP_PINS.iter().fold(0u32, |w, &p| w | 1 << (p + 16));
-    super::hw::gpiob().bsrr().write(|w| unsafe { w.bits(low) });
+    // SAFETY: BSRR takes any word; this one resets only the step pins.
+    gpio::gpiob().bsrr().write(|w| unsafe { w.bits(low) });
     HALTED.store(true, Relaxed);
 }
 

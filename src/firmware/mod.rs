@@ -1,13 +1,31 @@
-//! The RTIC application and its hardware glue (MCU only).
+//! The RTIC application and its hardware glue (MCU only), one file per peripheral or handler:
+//! - `setup`: what `init` brings up (clocks, USART1, SysTick, then each peripheral's setup);
+//! - `gpio`: pin modes, the BSRR outputs and the inputs; `boot`: GPIOB before RAM exists;
+//! - `tim2`: the step timer and the DMA1 channels it drives; `pulse`: the step pulse width;
+//! - `step`: the step and ramp interrupts; `burst`: DMA burst mode's buffers and fill interrupt;
+//! - `tim1_pwm`: the spindle PWM; `encoder`: TIM3 as the encoder counter;
+//! - `limits`: the limit and probe EXTIs; `watchdog`: the IWDG and the reset cause;
+//! - `flash_store`: the settings pages; `dwt`: the cycle counter; `panic`, `mem`;
+//! - `axes`: the axis count (a leaf, so the app and the handlers do not import each other).
 
+// Every unsafe block says why it is sound (CI: bench/tests/firmware_clippy.rs).
+#![deny(clippy::undocumented_unsafe_blocks)]
+
+mod axes;
 mod boot;
 mod burst;
+mod dwt;
 mod encoder;
-mod hw;
+mod flash_store;
+mod gpio;
 mod limits;
 mod mem;
 mod panic;
+mod pulse;
+mod setup;
 mod step;
+mod tim1_pwm;
+mod tim2;
 mod watchdog;
 
 use defmt_rtt as _;
@@ -29,10 +47,9 @@ mod app {
     use stm32f1xx_hal::pac;
     use stm32f1xx_hal::serial::{Rx, Tx};
 
-    use super::{burst, encoder, hw, limits, step, watchdog};
-
-    /// Axes the firmware drives: X Y Z A B C U.
-    pub const AXES: usize = ddastep::MAX_AXES;
+    use super::axes::AXES;
+    use super::setup::Board;
+    use super::{burst, dwt, encoder, flash_store, gpio, limits, pulse, step, tim1_pwm, tim2, watchdog};
 
     /// Lock-free state shared with the step interrupt.
     pub static SHARED: Shared<AXES> = Shared::new();
@@ -77,9 +94,9 @@ mod app {
         let by_watchdog = watchdog::take_reset_cause();
         let mut core = cx.core;
         // (The step interrupt is bound outside RTIC: `step.rs`.)
-        hw::start_cycle_counter(&mut core.DCB, &mut core.DWT);
-        let board = hw::Board::setup(cx.device, core.SYST);
-        let stored = hw::load_store();
+        dwt::start_cycle_counter(&mut core.DCB, &mut core.DWT);
+        let board = Board::setup(cx.device, core.SYST);
+        let stored = flash_store::load();
         let settings = stored.settings;
         let (mv_in, mv_out) = cx.local.moves.split();
         let (rx_in, rx_out) = cx.local.rxq.split();
@@ -88,7 +105,7 @@ mod app {
         if settings.dual_edge {
             // Dual-edge stepping (`$580`, fixed until the next boot: a change restarts).
             pins = pins.dual_edge();
-            hw::no_falling_edge();
+            tim2::no_falling_edge();
         }
         // After a hard limit's restart: the position the engine had (the feeder and the
         // controller start from it).
@@ -105,8 +122,8 @@ mod app {
             stored,
         );
         // Drivers off at the level `$4` asks for (`boot.rs` assumed active low).
-        hw::ENABLE_OFF_HIGH.store(!settings.enable_invert, Relaxed);
-        hw::set_enable(!settings.enable_invert);
+        gpio::ENABLE_OFF_HIGH.store(!settings.enable_invert, Relaxed);
+        gpio::set_enable(!settings.enable_invert);
         if by_watchdog {
             controller.watchdog_reset();
         }
@@ -125,7 +142,7 @@ mod app {
             step::install(engine, &mut core.NVIC);
         }
         defmt::info!("ddastep up: 72 MHz, {} axes", AXES);
-        hw::start_step_timer();
+        tim2::start();
         watchdog::start();
         (
             SharedRes { tx: board.tx },
@@ -162,7 +179,7 @@ mod app {
     /// interrupt.
     #[task(binds = EXTI15_10, priority = 3)]
     fn probe(_: probe::Context) {
-        limits::on_probe_edge();
+        limits::on_probe_edge(&SHARED);
     }
 
     /// USART1: realtime bytes act at once, line bytes go to the RX ring, the TX ring drains.
@@ -227,13 +244,13 @@ mod app {
                 hard_reported = true;
                 ctl.hard_limit(tx_in);
             }
-            let idr = hw::gpioa_idr();
+            let idr = gpio::gpioa_idr();
             ctl.set_limit_inputs(idr);
             // The probe: for `Pn:P` and the cycle's start; the level also backs up the edge
             // (contact made between the controller's check and its arming).
-            let low = hw::probe_low();
+            let low = gpio::probe_low();
             ctl.set_probe_input(low);
-            ctl.set_door_input(hw::gpioc_idr() & 1 << ddastep::board::DOOR_PIN == 0);
+            ctl.set_door_input(gpio::gpioc_idr() & 1 << ddastep::board::DOOR_PIN == 0);
             limits::PROBE_INVERT.store(ctl.settings().probe_invert, Relaxed);
             SHARED.probe_input(low != ctl.settings().probe_invert);
             let invert = ctl.settings().limit_invert;
@@ -242,24 +259,25 @@ mod app {
             let act = idle_step(ctl, rx_out, tx_in, now, &REQUESTS);
             // After the poll: a homing pass it just queued is watched before its move starts.
             limits::arm(ctl.settings().hard_limits, invert, ddastep::grbl::limits::active_pins(idr, invert), ctl.homing_watch());
-            hw::ENABLE_OFF_HIGH.store(!ctl.settings().enable_invert, Relaxed);
-            hw::set_enable(act.enable_pin_high);
+            gpio::ENABLE_OFF_HIGH.store(!ctl.settings().enable_invert, Relaxed);
+            gpio::set_enable(act.enable_pin_high);
             let mut restart = act.restart;
             if let Some(ticks) = act.pulse_ticks {
                 // (DMA mode: a pulse its buffers' layout cannot hold restarts with a new one.)
-                restart |= !hw::set_pulse_ticks(ticks);
+                restart |= !pulse::set_pulse_ticks(ticks);
             }
             if let Some(t) = act.pwm {
-                hw::set_pwm_timing(t);
+                tim1_pwm::set_timing(t);
             }
             if act.spindle != spindle {
                 spindle = act.spindle;
-                hw::set_spindle(spindle);
+                tim1_pwm::set_duty(spindle.ccr);
+                gpio::set_tool_outputs(spindle);
             }
             if act.save || restart {
-                hw::save_store(cx.local.flash, &ctl.image());
+                flash_store::save(cx.local.flash, &ctl.image());
             }
-            hw::heartbeat(now);
+            gpio::heartbeat(now);
             watchdog::stall_hook();
             if life.alive(MILLIS.load(Relaxed), STEP_TIME.entries(), halted) {
                 watchdog::feed();

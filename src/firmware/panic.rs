@@ -4,16 +4,19 @@ use core::panic::PanicInfo;
 
 use ddastep::board;
 
+use super::gpio;
+
 /// Disables the drivers (EN at the level `$4` makes "off": high unless inverted) and drives
 /// every step pin low: one BSRR store.
 fn safe_outputs() {
     let en = 1u32 << board::ENABLE_PIN;
-    let off_high = super::hw::ENABLE_OFF_HIGH.load(core::sync::atomic::Ordering::Relaxed);
+    let off_high = gpio::ENABLE_OFF_HIGH.load(core::sync::atomic::Ordering::Relaxed);
     let mut word = if off_high { en } else { en << 16 };
     for p in board::STEP_PINS {
         word |= 1 << (p + 16);
     }
-    super::hw::gpiob().bsrr().write(|w| unsafe { w.bits(word) });
+    // SAFETY: BSRR takes any word (an atomic set/reset); this one drives only EN and the step pins.
+    gpio::gpiob().bsrr().write(|w| unsafe { w.bits(word) });
 }
 
 #[panic_handler]

@@ -15,8 +15,10 @@ use ddastep::motion::engine::{Engine, Ramper, Stepper};
 use ddastep::steptime::STEP_TIME;
 use stm32f1xx_hal::pac::{self, interrupt};
 
-use super::app::AXES;
-use super::hw;
+use super::axes::AXES;
+use super::dwt::cycles;
+use super::gpio::gpiob;
+use super::tim2::{tim2, SR_CC1IF, SR_UIF};
 
 /// One half of the engine, owned by its interrupt.
 struct Slot<T>(UnsafeCell<MaybeUninit<T>>);
@@ -70,22 +72,27 @@ pub fn install(engine: Engine<'static, AXES>, nvic: &mut cortex_m::peripheral::N
 #[interrupt]
 #[link_section = ".data.ramfunc.tim2"]
 fn TIM2() {
-    let t0 = hw::cycles();
+    let t0 = cycles();
     // SAFETY: installed before TIM2 was unmasked; this handler is its only user.
     let engine = unsafe { (*STEPPER.0.get()).assume_init_mut() };
-    let sr = hw::tim2().sr().read().bits();
-    if sr & hw::SR_UIF != 0 {
-        hw::gpiob().bsrr().write(|w| unsafe { w.bits(engine.word()) });
-        hw::tim2().sr().write(|w| unsafe { w.bits(!hw::SR_UIF) });
+    let sr = tim2().sr().read().bits();
+    if sr & SR_UIF != 0 {
+        // SAFETY: BSRR takes any word; the engine's word sets and resets only its own step and direction pins.
+        gpiob().bsrr().write(|w| unsafe { w.bits(engine.word()) });
+        // SAFETY: SR is rc_w0: writing 0 to UIF and 1 elsewhere clears only the update flag.
+        tim2().sr().write(|w| unsafe { w.bits(!SR_UIF) });
         let arr = engine.tick_quick();
-        hw::tim2().arr().write(|w| unsafe { w.bits(arr as u32) });
+        // SAFETY: ARR: the engine's next period, a u16, fits the 16-bit counter.
+        tim2().arr().write(|w| unsafe { w.bits(arr as u32) });
     }
     // The compare event ends the pulse; if it came while we computed, end it now.
-    if hw::tim2().sr().read().bits() & hw::SR_CC1IF != 0 {
-        hw::gpiob().bsrr().write(|w| unsafe { w.bits(engine.step_off()) });
-        hw::tim2().sr().write(|w| unsafe { w.bits(!hw::SR_CC1IF) });
+    if tim2().sr().read().bits() & SR_CC1IF != 0 {
+        // SAFETY: BSRR takes any word; `step_off` resets only the step pins.
+        gpiob().bsrr().write(|w| unsafe { w.bits(engine.step_off()) });
+        // SAFETY: SR is rc_w0: writing 0 to CC1IF and 1 elsewhere clears only the compare 1 flag.
+        tim2().sr().write(|w| unsafe { w.bits(!SR_CC1IF) });
     }
-    STEP_TIME.record(hw::cycles().wrapping_sub(t0));
+    STEP_TIME.record(cycles().wrapping_sub(t0));
 }
 
 /// The ramp interrupt: the engine's ramp half, preempted by every step.

@@ -4,13 +4,9 @@
 use ddastep::watchdog::{IWDG_PR, IWDG_RLR};
 use stm32f1xx_hal::pac;
 
-/// IWDG_KR keys: unlock PR/RLR, reload the counter, start the watchdog.
-const KEY_UNLOCK: u16 = 0x5555;
-const KEY_RELOAD: u16 = 0xAAAA;
-const KEY_START: u16 = 0xCCCC;
-/// RCC_CSR: independent-watchdog reset flag, and the bit that clears every reset flag.
-const CSR_IWDGRSTF: u32 = 1 << 29;
-const CSR_RMVF: u32 = 1 << 24;
+// PR is a 3-bit prescaler code, RLR a 12-bit reload value.
+const _: () = assert!(IWDG_PR < 8 && IWDG_RLR < 0x1000);
+
 
 /// Test hook: a bench writes a non-zero word here (symbol `DDASTEP_STALL_IDLE`) to stall the
 /// idle loop and prove the watchdog trips. In .bss, so the reset clears it.
@@ -26,24 +22,26 @@ fn iwdg() -> &'static pac::iwdg::RegisterBlock {
 pub fn take_reset_cause() -> bool {
     // SAFETY: RCC_CSR is read and its flags cleared once, first thing in `init`.
     let rcc = unsafe { &*pac::RCC::ptr() };
-    let by_watchdog = rcc.csr().read().bits() & CSR_IWDGRSTF != 0;
-    rcc.csr().modify(|r, w| unsafe { w.bits(r.bits() | CSR_RMVF) });
+    let by_watchdog = rcc.csr().read().iwdgrstf().bit_is_set();
+    // RMVF clears every reset flag.
+    rcc.csr().modify(|_, w| w.rmvf().set_bit());
     by_watchdog
 }
 
 /// Starts the watchdog with `ddastep::watchdog`'s timeout (it cannot be stopped again).
 pub fn start() {
     let w = iwdg();
-    w.kr().write(|k| unsafe { k.bits(KEY_UNLOCK) });
-    w.pr().write(|k| unsafe { k.bits(IWDG_PR) });
-    w.rlr().write(|k| unsafe { k.bits(IWDG_RLR) });
-    w.kr().write(|k| unsafe { k.bits(KEY_RELOAD) });
-    w.kr().write(|k| unsafe { k.bits(KEY_START) });
+    // The unlock key opens PR and RLR for writing.
+    w.kr().write(|k| k.key().unlock());
+    w.pr().write(|k| k.pr().set(IWDG_PR as u8));
+    w.rlr().write(|k| k.rl().set(IWDG_RLR));
+    w.kr().write(|k| k.key().feed());
+    w.kr().write(|k| k.key().start());
 }
 
 /// Reloads the counter.
 pub fn feed() {
-    iwdg().kr().write(|k| unsafe { k.bits(KEY_RELOAD) });
+    iwdg().kr().write(|k| k.key().feed());
 }
 
 /// Spins while the bench's stall flag is set (see [`DDASTEP_STALL_IDLE`]).
