@@ -14,37 +14,18 @@ use anyhow::{bail, Context, Result};
 use unicorn_engine::RegisterARM;
 
 use super::bus::{Stop, TIM2_IRQ};
+use super::clock::HZ;
 use super::cpu::{self, Cpu, Image};
 use super::dma_run;
 use super::exception;
 use super::gpio::PinEdge;
+use super::input::{InputFlip, Port};
 use super::nvic::IRQ0;
 use super::profile::{self, FnCost};
 use super::stats::{IsrEntry, IsrRun, Stats};
 
-/// Core clock: modeled cycles per second.
-pub const HZ: u64 = 72_000_000;
 /// Instruction budget per unicorn run when no split is needed.
 const UNLIMITED: usize = 1 << 40;
-
-/// GPIO port of a pin.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Port {
-    A = 0,
-    B = 1,
-    C = 2,
-    D = 3,
-    E = 4,
-}
-
-/// An input level change at a modeled cycle.
-#[derive(Clone, Copy, Debug)]
-pub struct InputFlip {
-    pub cycle: u64,
-    pub port: Port,
-    pub pin: u8,
-    pub level: bool,
-}
 
 /// An emulated Blue Pill with a program loaded.
 pub struct Board {

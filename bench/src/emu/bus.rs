@@ -155,7 +155,7 @@ pub struct Machine {
     pub exti: Exti,
     /// The machine wired to the pins, and the input changes it scheduled (board applies them).
     pub plant: Option<Box<dyn super::plant::Plant>>,
-    pub plant_flips: Vec<super::board::InputFlip>,
+    pub plant_flips: Vec<super::input::InputFlip>,
 }
 
 impl Machine {
@@ -313,7 +313,7 @@ impl Machine {
         if wraps > 0 {
             self.nvic.pending[super::nvic::SYSTICK as usize] = true;
         }
-        if self.iwdg.expires_at(super::board::HZ).is_some_and(|e| e <= t) {
+        if self.iwdg.expires_at(super::clock::HZ).is_some_and(|e| e <= t) {
             self.reset_due = Some(iwdg::CSR_IWDGRSTF);
         }
         self.nvic.level[(IRQ0 + TIM2_IRQ) as usize] = self.tim2.irq();
@@ -336,7 +336,7 @@ impl Machine {
             self.tim2.next_event(),
             self.usart1.next_event(),
             self.systick.next_event(),
-            self.iwdg.expires_at(super::board::HZ),
+            self.iwdg.expires_at(super::clock::HZ),
             self.dma.next_event(),
         ]
             .into_iter()

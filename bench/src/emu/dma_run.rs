@@ -168,7 +168,7 @@ pub fn service(uc: &mut Unicorn<'_, Machine>, running: bool) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::emu::PinEdge;
+    use crate::emu::gpio::PinEdge;
 
     #[test]
     fn request_map_and_write_lanes() {

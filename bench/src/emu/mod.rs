@@ -16,6 +16,7 @@
 pub mod asm;
 mod board;
 mod bus;
+mod clock;
 pub mod changes;
 pub mod cost;
 mod cpu;
@@ -27,6 +28,7 @@ pub mod figures;
 mod firmware;
 pub mod floor;
 mod gpio;
+mod input;
 pub mod iwdg;
 pub mod memory;
 pub mod plant;
@@ -42,7 +44,9 @@ mod systick;
 mod timer;
 mod usart;
 
-pub use board::{Board, InputFlip, Port, HZ};
+pub use board::Board;
+pub use clock::HZ;
+pub use input::{InputFlip, Port};
 pub use stats::IsrRun;
 pub use bus::{TIM2_IRQ, USART1_IRQ};
 pub use firmware::{firmware_elf, gcode_lines, repo_root, stream_gcode};

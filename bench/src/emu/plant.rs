@@ -4,7 +4,7 @@
 
 use std::any::Any;
 
-use super::board::InputFlip;
+use super::input::InputFlip;
 
 /// A model of what the board's pins are wired to.
 pub trait Plant: Send {

@@ -57,7 +57,7 @@ impl Pwm {
     fn output(&self) -> (f64, f64) {
         let on = self.running() && (self.ccmr1 >> 4) & 7 == 6 && self.ccer & 1 != 0 && self.bdtr & (1 << 15) != 0;
         let top = self.active.arr as f64 + 1.0;
-        let hz = super::board::HZ as f64 / self.period() as f64;
+        let hz = super::clock::HZ as f64 / self.period() as f64;
         if on { ((self.active.ccr1 as f64).min(top) / top, hz) } else { (0.0, hz) }
     }
 

@@ -12,7 +12,8 @@ use anyhow::Result;
 use serde::ser::SerializeMap;
 use serde::{Serialize, Serializer};
 
-use super::board::{Board, HZ};
+use super::board::Board;
+use super::clock::HZ;
 use super::bus::TIM2_IRQ;
 use super::nvic::IRQ0;
 use crate::la::{Analyzer, AxisChannels, Config};

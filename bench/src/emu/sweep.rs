@@ -19,7 +19,8 @@ use std::path::Path;
 use anyhow::{bail, Context, Result};
 use serde::Serialize;
 
-use super::board::{Board, HZ};
+use super::board::Board;
+use super::clock::HZ;
 use super::nvic::IRQ0;
 use super::profile::FnCost;
 use super::report::{AXES, STEP_PINS};
