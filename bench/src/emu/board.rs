@@ -13,7 +13,7 @@ use std::path::Path;
 use anyhow::{bail, Context, Result};
 use unicorn_engine::RegisterARM;
 
-use super::bus::{Stop, TIM2_IRQ};
+use super::mcu::{Stop, TIM2_IRQ};
 use super::clock::HZ;
 use super::cpu::{self, Cpu, Image};
 use super::dma_run;

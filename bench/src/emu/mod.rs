@@ -15,7 +15,7 @@
 
 pub mod asm;
 mod board;
-mod bus;
+mod mcu;
 mod clock;
 pub mod changes;
 pub mod cost;
@@ -48,7 +48,7 @@ pub use board::Board;
 pub use clock::HZ;
 pub use input::{InputFlip, Port};
 pub use stats::IsrRun;
-pub use bus::{TIM2_IRQ, USART1_IRQ};
+pub use mcu::{TIM2_IRQ, USART1_IRQ};
 pub use firmware::{firmware_elf, gcode_lines, repo_root, stream_gcode};
 pub use gpio::PinEdge;
 pub use report::{isr_profile, AxisReport, DmaReport, Report, SpindleReport, StepIsr, AXES, DIR_LOW_IS_POSITIVE, DIR_PINS, EN_PIN, STEP_PINS, TOOL_PINS};

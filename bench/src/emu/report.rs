@@ -14,7 +14,7 @@ use serde::{Serialize, Serializer};
 
 use super::board::Board;
 use super::clock::HZ;
-use super::bus::TIM2_IRQ;
+use super::mcu::TIM2_IRQ;
 use super::nvic::IRQ0;
 use crate::la::{Analyzer, AxisChannels, Config};
 

@@ -1,6 +1,6 @@
-//! The emulated Blue Pill's state (time, peripherals, NVIC, traces) and the MMIO dispatch
+//! `Mcu`: the emulated STM32F103's state (time, peripherals, NVIC, traces) and the MMIO dispatch
 //! from unicorn's callbacks to the peripheral models. For `board.rs`, which owns a
-//! `Unicorn<Machine>`.
+//! `Unicorn<Mcu>`.
 //!
 //! Time is modeled cycles. During a block, `now` is the cycle the block began and an access
 //! happens at the end of its instruction: `now + stall + prefix[i] + cost[i]`, where `stall`
@@ -13,7 +13,7 @@ use std::collections::{BTreeMap, HashMap, HashSet};
 
 use super::cost::{Block, BlockCache};
 use super::dma::{self, Dma};
-use super::gpio::{PinEdge, Port};
+use super::gpio::{GpioPort, PinEdge};
 use super::exti::{self, Exti};
 use super::iwdg::{self, Iwdg};
 use super::memory::{apb_divider, bridge_cycles, bus_of, Bus, FlashConfig};
@@ -96,7 +96,7 @@ pub enum Stop {
 }
 
 /// Everything the emulator callbacks can see.
-pub struct Machine {
+pub struct Mcu {
     /// Cycle at the start of `cur` (or the current PC when stopped).
     pub now: u64,
     pub insns: u64,
@@ -119,7 +119,7 @@ pub struct Machine {
     pub dma: Dma,
     pub usart1: Usart,
     pub systick: SysTick,
-    pub ports: Vec<Port>,
+    pub ports: Vec<GpioPort>,
     pub edges: Vec<PinEdge>,
     pub record_edges: bool,
     /// Plain registers (RCC, AFIO, FLASH, unknown).
@@ -158,7 +158,7 @@ pub struct Machine {
     pub plant_flips: Vec<super::input::InputFlip>,
 }
 
-impl Machine {
+impl Mcu {
     // power-on state
     pub fn new() -> Self {
         let mut regs = HashMap::new();
@@ -181,7 +181,7 @@ impl Machine {
             dma: Dma::default(),
             usart1: Usart::default(),
             systick: SysTick::default(),
-            ports: vec![Port::new(); 5],
+            ports: vec![GpioPort::new(); 5],
             edges: Vec::new(),
             record_edges: true,
             regs,
@@ -210,7 +210,7 @@ impl Machine {
     // a system reset (watchdog): peripherals, NVIC and clocks to their reset state, RCC_CSR
     // flags `csr` added; time, traces, the serial transcript and external inputs are kept
     pub fn system_reset(&mut self, csr: u32) {
-        let mut fresh = Machine::new();
+        let mut fresh = Mcu::new();
         std::mem::swap(self, &mut fresh);
         let old = fresh;
         self.now = old.now;
