@@ -22,6 +22,7 @@ pub mod cost;
 mod cpu;
 pub mod dma;
 mod dma_run;
+mod dwt;
 mod exception;
 mod exti;
 pub mod figures;
