@@ -1,6 +1,6 @@
 //! GPIO ports A–E (RM0008 §9): CRL/CRH, IDR, ODR, BSRR, BRR, LCKR. The output latch (ODR)
 //! drives the traced pins; inputs read the level a test or CLI set, else the pull-up/down
-//! chosen by ODR. A BSRR write changes all its pins at one cycle. For the bus.
+//! chosen by ODR. A BSRR write changes all its pins at one cycle. For `mcu.rs`.
 
 /// One pin change of an output latch.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -1,5 +1,5 @@
 //! Input pins driven from outside the firmware: which port, and a scheduled level change.
-//! Used by the board's run loop, the bus (plant flips) and plants; a leaf.
+//! Used by the board's run loop, `mcu.rs` (plant flips) and plants; a leaf.
 
 /// GPIO port of a pin.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -169,7 +169,7 @@ mod tests {
 /// Inclusive thread-mode cycles of calls to chosen functions: a call opens when a block starts
 /// at one of the entry addresses (in thread mode) and closes when a block starts at its return
 /// address (the LR at entry) with the stack pointer back where it was. Cycles of interrupts
-/// taken meanwhile are not counted (only thread-mode blocks advance `Machine::thread_cycles`).
+/// taken meanwhile are not counted (only thread-mode blocks advance `Mcu::thread_cycles`).
 #[derive(Clone, Debug, Default)]
 pub struct FnTimer {
     /// Entry addresses of the timed functions, with an index naming each.

@@ -1,6 +1,6 @@
 //! TIM1 as the spindle/laser PWM output on PA8 (RM0008 §14): PSC, ARR, CCR1, CCMR1, CCER,
 //! BDTR, CR1, EGR. No interrupts, no counter reads: what the bench needs is the duty cycle the
-//! pin carries over time. For the bus.
+//! pin carries over time. For `mcu.rs`.
 //!
 //! The output is on when the counter runs (CR1.CEN), channel 1 is in PWM mode 1
 //! (CCMR1.OC1M = 110), enabled (CCER.CC1E) and the main output is on (BDTR.MOE); its duty is
