@@ -13,7 +13,7 @@
 //! bounces: the new level, the old one at 20 %, the new at 45 %, the old at 70 % and the new
 //! for good at 100 % of `bounce_us`.
 //!
-//! An optional `[encoder]` puts a quadrature encoder on one axis's motor (issue 14): the
+//! An optional `[encoder]` puts a quadrature encoder on one axis's motor: the
 //! carriage follows the motor's rotor, which follows the step pulses except where a `[[fault]]`
 //! says otherwise — `miss_steps` pulses that do not move it, or `slip_steps` it falls back at
 //! once (a crash) — from a time (`at_s`, taking effect at the next step edge) or a carriage
@@ -22,7 +22,7 @@
 //! (PA6) or B (PA7), A leading B going forward, `lag_us` after the step edge that caused it
 //! and at least `edge_ns` after the previous edge.
 //!
-//! An optional `[probe]` (issue 12) is a touch probe on one axis (`axis = "Z"`, `at_mm = -5.0`):
+//! An optional `[probe]` is a touch probe on one axis (`axis = "Z"`, `at_mm = -5.0`):
 //! in contact while that carriage is at or below `at_mm`, wired NO to ground on the probe input
 //! (PC14, pulled up: contact = low), with no bounce, its level changing at the step edge that
 //! crosses `at_mm`.

@@ -1,7 +1,6 @@
 //! Moves changing at speed: back-to-back short moves at the firmware's own rate cap, and the
-//! step interrupt's mean and longest run while they run (issue 10's measure: a move change
-//! must cost a tick no more than 1.3× the mean).
-//!
+//! step interrupt's mean and longest run while they run (the goal: a move change costs a tick
+//! no more than 1.3× the mean; figures in bench/RESULTS.md, "Moves changing at the rate cap").
 //! Every figure is *modeled* (cycles of the emulated Cortex-M3, see bench/README.md).
 
 use anyhow::{ensure, Result};
