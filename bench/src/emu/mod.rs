@@ -15,9 +15,8 @@
 
 pub mod asm;
 mod board;
-mod mcu;
-mod clock;
 pub mod changes;
+mod clock;
 pub mod cost;
 mod cpu;
 pub mod dma;
@@ -31,6 +30,7 @@ pub mod floor;
 mod gpio;
 mod input;
 pub mod iwdg;
+mod mcu;
 pub mod memory;
 pub mod plant;
 pub mod nvic;

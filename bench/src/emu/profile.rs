@@ -160,7 +160,7 @@ mod tests {
 
     #[test]
     fn demangles_legacy_names() {
-        assert_eq!(demangle("_ZN7ddastep6engine19Engine$LT$_$C$_$GT$4tick17h2546dee6a00bc47dE"), "ddastep::motion::engine::Engine<_,_>::tick");
+        assert_eq!(demangle("_ZN7ddastep6motion6engine19Engine$LT$_$C$_$GT$4tick17h2546dee6a00bc47dE"), "ddastep::motion::engine::Engine<_,_>::tick");
         assert_eq!(demangle("TIM2"), "TIM2");
         assert_eq!(demangle("_ZN4core3ptr13drop_in_place17h0123456789abcdefE"), "core::ptr::drop_in_place");
     }
