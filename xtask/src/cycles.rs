@@ -226,6 +226,20 @@ mod tests {
     }
 
     #[test]
+    fn a_reexported_crate_leads_out_of_the_crate() {
+        // `crate::la::Analyzer` names the other crate, not lib.rs that re-exports it.
+        let (found, report) = cycles(
+            "extern",
+            &[
+                ("src/lib.rs", "pub use ddastep_la as la;\npub mod emu;\npub use emu::Board;\n"),
+                ("src/emu.rs", "pub struct Board;\nfn f() -> crate::la::Analyzer { todo!() }\n"),
+            ],
+        );
+        assert!(found.is_empty(), "{report}");
+        assert_eq!(report.edges, 1, "{report}");
+    }
+
+    #[test]
     fn a_path_counts_toward_the_deepest_module() {
         // `crate::m::low::f` names low.rs, not m/mod.rs, so the child does not depend on its parent.
         let (found, report) = cycles(

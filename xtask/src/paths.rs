@@ -1,7 +1,7 @@
 //! The paths a file names (`use` trees, paths in code and in macro arguments) and their
 //! resolution to the deepest module of the crate that they reach. Used by `cycles.rs`.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::PathBuf;
 
 use proc_macro2::{Spacing, TokenStream, TokenTree};
@@ -169,11 +169,15 @@ pub struct Resolver<'t> {
     aliases: Vec<BTreeMap<String, ModId>>,
     /// Per module: modules whose names a glob brings in (`use super::*;`).
     globs: Vec<Vec<ModId>>,
+    /// Per module: names that `use` binds to another crate (`pub use ddastep_la as la;`), so
+    /// that `crate::la::X` leads out of the crate, not to the file that re-exports it.
+    externs: Vec<BTreeSet<String>>,
 }
 
 impl<'t> Resolver<'t> {
     pub fn new(tree: &'t ModTree, references: &[Reference]) -> Resolver<'t> {
-        let mut resolver = Resolver { tree, aliases: vec![BTreeMap::new(); tree.modules.len()], globs: vec![Vec::new(); tree.modules.len()] };
+        let n = tree.modules.len();
+        let mut resolver = Resolver { tree, aliases: vec![BTreeMap::new(); n], globs: vec![Vec::new(); n], externs: vec![BTreeSet::new(); n] };
         // A `use` may name a module through another `use`: repeat until nothing new binds.
         loop {
             let mut changed = false;
@@ -192,9 +196,16 @@ impl<'t> Resolver<'t> {
                 }
             }
             if !changed {
-                return resolver;
+                break;
             }
         }
+        for r in references {
+            let relative = r.segments.first().is_some_and(|s| !matches!(s.as_str(), "crate" | "self" | "super" | "Self"));
+            if let (Kind::Use { name: Some(name) }, true, None) = (&r.kind, relative, resolver.resolve(r.module, &r.segments)) {
+                resolver.externs[r.module].insert(name.clone());
+            }
+        }
+        resolver
     }
 
     /// The deepest module that `segments`, written in `module`, reach, and whether they name
@@ -213,8 +224,12 @@ impl<'t> Resolver<'t> {
             at = modules[at].parent?;
             i += 1;
         }
-        while let Some(&child) = segments.get(i).and_then(|s| modules[at].children.get(s)) {
-            at = child;
+        while let Some(segment) = segments.get(i) {
+            match modules[at].children.get(segment) {
+                Some(&child) => at = child,
+                None if i > 0 && self.externs[at].contains(segment) => return None,
+                None => break,
+            }
             i += 1;
         }
         Some((at, i == segments.len()))
