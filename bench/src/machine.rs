@@ -30,6 +30,8 @@
 //! Optional `[[door]]` entries open and close the safety door at given times (`at_s = 1.0`,
 //! `open = true`): the door input (PC15, pulled up) goes low while the door is open, as a
 //! switch closing to ground would drive it.
+//!
+//! `spec.rs` reads and checks the machine file; `model.rs` is the machine while it runs.
 
 mod model;
 mod spec;

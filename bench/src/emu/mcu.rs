@@ -1,13 +1,11 @@
-//! `Mcu`: the emulated STM32F103's state (time, peripherals, NVIC, traces) and the MMIO dispatch
-//! from unicorn's callbacks to the peripheral models. For `board.rs`, which owns a
-//! `Unicorn<Mcu>`.
+//! `Mcu`: the emulated STM32F103's state (time, peripherals, NVIC, traces); its MMIO dispatch
+//! from unicorn's callbacks to the peripheral models is `mcu/mmio.rs`, the addresses it routes
+//! `mcu/address.rs`. For `board.rs`, which owns a `Unicorn<Mcu>`.
 //!
 //! Time is modeled cycles. During a block, `now` is the cycle the block began and an access
 //! happens at the end of its instruction: `now + stall + prefix[i] + cost[i]`, where `stall`
 //! holds the bridge stalls of this block's earlier peripheral accesses (`memory.rs`): they
 //! are added to the clock with the block.
-//! Registers with no model keep what was written (so read-modify-write works), read 0 until
-//! then, and are logged once with address and PC.
 
 use std::collections::{BTreeMap, HashMap, HashSet};
 

@@ -1,6 +1,9 @@
 //! The MMIO dispatch: unicorn's read and write callbacks routed to the peripheral models at
 //! the access's cycle (bridge stalls included), GPIO stores traced as pin edges, input edges
 //! into EXTI and the encoder timer, and plain registers for everything without a model.
+//!
+//! Registers with no model keep what was written (so read-modify-write works), read 0 until
+//! then, and are logged once with address and PC.
 
 use super::address::*;
 use super::{Mcu, TIM2_IRQ};
