@@ -15,7 +15,7 @@ fn main() -> anyhow::Result<()> {
     }
     let elf = firmware_elf()?;
     for dual_edge in [false, true] {
-        let s = sweep::sweep(&elf, &sweep::Options { dual_edge, ..Default::default() })?;
+        let s = sweep::sweep(&elf, &sweep::Options { mode: sweep::Mode { dual_edge, dma: false }, ..Default::default() })?;
         let mode = if dual_edge { "dual-edge, $580=1" } else { "single-edge" };
         println!("max step rate ($I with the sweep settings, {mode}): {} Hz", s.cap_hz);
         print!("{}", s.table());

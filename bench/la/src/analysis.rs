@@ -13,6 +13,7 @@ use super::axis::AxisState;
 use super::deviation::DeviationTracker;
 use super::glitch::{Edge, GlitchFilter, Observed};
 use super::rate::{cruise_bins, BIN_PS, MAX_BINS};
+use super::ratio::reduce;
 use super::report::{AxisReport, Cruise, Expectation, Report, Series};
 
 /// Cruise: bins whose master rate is at least this fraction of its maximum.
@@ -356,22 +357,4 @@ impl Analyzer {
 // picoseconds to nanoseconds
 fn ps_to_ns(ps: u64) -> f64 {
     ps as f64 / 1e3
-}
-
-// greatest common divisor
-fn gcd(a: u64, b: u64) -> u64 {
-    if b == 0 {
-        a
-    } else {
-        gcd(b, a % b)
-    }
-}
-
-// counts divided by their gcd (all zero stays all zero)
-pub fn reduce(counts: &[u64]) -> Vec<u64> {
-    let g = counts.iter().fold(0, |g, &c| gcd(g, c));
-    counts
-        .iter()
-        .map(|&c| c.checked_div(g).unwrap_or(0))
-        .collect()
 }

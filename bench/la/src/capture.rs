@@ -1,5 +1,5 @@
-//! Opening a capture file: format detection and the common stream of level changes that every
-//! reader produces. Used by the `la` binary and by tests; the virtual bench skips files and
+//! Opening a capture file: format detection, and the readers behind one [`Capture`] (the level
+//! stream they produce is `levels.rs`, re-exported here). Used by the `la` binary and by tests; the virtual bench skips files and
 //! calls [`Analyzer`] directly.
 
 use std::fs::File;
@@ -7,19 +7,11 @@ use std::io::{BufRead, BufReader};
 use std::path::Path;
 
 use anyhow::{bail, Context, Result};
-use serde::Serialize;
 
+use super::analysis::Analyzer;
 use super::csv::CsvReader;
+pub use super::levels::{CaptureInfo, Format, Recorded, Sink};
 use super::vcd::VcdReader;
-use super::Analyzer;
-
-/// Receiver of a capture's level reports, in time order.
-pub trait Sink {
-    /// `channel` is at `level` at `time_ps` (repeats allowed).
-    fn level(&mut self, time_ps: u64, channel: usize, level: bool);
-    /// Time has reached `time_ps`.
-    fn advance(&mut self, time_ps: u64);
-}
 
 impl Sink for Analyzer {
     // forward a level report
@@ -31,42 +23,6 @@ impl Sink for Analyzer {
     fn advance(&mut self, time_ps: u64) {
         Analyzer::advance(self, time_ps);
     }
-}
-
-/// Every report kept in memory, for tests and small files.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
-pub struct Recorded {
-    pub levels: Vec<(u64, usize, bool)>,
-    pub end_ps: u64,
-}
-
-impl Sink for Recorded {
-    // keep the report
-    fn level(&mut self, time_ps: u64, channel: usize, level: bool) {
-        self.levels.push((time_ps, channel, level));
-    }
-
-    // keep the latest time
-    fn advance(&mut self, time_ps: u64) {
-        self.end_ps = self.end_ps.max(time_ps);
-    }
-}
-
-/// Capture file formats.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
-#[serde(rename_all = "lowercase")]
-pub enum Format {
-    Vcd,
-    Csv,
-}
-
-/// What a capture's header says.
-#[derive(Clone, Debug, Serialize)]
-pub struct CaptureInfo {
-    pub format: Format,
-    /// Channel names, indexed by the channel numbers the reader reports.
-    pub channels: Vec<String>,
-    pub sample_rate_hz: Option<f64>,
 }
 
 /// An opened capture, header read.

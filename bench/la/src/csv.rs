@@ -16,7 +16,7 @@ use std::io::BufRead;
 
 use anyhow::{anyhow, bail, Context, Result};
 
-use super::capture::{CaptureInfo, Format, Sink};
+use super::levels::{CaptureInfo, Format, Sink};
 
 /// How a row's time is found.
 #[derive(Clone, Copy, Debug, PartialEq)]

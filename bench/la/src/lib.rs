@@ -60,13 +60,16 @@ pub mod capture;
 mod csv;
 mod deviation;
 mod glitch;
+mod levels;
 pub mod map;
 pub mod plot;
 mod rate;
+mod ratio;
 mod report;
 pub mod synth;
 mod vcd;
 
-pub use analysis::{reduce, Analyzer, AxisChannels, Config, CRUISE_FRACTION};
+pub use analysis::{Analyzer, AxisChannels, Config, CRUISE_FRACTION};
 pub use capture::{open, Capture, CaptureInfo, Format};
+pub use ratio::reduce;
 pub use report::{AxisReport, Cruise, Expectation, Report, Series};

@@ -103,7 +103,7 @@ impl Report {
             "{} = {} = {}",
             names.join(":"),
             join(&counts),
-            join(&super::reduce(&counts))
+            join(&super::ratio::reduce(&counts))
         );
         if let Some(expect) = &self.expect {
             if expect.pass {

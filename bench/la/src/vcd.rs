@@ -13,7 +13,7 @@ use std::io::BufRead;
 
 use anyhow::{anyhow, bail, Context, Result};
 
-use super::capture::{CaptureInfo, Format, Sink};
+use super::levels::{CaptureInfo, Format, Sink};
 
 /// Whitespace-separated tokens of a stream, with the line number for messages.
 struct Tokens<R> {

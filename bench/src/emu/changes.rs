@@ -1,12 +1,11 @@
 //! Moves changing at speed: back-to-back short moves at the firmware's own rate cap, and the
-//! step interrupt's mean and longest run while they run (issue 10's measure: a move change
-//! must cost a tick no more than 1.3× the mean).
-//!
+//! step interrupt's mean and longest run while they run (the goal: a move change costs a tick
+//! no more than 1.3× the mean; figures in bench/RESULTS.md, "Moves changing at the rate cap").
 //! Every figure is *modeled* (cycles of the emulated Cortex-M3, see bench/README.md).
 
 use anyhow::{ensure, Result};
 
-use super::sweep::{settings_lines, RATIO};
+use super::sweep::setup::{settings_lines, PULSE_US, RATIO, STEPS_PER_MM};
 use super::{Board, HZ};
 
 /// A step-interrupt run is at speed when its update event came within this many cycles of
@@ -52,7 +51,7 @@ impl ChangeResult {
 /// The `G1` line (relative, the sweep's steps/mm) that moves `steps` per axis with the master,
 /// the first axis, at `master_hz`.
 pub fn g1_line(steps: &[i64], master_hz: f64) -> String {
-    let mm: Vec<f64> = steps.iter().map(|&s| s as f64 / super::sweep::STEPS_PER_MM).collect();
+    let mm: Vec<f64> = steps.iter().map(|&s| s as f64 / STEPS_PER_MM).collect();
     let path = mm.iter().map(|m| m * m).sum::<f64>().sqrt();
     let feed = path / (steps[0] as f64 / master_hz) * 60.0;
     let words: String = "XYZABCU".chars().zip(&mm).map(|(a, m)| format!(" {a}{m}")).collect();
@@ -65,7 +64,7 @@ pub fn g1_line(steps: &[i64], master_hz: f64) -> String {
 /// `axes` axes (steps in the sweep's ratio; on 2 and more axes Y reverses at every junction:
 /// a direction change at speed). Runs until idle.
 pub fn back_to_back(b: &mut Board, axes: usize, hz: f64) -> Result<ChangeResult> {
-    back_to_back_at(b, axes, hz, super::sweep::PULSE_US)
+    back_to_back_at(b, axes, hz, PULSE_US)
 }
 
 /// [`back_to_back`] with pulses of `pulse_us` (`$0`) instead of the sweep's.

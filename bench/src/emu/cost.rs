@@ -5,7 +5,7 @@
 //! with the STM32F103's memory timing from `memory.rs` added: flash wait states as FLASH_ACR
 //! sets them (W; 2 at 72 MHz), the line schedule of the prefetch buffer (stalls when code
 //! outruns 8 bytes per line read), and the refill after a taken branch (a line read in flash,
-//! 2 cycles in SRAM). Peripheral bridge stalls are dynamic: `bus.rs` adds them per access.
+//! 2 cycles in SRAM). Peripheral bridge stalls are dynamic: `mcu.rs` adds them per access.
 //!
 //! | class                                   | modeled cycles                    |
 //! |-----------------------------------------|-----------------------------------|

@@ -1,6 +1,6 @@
 //! Builds the unicorn Cortex-M3 with the Blue Pill memory map and the hooks that feed the
 //! time model: a block hook (adds cached block costs, stops before a block when an event
-//! is due) and MMIO callbacks into `bus::Machine`. For `board.rs`.
+//! is due) and MMIO callbacks into `mcu::Mcu`. For `board.rs`.
 //!
 //! Memory map: flash 64 KiB at 0x0800_0000 (copied to the boot alias at 0), RAM 20 KiB at
 //! 0x2000_0000, system memory (flash size, UID) at 0x1FFF_F000, peripherals 0x4000_0000–
@@ -12,7 +12,7 @@ use object::{Object, ObjectSegment, ObjectSymbol};
 use unicorn_engine::unicorn_const::{Arch, Mode, Prot};
 use unicorn_engine::{ArmCpuModel, RegisterARM, Unicorn};
 
-use super::bus::{Machine, Stop};
+use super::mcu::{Mcu, Stop};
 use super::profile::Symbols;
 
 pub const FLASH_BASE: u32 = 0x0800_0000;
@@ -33,12 +33,12 @@ pub struct Image {
     pub symbols: Symbols,
 }
 
-pub type Cpu = Unicorn<'static, Machine>;
+pub type Cpu = Unicorn<'static, Mcu>;
 
 // map memory, install hooks and load `elf` into a new CPU
 pub fn build(elf: &[u8]) -> Result<(Cpu, Image)> {
     let e = |err| anyhow!("unicorn: {err:?}");
-    let mut uc = Unicorn::new_with_data(Arch::ARM, Mode::THUMB | Mode::MCLASS, Machine::new()).map_err(e)?;
+    let mut uc = Unicorn::new_with_data(Arch::ARM, Mode::THUMB | Mode::MCLASS, Mcu::new()).map_err(e)?;
     uc.ctl_set_cpu_model(ArmCpuModel::CORTEX_M3 as i32).map_err(e)?;
     uc.mem_map(0, FLASH_SIZE as u64, Prot::READ | Prot::EXEC).map_err(e)?;
     uc.mem_map(FLASH_BASE as u64, FLASH_SIZE as u64, Prot::ALL).map_err(e)?;
@@ -63,13 +63,13 @@ fn map_mmio(uc: &mut Cpu, base: u64, size: u64, _: u32) -> Result<(), unicorn_en
     uc.mmio_map(
         base,
         size,
-        Some(move |uc: &mut Unicorn<Machine>, off: u64, len: usize| {
+        Some(move |uc: &mut Unicorn<Mcu>, off: u64, len: usize| {
             let pc = uc.reg_read(RegisterARM::PC).unwrap_or(0) as u32;
             let m = uc.get_data_mut();
             m.pc = pc;
             m.read((base + off) as u32, len) as u64
         }),
-        Some(move |uc: &mut Unicorn<Machine>, off: u64, len: usize, value: u64| {
+        Some(move |uc: &mut Unicorn<Mcu>, off: u64, len: usize, value: u64| {
             let pc = uc.reg_read(RegisterARM::PC).unwrap_or(0) as u32;
             let m = uc.get_data_mut();
             m.pc = pc;
@@ -101,7 +101,7 @@ fn map_bitband(uc: &mut Cpu, alias: u64, target: u32, size: u32) -> Result<(), u
     uc.mmio_map(
         alias,
         size as u64 * 32,
-        Some(move |uc: &mut Unicorn<Machine>, off: u64, _len: usize| {
+        Some(move |uc: &mut Unicorn<Mcu>, off: u64, _len: usize| {
             let (word, bit) = locate(off);
             let v = if is_ram {
                 let mut b = [0u8; 4];
@@ -114,7 +114,7 @@ fn map_bitband(uc: &mut Cpu, alias: u64, target: u32, size: u32) -> Result<(), u
             };
             ((v >> bit) & 1) as u64
         }),
-        Some(move |uc: &mut Unicorn<Machine>, off: u64, _len: usize, value: u64| {
+        Some(move |uc: &mut Unicorn<Mcu>, off: u64, _len: usize, value: u64| {
             let (word, bit) = locate(off);
             if is_ram {
                 let mut b = [0u8; 4];
@@ -176,7 +176,7 @@ fn segment_paddr(elf: &[u8], vaddr: u64) -> Option<u64> {
 }
 
 // block hook: account the previous block, then stop before this one if an event is due
-fn on_block(uc: &mut Unicorn<Machine>, addr: u64, size: u32) {
+fn on_block(uc: &mut Unicorn<Mcu>, addr: u64, size: u32) {
     let addr = addr as u32;
     let m = uc.get_data_mut();
     if let Some(prev) = m.cur.take() {
@@ -219,7 +219,7 @@ fn on_block(uc: &mut Unicorn<Machine>, addr: u64, size: u32) {
 
 // the function timer (`profile::FnTimer`): a thread-mode block starting at `addr` opens a call
 // of a timed function or closes the innermost open one
-fn time_calls(uc: &mut Unicorn<Machine>, addr: u32) {
+fn time_calls(uc: &mut Unicorn<Mcu>, addr: u32) {
     let sp = uc.reg_read(RegisterARM::SP).unwrap_or(0) as u32;
     let lr = uc.reg_read(RegisterARM::LR).unwrap_or(0) as u32;
     let m = uc.get_data_mut();

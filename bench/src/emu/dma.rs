@@ -2,7 +2,7 @@
 //! peripheral register per peripheral request (here TIM2's requests, RM0008 table 78; see
 //! `dma_run.rs`). This file is the register file and the per-transfer bookkeeping;
 //! `dma_run.rs` times each transfer on the bus, reads its memory side from unicorn and lands
-//! its peripheral side. For the bus (registers, interrupt lines) and the run loop.
+//! its peripheral side. For `mcu.rs` (registers, interrupt lines) and the run loop.
 //!
 //! Registers: ISR (read-only), IFCR (write 1 to clear; CGIFx clears all four flags of
 //! channel x), and per channel x at 0x08 + 0x14·(x−1): CCR (EN, TCIE, HTIE, TEIE, DIR, CIRC,

@@ -1,7 +1,7 @@
 //! DMA1 on the emulated bus: TIM2's requests to channels (RM0008 table 78), each transfer
 //! timed with the constants of `dma.rs` and the shared AHB-to-APB bridge, its memory side
 //! read from unicorn's SRAM and its peripheral side landed through the same register
-//! dispatch as a CPU access. For `bus.rs` (sync, next event), the block hook in `cpu.rs`
+//! dispatch as a CPU access. For `mcu.rs` (sync, next event), the block hook in `cpu.rs`
 //! and the run loop in `board.rs` (both call [`service`]).
 //!
 //! Order of events: TIM2 queues a request at its event's cycle r (during `sync`, which the
@@ -30,7 +30,7 @@
 //! are paid once per transfer and transfers of all channels are serialized. The bus-matrix
 //! arbitration cycle is counted even without a competing access (AN4031 counts 0 then): one
 //! cycle pessimistic. The peripheral side uses the bridge the CPU uses
-//! (`Machine::bridge_free`): CPU peripheral accesses and DMA transfers queue behind each
+//! (`Mcu::bridge_free`): CPU peripheral accesses and DMA transfers queue behind each
 //! other. Bus cost: the DMA holds the bus matrix for its SRAM access and its bridge transfer,
 //! AHB_ACCESS + 1 + 2·d cycles (5 per GPIO write, 7 per TIM2 write); the bench charges all of
 //! them to the CPU whenever it is running, none while it sleeps in WFI. That is the
@@ -39,7 +39,7 @@
 //! checked against silicon.
 use unicorn_engine::Unicorn;
 
-use super::bus::Machine;
+use super::mcu::Mcu;
 use super::dma::{size_mask, Beat, Transfer, ADDRESS, AHB_ACCESS, ARBITRATION};
 use super::memory::{bus_of, Bus};
 
@@ -72,7 +72,7 @@ fn lanes(addr: u32, bytes: u32, value: u32) -> (u32, u32) {
     }
 }
 
-impl Machine {
+impl Mcu {
     // hand the requests TIM2 raised to the DMA controller
     pub(super) fn dma_collect(&mut self) {
         if self.tim2.dma_requests.is_empty() {
@@ -138,7 +138,7 @@ impl Machine {
 }
 
 // read `bytes` of memory at `addr` (zero-extended; 0 where nothing is mapped)
-fn read_mem(uc: &Unicorn<'_, Machine>, addr: u32, bytes: u32) -> u32 {
+fn read_mem(uc: &Unicorn<'_, Mcu>, addr: u32, bytes: u32) -> u32 {
     let mut b = [0u8; 4];
     let n = bytes.min(4) as usize;
     if uc.mem_read(addr as u64, &mut b[..n]).is_err() {
@@ -149,7 +149,7 @@ fn read_mem(uc: &Unicorn<'_, Machine>, addr: u32, bytes: u32) -> u32 {
 
 /// Serve the DMA requests waiting (and write what DIR = 0 transfers read into SRAM); the CPU
 /// loses the bus cycles only when `running`. Returns whether anything was done.
-pub fn service(uc: &mut Unicorn<'_, Machine>, running: bool) -> bool {
+pub fn service(uc: &mut Unicorn<'_, Mcu>, running: bool) -> bool {
     if !uc.get_data().dma.needs_service() {
         return false;
     }
@@ -168,7 +168,7 @@ pub fn service(uc: &mut Unicorn<'_, Machine>, running: bool) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::emu::PinEdge;
+    use crate::emu::gpio::PinEdge;
 
     #[test]
     fn request_map_and_write_lanes() {
@@ -180,10 +180,10 @@ mod tests {
         assert_eq!(lanes(0x2000_0002, 2, 0xBEEF), (0xBEEF_BEEF, 0xFFFF_0000), "AHB: addressed lanes");
     }
 
-    // a Machine with GPIOB PB9 as output, DMA channel `x` (1-based) memory→peripheral to
+    // a Mcu with GPIOB PB9 as output, DMA channel `x` (1-based) memory→peripheral to
     // `cpar`, 32 bit, circular, `n` items
-    fn machine(x: u32, cpar: u32, n: u32) -> Machine {
-        let mut m = Machine::new();
+    fn mcu(x: u32, cpar: u32, n: u32) -> Mcu {
+        let mut m = Mcu::new();
         m.write_reg(0x4001_0C04, 0x4444_4434, u32::MAX, 0, 0); // GPIOB CRH: PB9 output
         m.write_reg(0x4002_1004, 0x400, u32::MAX, 0, 0); // RCC_CFGR: APB1 = HCLK / 2
         let ch = 0x4002_0008 + 0x14 * (x - 1);
@@ -193,7 +193,7 @@ mod tests {
         m
     }
 
-    fn launch(m: &mut Machine, x: usize, r: u64, value: u32, running: bool) {
+    fn launch(m: &mut Mcu, x: usize, r: u64, value: u32, running: bool) {
         m.dma.request(x, r);
         for (r, x) in m.dma.take_requests() {
             let beat = m.dma.begin(x, r).expect("channel serves");
@@ -203,7 +203,7 @@ mod tests {
 
     #[test]
     fn gpio_write_lands_after_latency_and_shares_the_bridge_with_the_cpu() {
-        let mut m = machine(2, 0x4001_0C10, 4);
+        let mut m = mcu(2, 0x4001_0C10, 4);
         // idle bus: arbitration 1 + address 1 + SRAM 2 + APB2 bridge 3
         launch(&mut m, 1, 100, 1 << 9, true);
         assert_eq!(m.dma.next_event(), Some(107));
@@ -225,7 +225,7 @@ mod tests {
 
     #[test]
     fn tim2_arr_write_goes_through_the_timer_at_its_landing_cycle() {
-        let mut m = machine(1, 0x4000_002C, 2);
+        let mut m = mcu(1, 0x4000_002C, 2);
         m.write_reg(0x4000_002C, 999, u32::MAX, 0, 0);
         m.write_reg(0x4000_0000, 0x81, u32::MAX, 0, 0); // ARPE | CEN at 0: updates at 1000, ...
         // APB1 at HCLK / 2: bridge 5, so 1 + 1 + 2 + 5
@@ -242,7 +242,7 @@ mod tests {
     #[test]
     fn a_request_waits_for_its_disabled_channel_unless_the_timer_withdraws_it() {
         for withdraw in [false, true] {
-            let mut m = machine(2, 0x4001_0C10, 4);
+            let mut m = mcu(2, 0x4001_0C10, 4);
             let ccr2 = 0x4002_001C;
             let ccr = m.dma.read(ccr2 - 0x4002_0000);
             m.write_reg(ccr2, ccr & !1, u32::MAX, 0, 0); // channel 2 off

@@ -2,7 +2,7 @@
 //! (rc_w1). AFIO_EXTICR1–4 choose the port of each line. An edge of a GPIO input level (a test,
 //! the CLI or the virtual machine driving it) sets the line's pending bit when its edge is
 //! enabled; lines 0–4 raise IRQ 6–10 while pending and unmasked, lines 5–9 share IRQ 23 and
-//! lines 10–15 IRQ 40 (EXTI15_10: the probe input, PC14). For the bus.
+//! lines 10–15 IRQ 40 (EXTI15_10: the probe input, PC14). For `mcu.rs`.
 
 /// IRQ number of EXTI line 0 (lines 1–4 follow).
 pub const EXTI0_IRQ: u32 = 6;

@@ -8,7 +8,7 @@ use std::sync::OnceLock;
 
 use anyhow::{bail, Context, Result};
 
-use super::Board;
+use super::board::Board;
 
 // the repository root (the bench crate's parent)
 pub fn repo_root() -> PathBuf {

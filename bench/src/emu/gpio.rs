@@ -1,6 +1,6 @@
 //! GPIO ports A–E (RM0008 §9): CRL/CRH, IDR, ODR, BSRR, BRR, LCKR. The output latch (ODR)
 //! drives the traced pins; inputs read the level a test or CLI set, else the pull-up/down
-//! chosen by ODR. A BSRR write changes all its pins at one cycle. For the bus.
+//! chosen by ODR. A BSRR write changes all its pins at one cycle. For `mcu.rs`.
 
 /// One pin change of an output latch.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -13,9 +13,9 @@ pub struct PinEdge {
     pub level: bool,
 }
 
-/// One GPIO port.
+/// One GPIO port's registers and external levels (`input::Port` names a port).
 #[derive(Default, Clone)]
-pub struct Port {
+pub struct GpioPort {
     pub crl: u32,
     pub crh: u32,
     pub odr: u32,
@@ -25,7 +25,7 @@ pub struct Port {
     pub ext_driven: u32,
 }
 
-impl Port {
+impl GpioPort {
     // reset state: all pins floating inputs
     pub fn new() -> Self {
         Self { crl: 0x4444_4444, crh: 0x4444_4444, ..Self::default() }

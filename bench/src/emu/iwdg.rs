@@ -1,5 +1,5 @@
 //! Independent watchdog (RM0008 §19) and the system reset it causes (AIRCR.SYSRESETREQ
-//! causes one too, flagged SFTRSTF). For the bus and the board.
+//! causes one too, flagged SFTRSTF). For `mcu.rs` and the board.
 //!
 //! KR: 0xCCCC starts the watchdog (and reloads it), 0xAAAA reloads, 0x5555 unlocks PR and RLR
 //! until the next other key. The counter runs from the LSI, modeled at its nominal 40 kHz

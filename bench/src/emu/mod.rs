@@ -15,19 +15,22 @@
 
 pub mod asm;
 mod board;
-mod bus;
 pub mod changes;
+mod clock;
 pub mod cost;
 mod cpu;
 pub mod dma;
 mod dma_run;
+mod dwt;
 mod exception;
 mod exti;
 pub mod figures;
 mod firmware;
 pub mod floor;
 mod gpio;
+mod input;
 pub mod iwdg;
+mod mcu;
 pub mod memory;
 pub mod plant;
 pub mod nvic;
@@ -42,9 +45,11 @@ mod systick;
 mod timer;
 mod usart;
 
-pub use board::{Board, InputFlip, Port, HZ};
+pub use board::Board;
+pub use clock::HZ;
+pub use input::{InputFlip, Port};
 pub use stats::IsrRun;
-pub use bus::{TIM2_IRQ, USART1_IRQ};
+pub use mcu::{TIM2_IRQ, USART1_IRQ};
 pub use firmware::{firmware_elf, gcode_lines, repo_root, stream_gcode};
 pub use gpio::PinEdge;
 pub use report::{isr_profile, AxisReport, DmaReport, Report, SpindleReport, StepIsr, AXES, DIR_LOW_IS_POSITIVE, DIR_PINS, EN_PIN, STEP_PINS, TOOL_PINS};

@@ -1,10 +1,10 @@
 //! The machine around the board: something that watches the output latches and drives input
-//! pins back (the virtual machine's carriages and switches, `crate::machine`). For the bus,
+//! pins back (the virtual machine's carriages and switches, `crate::machine`). For `mcu.rs`,
 //! which calls it on every latch change, and the board, which applies what it schedules.
 
 use std::any::Any;
 
-use super::board::InputFlip;
+use super::input::InputFlip;
 
 /// A model of what the board's pins are wired to.
 pub trait Plant: Send {

@@ -160,7 +160,7 @@ mod tests {
 
     #[test]
     fn demangles_legacy_names() {
-        assert_eq!(demangle("_ZN7ddastep6engine19Engine$LT$_$C$_$GT$4tick17h2546dee6a00bc47dE"), "ddastep::engine::Engine<_,_>::tick");
+        assert_eq!(demangle("_ZN7ddastep6motion6engine19Engine$LT$_$C$_$GT$4tick17h2546dee6a00bc47dE"), "ddastep::motion::engine::Engine<_,_>::tick");
         assert_eq!(demangle("TIM2"), "TIM2");
         assert_eq!(demangle("_ZN4core3ptr13drop_in_place17h0123456789abcdefE"), "core::ptr::drop_in_place");
     }
@@ -169,7 +169,7 @@ mod tests {
 /// Inclusive thread-mode cycles of calls to chosen functions: a call opens when a block starts
 /// at one of the entry addresses (in thread mode) and closes when a block starts at its return
 /// address (the LR at entry) with the stack pointer back where it was. Cycles of interrupts
-/// taken meanwhile are not counted (only thread-mode blocks advance `Machine::thread_cycles`).
+/// taken meanwhile are not counted (only thread-mode blocks advance `Mcu::thread_cycles`).
 #[derive(Clone, Debug, Default)]
 pub struct FnTimer {
     /// Entry addresses of the timed functions, with an index naming each.

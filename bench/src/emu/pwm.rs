@@ -1,6 +1,6 @@
 //! TIM1 as the spindle/laser PWM output on PA8 (RM0008 §14): PSC, ARR, CCR1, CCMR1, CCER,
 //! BDTR, CR1, EGR. No interrupts, no counter reads: what the bench needs is the duty cycle the
-//! pin carries over time. For the bus.
+//! pin carries over time. For `mcu.rs`.
 //!
 //! The output is on when the counter runs (CR1.CEN), channel 1 is in PWM mode 1
 //! (CCMR1.OC1M = 110), enabled (CCER.CC1E) and the main output is on (BDTR.MOE); its duty is
@@ -57,7 +57,7 @@ impl Pwm {
     fn output(&self) -> (f64, f64) {
         let on = self.running() && (self.ccmr1 >> 4) & 7 == 6 && self.ccer & 1 != 0 && self.bdtr & (1 << 15) != 0;
         let top = self.active.arr as f64 + 1.0;
-        let hz = super::board::HZ as f64 / self.period() as f64;
+        let hz = super::clock::HZ as f64 / self.period() as f64;
         if on { ((self.active.ccr1 as f64).min(top) / top, hz) } else { (0.0, hz) }
     }
 

@@ -1,5 +1,5 @@
 //! TIM3 as a quadrature encoder counter (RM0008 §15.3.12, "Encoder interface mode"): CR1,
-//! SMCR, CCMR1, CCER, CNT, ARR; other registers keep what is written. For the bus, which
+//! SMCR, CCMR1, CCER, CNT, ARR; other registers keep what is written. For `mcu.rs`, which
 //! hands it every level change of PA6 (TI1) and PA7 (TI2).
 //!
 //! With CR1.CEN set and SMCR.SMS = 001, 010 or 011 the counter counts the edges of TI1, TI2

@@ -1,7 +1,7 @@
 //! Run outputs: the JSON/human report (per-axis numbers come from the `la` checker fed with
 //! the bench's pin edges) and a VCD of the step, dir and enable pins. For the CLI and tests.
 //!
-//! Pin map (firmware contract): step X..U = PB9..PB15, dir X..U = PB0, PB1, PB3, PB4, PB5,
+//! Pin map (the firmware's, `ddastep::board`): step X..U = PB9..PB15, dir X..U = PB0, PB1, PB3, PB4, PB5,
 //! PB6, PB7, enable = PB8; spindle PWM = PA8 (TIM1 CH1, recorded as a duty cycle), spindle
 //! enable = PA15, spindle direction = PA5, flood = PA4, mist = PA3. VCD time is modeled cycles × 1000/72 ns, rounded to 1 ns.
 
@@ -9,24 +9,29 @@ use std::io::Write;
 use std::path::Path;
 
 use anyhow::Result;
+use ddastep::board as pins;
 use serde::ser::SerializeMap;
 use serde::{Serialize, Serializer};
 
-use super::board::{Board, HZ};
-use super::bus::TIM2_IRQ;
+use super::board::Board;
+use super::clock::HZ;
+use super::mcu::TIM2_IRQ;
 use super::nvic::IRQ0;
 use crate::la::{Analyzer, AxisChannels, Config};
 
 /// Axis names in channel order.
 pub const AXES: [&str; 7] = ["X", "Y", "Z", "A", "B", "C", "U"];
-/// GPIOB step pins per axis.
-pub const STEP_PINS: [u8; 7] = [9, 10, 11, 12, 13, 14, 15];
-/// GPIOB dir pins per axis.
-pub const DIR_PINS: [u8; 7] = [0, 1, 3, 4, 5, 6, 7];
+/// GPIOB step and dir pins per axis: the firmware's pin map.
+pub use ddastep::board::{DIR_PINS, STEP_PINS};
 /// GPIOB shared enable pin.
-pub const EN_PIN: u8 = 8;
+pub const EN_PIN: u8 = pins::ENABLE_PIN;
 /// GPIOA pins of the spindle and coolant outputs, with their VCD names.
-pub const TOOL_PINS: [(u8, &str); 4] = [(15, "SPINDLE_EN"), (5, "SPINDLE_DIR"), (4, "FLOOD"), (3, "MIST")];
+pub const TOOL_PINS: [(u8, &str); 4] = [
+    (pins::SPINDLE_ENABLE_PIN, "SPINDLE_EN"),
+    (pins::SPINDLE_DIR_PIN, "SPINDLE_DIR"),
+    (pins::COOLANT_FLOOD_PIN, "FLOOD"),
+    (pins::COOLANT_MIST_PIN, "MIST"),
+];
 /// Dir pin low = positive motion (Grbl's convention with `$3=0`; a `$3` mask would flip axes,
 /// which the report does not follow).
 pub const DIR_LOW_IS_POSITIVE: bool = true;

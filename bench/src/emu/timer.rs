@@ -1,6 +1,6 @@
 //! TIM2 (16-bit general-purpose timer, RM0008 §15) in up-counting mode, evaluated lazily:
 //! the state is a counter value at a reference cycle, and `advance(t)` replays the update and
-//! compare events up to cycle `t`. For the bus (register access) and the run loop (next event).
+//! compare events up to cycle `t`. For `mcu.rs` (register access) and the run loop (next event).
 //!
 //! Modeled: CR1 (CEN, UDIS, URS, OPM, ARPE), CR2.CCDS, DIER (UIE, CC1IE..CC4IE, UDE,
 //! CC1DE..CC4DE), SR (rc_w0), EGR (UG, CC1G..CC4G), CNT, PSC (preloaded), ARR (preloaded when
