@@ -74,7 +74,7 @@ pub fn arm(on: bool, invert: bool, active: u8, watch: Option<u8>) {
 
 /// The EXTI0/1/2 handler body: homing's stop for a watched switch, else (hard limits) stop
 /// all step output if a limit pin went active.
-pub fn on_edge<const N: usize>(shared: &ddastep::motion::queue::Shared<N>) {
+pub fn on_edge<const N: usize>(shared: &ddastep::motion::shared::Shared<N>) {
     exti().pr().write(|w| unsafe { w.bits(LINES) });
     let armed = ARMED.load(Relaxed);
     let active = ddastep::grbl::limits::active_pins(super::hw::gpioa_idr(), armed & 2 != 0) as u32;

@@ -3,7 +3,7 @@
 //! Who uses it: settings defaults and docs; the engine itself only sees timer ticks
 //! ([`Timing`]). Figures are the minimums from each driver's datasheet.
 
-use crate::motion::ramp::MAX_RATE_HZ;
+use crate::motion::rate::MAX_RATE_HZ;
 use crate::TIMER_HZ;
 
 /// Minimum timing a step/dir driver needs, in nanoseconds.

@@ -1,15 +1,16 @@
 //! The step half of the engine: what the TIM2 interrupt does, one tick at a time (see the
 //! parent module for the contract and the split).
 //!
-//! Who uses it: the firmware's TIM2 handler, and [`super::Engine`] on the host.
+//! Who uses it: the firmware's TIM2 handler, and the host's `Engine`, which runs both halves.
 
 use core::sync::atomic::Ordering::Relaxed;
 
-use super::{Link, IDLE_TICKS, MAX_TICK, PRIME_TICKS};
+use super::link::Link;
+use super::ticks::{IDLE_TICKS, MAX_TICK, PRIME_TICKS};
 use crate::board::PinMap;
 use crate::motion::control::Ctl;
 use crate::motion::prepared::{Prepared, Slave};
-use crate::motion::queue::{Shared, State};
+use crate::motion::shared::{Shared, State};
 use crate::motion::ramp::{RampSlot, RAMP_LEN};
 use crate::motion::ring::RingConsumer;
 use crate::TICKS_PER_MS;
@@ -19,7 +20,7 @@ use crate::TICKS_PER_MS;
 /// view fails).
 const CLEARED: usize = 1;
 
-mod plain;
+pub(crate) mod plain;
 
 /// A tick whose own period (the gap from its update event to the next) is at least this (2048
 /// ticks: below 35 kHz) leaves room before a direction change for the change itself: the
@@ -71,7 +72,7 @@ pub struct Stepper<'a, const N: usize, const L: usize = RAMP_LEN> {
     ctl_seen: Ctl,
     /// How to ask for the ramp half's interrupt (a counter in [`Link`] moved): write `.1` to
     /// the register at `.0` (the NVIC's set-pending word for its vector); null on the host,
-    /// where [`super::Engine`] runs the ramp half after every tick anyway.
+    /// where the host's `Engine` runs the ramp half after every tick anyway.
     pend: (*mut u32, u32),
     /// Set when a tick asked for the ramp half and no register is set to pend ([`Self::set_pend`]):
     /// the DMA burst fill runs the ramp half itself ([`crate::motion::burst`]).
