@@ -1,7 +1,7 @@
 //! The acceleration's shape: the ideal profile each table entry takes its mean rate from
 //! (trapezoid, or a logistic S-curve), outside any interrupt.
 //!
-//! Who uses it: the table build ([`super::table`]), for its entries and its length.
+//! Who uses it: the table build (`ramp/table.rs`), for its entries and its length.
 
 use crate::num::{f32_of_u64, i32_of, u64_of};
 

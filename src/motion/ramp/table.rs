@@ -3,7 +3,7 @@
 //! period, distance) on it.
 //!
 //! Who uses it: the settings build it; the engine's ramp walk reads it; the look-ahead's
-//! searches ([`super::search`]) map speeds and distances onto its indices.
+//! searches (`ramp/search.rs`) map speeds and distances onto its indices.
 
 use super::shape::{mean_millihz, s_curve_stretch, RampConfig, Shape};
 use crate::motion::rate::{period_of_millihz, Period, MAX_RATE_HZ, MIN_RATE_HZ};

@@ -21,7 +21,9 @@
 
 use core::sync::atomic::Ordering::Relaxed;
 
-use super::{bump, piece, slave_bits, toggle, Phase, Stepper};
+use super::extend::piece;
+use super::state::{bump, Phase, Stepper};
+use super::word::{slave_bits, toggle};
 use crate::TICKS_PER_MS;
 use crate::motion::prepared::Slave;
 
