@@ -179,8 +179,8 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
     /// the trigger; it takes the walk from there). Returns that period.
     #[inline(never)]
     fn trigger(&mut self) -> u32 {
-        // SAFETY: as in `step`; atomic fields.
         let p = self.cur;
+        // SAFETY: `cur` is the running move's slot (as in `step`); only its atomic fields.
         let period = unsafe {
             (*p).decel_at.store(0, Relaxed);
             let period = (*p).down_period.load(Relaxed);
