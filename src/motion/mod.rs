@@ -21,7 +21,7 @@
 //! - [`shared`]: the state shared lock-free with the step interrupt (the position record's
 //!   sequence lock, the engine's state, control word, overrides, probe).
 //! - [`timing`]: driver timing (pulse width, direction setup) as typed constants.
-//! - [`sim`]: a model of the TIM2 preload pipeline that turns ticks into timed edges (host
+//! - [`tim2_model`]: a model of the TIM2 preload pipeline that turns ticks into timed edges (host
 //!   tests, benchmarks).
 
 pub mod burst;
@@ -34,6 +34,6 @@ pub mod ramp;
 pub mod rate;
 pub mod ring;
 pub mod shared;
-pub mod sim;
+pub mod tim2_model;
 pub mod timing;
 pub mod walk;

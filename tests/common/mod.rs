@@ -7,7 +7,7 @@ use ddastep::motion::moves::Move;
 use ddastep::motion::shared::{Shared, State};
 use ddastep::planning::feeder::Feeder;
 use ddastep::motion::ramp::{RampConfig, RampSlot, Shape};
-use ddastep::motion::sim::{apply_bsrr, Edge, TimerSim};
+use ddastep::motion::tim2_model::{apply_bsrr, Edge, TimerSim};
 use ddastep::motion::timing::Timing;
 use ddastep::motion::ring::MoveRing;
 

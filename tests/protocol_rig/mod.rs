@@ -12,7 +12,7 @@ use ddastep::motion::shared::{Shared, State};
 use ddastep::planning::feeder::Feeder;
 use ddastep::motion::ramp::RampSlot;
 use ddastep::grbl::settings::Settings;
-use ddastep::motion::sim::TimerSim;
+use ddastep::motion::tim2_model::TimerSim;
 use ddastep::TICKS_PER_MS;
 use ddastep::motion::ring::MoveRing;
 
