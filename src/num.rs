@@ -1,6 +1,7 @@
-//! Float-to-integer conversions, out of line.
+//! Number helpers: float-to-integer conversions (out of line), and a 64-by-32-bit [`mul_div`].
 //!
-//! Who uses it: the settings, G-code, planning and report code (never the step interrupt).
+//! Who uses it: the settings, G-code, planning and report code, status reports and the
+//! feeder (never the step interrupt).
 //!
 //! The library computes in `f32`, as Grbl does (the Cortex-M3 has no FPU: each `f64` operation
 //! would link a second, larger soft-float set and pass two registers per operand). Rust's `as`
@@ -66,9 +67,29 @@ pub fn round_u32(x: f32) -> u32 {
     libm::roundf(x) as u32
 }
 
+/// `(a * b + add) / d` for a quotient that fits 32 bits (`a * b + add < d * 2^32`), without a
+/// 64-bit division: shift-subtract on the 64-bit product. Saves the ~900 B `__aeabi_uldivmod`
+/// the firmware otherwise links (only status reports and the feeder's horizon call this).
+pub fn mul_div(a: u32, b: u32, add: u32, d: u32) -> u32 {
+    let n = a as u64 * b as u64 + add as u64;
+    let d64 = d as u64;
+    let mut rem = n >> 32;
+    let mut q = 0u32;
+    for bit in (0..32).rev() {
+        rem = (rem << 1) | ((n >> bit) & 1);
+        q <<= 1;
+        if rem >= d64 {
+            rem -= d64;
+            q |= 1;
+        }
+    }
+    q
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
 
     #[test]
     fn same_as_the_casts() {
@@ -96,6 +117,27 @@ mod tests {
             for y in [x as i64, (x as i64).wrapping_neg()] {
                 assert_eq!(f32_of_i64(y).to_bits(), (y as f32).to_bits(), "{y}");
             }
+        }
+    }
+
+    fn reference(a: u32, b: u32, add: u32, d: u32) -> u64 {
+        (a as u64 * b as u64 + add as u64) / d as u64
+    }
+
+    #[test]
+    fn mul_div_edges() {
+        let m = u32::MAX;
+        for (a, b, add, d) in [(0, 0, 0, 1), (m, m, m / 2, m), (m, 1, 0, 1), (m - 1, m, 0, m), (7, 3, 1, 2), (1, 1, 0, m)] {
+            assert_eq!(mul_div(a, b, add, d) as u64, reference(a, b, add, d), "{a} {b} {add} {d}");
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn mul_div_matches_u64(total in 1u32.., done in any::<u32>(), c in any::<u32>()) {
+            let (done, c) = (done % (total as u64 + 1) as u32, c % (total as u64 + 1) as u32);
+            prop_assert_eq!(mul_div(done, c, total / 2, total) as u64, reference(done, c, total / 2, total));
+            prop_assert_eq!(mul_div(c, done, 0, total) as u64, reference(c, done, 0, total));
         }
     }
 }

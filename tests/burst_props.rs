@@ -7,7 +7,8 @@ mod common;
 use common::Rig;
 use ddastep::motion::burst::{Layout, HALF_MAX};
 use ddastep::motion::engine::IDLE_TICKS;
-use ddastep::motion::queue::{Move, State};
+use ddastep::motion::moves::Move;
+use ddastep::motion::shared::State;
 use ddastep::grbl::settings::Settings;
 use proptest::prelude::*;
 
@@ -33,7 +34,7 @@ impl Driver {
     }
 
     /// Before a real tick.
-    fn between(&mut self, shared: &ddastep::motion::queue::Shared<3>, feeder: &mut ddastep::motion::queue::Feeder<'static, 3>) {
+    fn between(&mut self, shared: &ddastep::motion::shared::Shared<3>, feeder: &mut ddastep::planning::feeder::Feeder<'static, 3>) {
         if let Some((on, len)) = self.hold {
             let held = self.ticks >= on && self.held_ticks < len;
             if held {
@@ -52,7 +53,7 @@ impl Driver {
         self.preload = period;
     }
 
-    fn done(&self, shared: &ddastep::motion::queue::Shared<3>, feeder: &ddastep::motion::queue::Feeder<'static, 3>) -> bool {
+    fn done(&self, shared: &ddastep::motion::shared::Shared<3>, feeder: &ddastep::planning::feeder::Feeder<'static, 3>) -> bool {
         feeder.pending() == 0
             && shared.state() == State::Idle
             && self.hold.is_none_or(|(_, len)| self.held_ticks >= len)

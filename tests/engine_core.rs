@@ -4,7 +4,8 @@
 mod common;
 
 use common::Rig;
-use ddastep::motion::queue::{Move, MoveError, State};
+use ddastep::motion::moves::{Move, MoveError};
+use ddastep::motion::shared::State;
 use ddastep::motion::ramp::{hz_of_period, RampConfig, RampError, RampTable, Shape};
 use ddastep::motion::timing::Timing;
 use ddastep::TIMER_HZ;

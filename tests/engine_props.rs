@@ -4,7 +4,8 @@
 mod common;
 
 use common::Rig;
-use ddastep::motion::queue::{Move, State};
+use ddastep::motion::moves::Move;
+use ddastep::motion::shared::State;
 use ddastep::motion::ramp::{RampConfig, RampTable, Shape};
 use ddastep::TIMER_HZ;
 use proptest::prelude::*;

@@ -6,7 +6,7 @@ mod common;
 
 use common::Rig;
 use ddastep::planning::planner::{Limits, Planner};
-use ddastep::motion::queue::State;
+use ddastep::motion::shared::State;
 use ddastep::grbl::settings::Settings;
 use proptest::prelude::*;
 

@@ -124,7 +124,7 @@ fn g93_duration(settings: Settings, line: &str) -> (u64, u64, Bench<3>) {
     b.send(line);
     b.send("\n");
     let mut ms = 0;
-    while b.ctl.busy() || b.ctl.pending_moves() > 0 || b.shared.state() != ddastep::motion::queue::State::Idle {
+    while b.ctl.busy() || b.ctl.pending_moves() > 0 || b.shared.state() != ddastep::motion::shared::State::Idle {
         run_recording(&mut b, 10, &mut steps);
         ms += 10;
         assert!(ms < 200_000);

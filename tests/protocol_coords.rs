@@ -149,7 +149,7 @@ fn wco_and_ov_follow_grbls_refresh_counters() {
     // An offset change brings WCO into the very next report; an override change Ov.
     b.line("G92 X1");
     assert!(b.status().contains("|WCO:-1.000,0.000,0.000>"));
-    b.shared.set_overrides(ddastep::motion::queue::Overrides { feed: 120, rapid: 50, spindle: 100 });
+    b.shared.set_overrides(ddastep::motion::moves::Overrides { feed: 120, rapid: 50, spindle: 100 });
     assert!(b.status().ends_with("|Ov:120,50,100>\r\n"));
     // $10=2: WPos and the buffer state.
     b.line("$10=2");

@@ -4,7 +4,7 @@
 
 mod protocol_rig;
 
-use ddastep::motion::queue::State;
+use ddastep::motion::shared::State;
 use ddastep::grbl::settings::Settings;
 use proptest::prelude::*;
 use protocol_rig::{Bench, EncoderModel};

@@ -3,7 +3,7 @@
 
 mod protocol_rig;
 
-use ddastep::motion::queue::State;
+use ddastep::motion::shared::State;
 use protocol_rig::Bench;
 
 #[test]

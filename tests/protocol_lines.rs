@@ -2,7 +2,7 @@
 
 mod protocol_rig;
 
-use ddastep::motion::queue::State;
+use ddastep::motion::shared::State;
 use ddastep::grbl::settings::Settings;
 use protocol_rig::{replies, Bench};
 

@@ -332,7 +332,7 @@ fn a_hold_while_an_override_ramps_ends_exactly_and_resumes_at_the_new_speed() {
     b.run_ms(40);
     b.byte(b'!');
     b.run_ms(400);
-    assert_eq!(b.shared.state(), ddastep::motion::queue::State::Held);
+    assert_eq!(b.shared.state(), ddastep::motion::shared::State::Held);
     let held = b.shared.positions();
     b.run_ms(50);
     assert_eq!(b.shared.positions(), held, "held");

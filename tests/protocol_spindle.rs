@@ -2,7 +2,8 @@
 
 mod protocol_rig;
 
-use ddastep::motion::queue::{Overrides, State};
+use ddastep::motion::moves::Overrides;
+use ddastep::motion::shared::State;
 use ddastep::grbl::settings::Settings;
 use ddastep::grbl::spindle::{duty, PwmTiming};
 use protocol_rig::{replies, Bench};

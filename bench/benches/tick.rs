@@ -6,7 +6,9 @@
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use ddastep::board::pin_map;
 use ddastep::motion::engine::Engine;
-use ddastep::motion::queue::{Feeder, Move, Shared};
+use ddastep::motion::moves::Move;
+use ddastep::motion::shared::Shared;
+use ddastep::planning::feeder::Feeder;
 use ddastep::motion::ramp::{RampConfig, RampSlot, Shape};
 use ddastep::motion::timing::Timing;
 use ddastep::motion::ring::MoveRing;

@@ -66,7 +66,7 @@ pub fn setup() {
 
 /// The EXTI15_10 handler body: the probe input changed; a probe cycle's edge stops the engine
 /// at its next tick (see `Shared::probe_input`).
-pub fn on_probe_edge<const N: usize>(shared: &ddastep::motion::queue::Shared<N>) {
+pub fn on_probe_edge<const N: usize>(shared: &ddastep::motion::shared::Shared<N>) {
     // SAFETY: PR is write-1-to-clear: clears only the probe line's flag, this handler's own.
     exti().pr().write(|w| unsafe { w.bits(PROBE_LINE) });
     shared.probe_input(gpio::probe_low() != PROBE_INVERT.load(Relaxed));
@@ -84,7 +84,7 @@ pub fn arm(on: bool, invert: bool, active: u8, watch: Option<u8>) {
 
 /// The EXTI0/1/2 handler body: homing's stop for a watched switch, else (hard limits) stop
 /// all step output if a limit pin went active.
-pub fn on_edge<const N: usize>(shared: &ddastep::motion::queue::Shared<N>) {
+pub fn on_edge<const N: usize>(shared: &ddastep::motion::shared::Shared<N>) {
     // SAFETY: PR is write-1-to-clear: clears only lines 0-2, this handler's own.
     exti().pr().write(|w| unsafe { w.bits(LINES) });
     let armed = ARMED.load(Relaxed);

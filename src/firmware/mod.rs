@@ -38,7 +38,8 @@ mod app {
     use ddastep::grbl::controller::Controller;
     use ddastep::motion::engine::Engine;
     use ddastep::grbl::shell::{dispatch, idle_step, Requests};
-    use ddastep::motion::queue::{Feeder, Shared};
+    use ddastep::motion::shared::Shared;
+    use ddastep::planning::feeder::Feeder;
     use ddastep::planning::lookahead::Buffer;
     use ddastep::motion::ring::MoveRing;
     use ddastep::motion::ramp::RampSlot;

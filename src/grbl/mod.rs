@@ -6,6 +6,7 @@ pub mod coords;
 pub mod gcode;
 pub mod jog;
 pub mod limits;
+pub mod overrides;
 pub mod protocol;
 pub mod report;
 pub mod settings;

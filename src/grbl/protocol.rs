@@ -30,7 +30,7 @@ pub enum Realtime {
     /// 0x84: the safety door opened ([`crate::grbl::controller::Controller::door_command`]).
     Door,
     /// Grbl's other extended realtime bytes (0x80..=0xFF): overrides 0x90–0x9D act
-    /// ([`crate::motion::queue::Overrides::apply`]), the others are ignored.
+    /// ([`crate::grbl::overrides::apply`]), the others are ignored.
     Extended(u8),
 }
 

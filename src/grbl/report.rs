@@ -8,7 +8,7 @@ use crate::grbl::coords::{Offsets, G28, G30};
 use crate::grbl::gcode::{Modal, Motion};
 use crate::grbl::spindle::{SpindleDir, FLOOD, MIST};
 use crate::grbl::protocol::{put_fixed, put_u32, Out, RX_BUFFER_LEN};
-use crate::motion::queue::Overrides;
+use crate::motion::moves::Overrides;
 use crate::motion::ramp::Shape;
 use crate::grbl::settings::Ramped;
 

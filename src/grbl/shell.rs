@@ -8,8 +8,9 @@ use core::sync::atomic::{AtomicBool, Ordering::Relaxed};
 use heapless::spsc::Consumer;
 
 use crate::grbl::controller::{Actions, Controller};
+use crate::grbl::overrides;
 use crate::grbl::protocol::{realtime, Out, Realtime};
-use crate::motion::queue::Shared;
+use crate::motion::shared::Shared;
 
 /// Requests the RX interrupt leaves for the idle loop (lock-free flags).
 pub struct Requests {
@@ -63,7 +64,7 @@ pub fn dispatch<const N: usize>(b: u8, shared: &Shared<N>, req: &Requests) -> Op
         Some(Realtime::Status) => req.status.store(true, Relaxed),
         Some(Realtime::Reset) => req.reset.store(true, Relaxed),
         Some(Realtime::JogCancel) => req.jog_cancel.store(true, Relaxed),
-        Some(Realtime::Extended(x)) => shared.set_overrides(shared.overrides().apply(x)),
+        Some(Realtime::Extended(x)) => shared.set_overrides(overrides::apply(shared.overrides(), x)),
         None => return Some(b),
     }
     None

@@ -31,8 +31,9 @@
 //! entries balance the fill's cost per half against splitting: entries up to 1500 ticks keep a
 //! step one entry from 48 kHz up. Modeled figures: bench/RESULTS.md, "DMA burst mode".
 
+use crate::motion::engine::stepper::plain::tail;
 use crate::motion::engine::{Engine, Ramper, Stepper};
-use crate::motion::queue::Shared;
+use crate::motion::shared::Shared;
 use crate::motion::ramp::RAMP_LEN;
 use crate::TICKS_PER_MS;
 
@@ -191,15 +192,6 @@ pub fn dma_played(cndtr: u32, n: usize, at: usize, half: usize) -> usize {
     } else {
         0
     }
-}
-
-/// `s[i..]` without the call the slice index makes at `opt-level = "z"` (the fill runs it per
-/// half).
-#[inline(always)]
-pub(crate) fn tail<T>(s: &mut [T], i: usize) -> &mut [T] {
-    let i = i.min(s.len());
-    // SAFETY: `i ≤ s.len()`: the rest of the slice, borrowed from `s`.
-    unsafe { core::slice::from_raw_parts_mut(s.as_mut_ptr().add(i), s.len() - i) }
 }
 
 #[cfg(test)]

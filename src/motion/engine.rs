@@ -46,65 +46,19 @@
 //!
 //! Cycle budget: see bench/RESULTS.md (modeled on the virtual bench).
 
-use core::sync::atomic::{AtomicBool, AtomicU32, AtomicUsize};
-
 use crate::board::PinMap;
-use crate::motion::queue::Shared;
 use crate::motion::ramp::{RampSlot, RAMP_LEN};
 use crate::motion::ring::RingConsumer;
-use crate::TICKS_PER_MS;
+use crate::motion::shared::Shared;
 
+pub(crate) mod link;
 mod ramper;
-mod stepper;
+pub(crate) mod stepper;
+mod ticks;
+pub use link::Link;
 pub use ramper::Ramper;
 pub use stepper::Stepper;
-
-/// Longest timer period one tick can set (ARR is 16 bits).
-pub const MAX_TICK: u32 = 1 << 16;
-/// Period of idle ticks while no move runs (0.5 ms: a new move starts within this).
-pub const IDLE_TICKS: u32 = TICKS_PER_MS / 2;
-/// Period of the ticks that wait for the ramp half to prime a move (a start from rest, a
-/// resume): 50 µs, ample for the ramp interrupt's work.
-pub const PRIME_TICKS: u32 = TICKS_PER_MS / 20;
-
-/// What the step half tells the ramp half: counters only the step half writes (one word each,
-/// read by the ramp half against its own copies), so neither side read-modify-writes a word
-/// the other writes. A move entered or ended shows in the position record's sequence
-/// ([`Shared::record_seq`]), the running move itself in the record ([`Shared::running`]).
-pub struct Link {
-    /// Ramp milliseconds of timer time passed while stepping.
-    pub(crate) ms: AtomicU32,
-    /// Deceleration triggers fired, and the move the last one fired in.
-    pub(crate) decel: AtomicU32,
-    pub(crate) decel_in: AtomicUsize,
-    /// The move a move change enters (from the last step of the one before until it is the
-    /// running move; 0 otherwise): the walk is on it from then on.
-    pub(crate) next: AtomicUsize,
-    /// The running move's successor once the ramp half has primed it (0 or 1: none; the step
-    /// half stores 1 when it enters the successor or goes idle).
-    pub(crate) succ: AtomicUsize,
-    /// Requests to prime the front move for a start from rest.
-    pub(crate) primes: AtomicU32,
-    /// The step half's feed hold.
-    pub(crate) hold: AtomicBool,
-    /// The ramp half's table index (Q20), for the step half's starvation count.
-    pub(crate) idx: AtomicU32,
-}
-
-impl Link {
-    pub(crate) const fn new() -> Self {
-        Link {
-            ms: AtomicU32::new(0),
-            decel: AtomicU32::new(0),
-            decel_in: AtomicUsize::new(0),
-            next: AtomicUsize::new(0),
-            succ: AtomicUsize::new(0),
-            primes: AtomicU32::new(0),
-            hold: AtomicBool::new(false),
-            idx: AtomicU32::new(0),
-        }
-    }
-}
+pub use ticks::{IDLE_TICKS, MAX_TICK, PRIME_TICKS};
 
 /// Both halves in one, for host tests: each tick runs the ramp half's work right after the
 /// step half's (on the board: the ramp interrupt, tail-chained after the step interrupt).

@@ -16,7 +16,7 @@ use core::sync::atomic::AtomicU32;
 
 use crate::board::PinMap;
 use crate::motion::interp::Dda;
-use crate::motion::queue::Rates;
+use crate::motion::moves::Rates;
 use crate::motion::ramp::Period;
 use crate::motion::timing::{Timing, STORE_JITTER_TICKS};
 

@@ -3,7 +3,7 @@
 //! Who uses it: settings defaults and docs; the engine itself only sees timer ticks
 //! ([`Timing`]). Figures are the minimums from each driver's datasheet.
 
-use crate::motion::ramp::MAX_RATE_HZ;
+use crate::motion::rate::MAX_RATE_HZ;
 use crate::TIMER_HZ;
 
 /// Minimum timing a step/dir driver needs, in nanoseconds.
@@ -170,93 +170,60 @@ impl Timing {
     }
 }
 
-/// Step-handler cost per master step, timer ticks: the virtual bench's step-rate sweep with
-/// the caps lifted (one long move per point, modeled with the silicon-checked memory model and
-/// the step interrupt in SRAM; the ramp interrupt and `idle` counted in the CPU) holds the CPU
-/// ≤ 95 % busy up to 299, 263 and 210 kHz on 1, 3 and 7 axes (periods 241, 274 and 343 ticks:
-/// 241 + 17 per slave); 245 + 17 per slave leaves about 1.5 % for code placement.
+/// Step-handler cost per master step, timer ticks (plus [`HANDLER_PER_SLAVE_TICKS`] per
+/// slave): keeps the CPU ≤ 95 % busy, with about 1.5 % left for code placement. Measured:
+/// bench/RESULTS.md, "Results" (the step-rate sweep with the caps lifted).
 pub const HANDLER_BASE_TICKS: u32 = 245;
 /// Extra handler ticks per slave axis (see [`HANDLER_BASE_TICKS`]).
 pub const HANDLER_PER_SLAVE_TICKS: u32 = 17;
-/// The longest step-handler run at speed, timer ticks (plus [`HANDLER_PER_SLAVE_TICKS`] per
-/// slave): a move change (the ramp work runs in its own interrupt); the bench's back-to-back
-/// moves at the cap (`ddastep_bench::emu::changes`, per-entry log) measured at most 319
-/// modeled cycles on one axis, 342 on three and 401 on seven.
+/// The longest step-handler run at speed, a move change, timer ticks (plus
+/// [`HANDLER_PER_SLAVE_TICKS`] per slave). Measured: bench/RESULTS.md, "Moves changing at the
+/// rate cap" (`ddastep_bench::emu::changes`).
 pub const HANDLER_LONG_TICKS: u32 = 330;
 /// From a handler's compare-flag check to its end (the self-measurement), less a margin.
 pub const HANDLER_TAIL_TICKS: u32 = 10;
-/// Where a falling edge lands at the latest after the next update event's rising store would
-/// (plus [`HANDLER_PER_SLAVE_TICKS`] per slave), for pulses longer than [`HANDLER_GAP_TICKS`]:
-/// the longest handler at speed (a move's last step, which finds its successor) stores it at
-/// its end when the compare event came during it. A low time of at least the pulse then needs
-/// the period to be this plus the pulse. The bench's back-to-back moves at the cap with 2 µs
-/// pulses (`bench/tests/firmware_lookahead.rs`) put it at 241 ticks on one axis (the lowest low time,
-/// 2.19 µs at a 404-tick period) and 212 + 17 per slave on three; 250 leaves a margin.
+/// Where a late falling edge lands after the next update's rising store, timer ticks (plus
+/// [`HANDLER_PER_SLAVE_TICKS`] per slave), for pulses over [`HANDLER_GAP_TICKS`]: a low time of
+/// at least the pulse needs a period of this plus the pulse. Measured with margin:
+/// `bench/tests/firmware_lookahead.rs` (back-to-back moves at the cap, 2 µs pulses).
 pub const HANDLER_FALL_TICKS: u32 = 250;
 
-/// The shortest time from a step handler's falling store to the next handler's rising store
-/// when a long handler delays the next update's (they run back to back: the rest of the first
-/// handler after its falling store, a tail-chain, the second's entry and its code before the
-/// store), timer ticks: the bench's back-to-back moves at the cap (`bench/tests/firmware_lookahead.rs`)
-/// measure lows of at least 68 ticks (944 ns) there; 48 leaves a margin. A pulse up to this
-/// needs no room for a low time after a long handler's late falling edge
-/// ([`HANDLER_FALL_TICKS`]).
+/// The shortest time from a falling store to the next handler's rising store when a long
+/// handler delays the next update, timer ticks: a pulse up to this needs no room for a low
+/// time ([`HANDLER_FALL_TICKS`]). Measured with margin: `bench/tests/firmware_lookahead.rs`.
 pub const HANDLER_GAP_TICKS: u32 = 48;
 
-/// Step-handler cost per master step in dual-edge mode (one update event per step, no compare
-/// event), timer ticks, plus [`HANDLER_PER_SLAVE_TICKS`] per slave: the sweep in dual-edge mode
-/// with the caps lifted holds the CPU ≤ 95 % busy up to 300, 264 and 211 kHz on 1, 3 and 7 axes
-/// (the toggle costs about what the compare check saves): the same 245 + 17 per slave as full
-/// pulses. Dual-edge mode gains where the full-pulse rule binds (from 1 µs: the low time after
-/// the latest falling edge).
+/// Step-handler cost per master step in dual-edge mode, timer ticks (plus
+/// [`HANDLER_PER_SLAVE_TICKS`] per slave): the toggle costs about what the compare check saves,
+/// so the same as [`HANDLER_BASE_TICKS`]. Measured: bench/RESULTS.md, "Dual-edge mode".
 pub const DUAL_BASE_TICKS: u32 = 245;
-/// Dual-edge mode: a long tick (a move change) delays the next update's toggle by what it runs
-/// over the period, so two toggles of a pin come `2 × period − this` apart at the least (plus
-/// [`HANDLER_PER_SLAVE_TICKS`] per slave), and the period is at least half of this plus the
-/// pulse. The bench's back-to-back moves at 293.9 kHz with 3 µs pulses
-/// (bench/tests/firmware_dual_edge.rs) measured toggles 192 cycles apart at a 246-tick period: 300
-/// on one axis; 320 leaves a margin.
+/// Dual-edge mode: a long tick (a move change) brings two toggles of a pin to `2 × period −
+/// this` apart (plus [`HANDLER_PER_SLAVE_TICKS`] per slave), so the period is at least half of
+/// this plus the pulse. Measured with margin: `bench/tests/firmware_dual_edge.rs`.
 pub const DUAL_LONG_TICKS: u32 = 320;
 
-/// DMA burst mode: the buffer fill's cost per master step for a move with slaves, timer ticks,
-/// plus [`DMA_PER_SLAVE_TICKS`] per slave, DMA's own bus cycles (three stores per step) and
-/// `idle` counted: the sweep in DMA mode with the caps lifted (`cargo sim -- --sweep --dma`;
-/// the slave lane's walks run from SRAM) holds the CPU ≤ 95 % busy up to 696, 686, 680, 574,
-/// 548 and 542 kHz on 2 to 7 axes (one straight move). Back-to-back moves at speed
-/// (`bench/tests/firmware_dma.rs`) bind harder: the slave-major lane's words are whole only at its
-/// end, and a fill that starts late after a long one (a move change) has DMA reach them first
-/// (the firmware counts it, `$I`'s `late`); on 7 axes that happened at 416 kHz and above, not
-/// at 402 kHz. 100 + 13 per slave: 637, 571, 516, 471, 433 and 404 kHz on 2 to 7 axes.
+/// DMA burst mode: the buffer fill's cost per master step of a move with slaves, timer ticks
+/// (plus [`DMA_PER_SLAVE_TICKS`] per slave; DMA's bus cycles and `idle` counted). Bound by
+/// back-to-back moves, where a fill late after a move change must not let DMA reach words not
+/// yet whole (`$I`'s `late`). Measured: bench/RESULTS.md, "DMA burst mode";
+/// `bench/tests/firmware_dma.rs`.
 pub const DMA_BASE_TICKS: u32 = 100;
-/// The same in dual-edge DMA mode for a move with slaves (`--dma --dual-edge`; the slave-major
-/// lane, a last pass toggling the words): 640, 645, 601, 531, 522 and 486 kHz on 2 to 7 axes on
-/// one move, but back-to-back moves have fills run late well below that: 170 + 10 per slave,
-/// 379 and 313 kHz on 3 and 7 axes, where the back-to-back moves see no late fill. (One axis
-/// takes [`DMA_LANE_TICKS`].)
+/// The same in dual-edge DMA mode (plus [`DMA_DUAL_PER_SLAVE_TICKS`] per slave; one axis
+/// takes [`DMA_LANE_TICKS`]): back-to-back moves bind. Measured: bench/RESULTS.md, "DMA burst
+/// mode, dual-edge"; `bench/tests/firmware_dma.rs`.
 pub const DMA_DUAL_BASE_TICKS: u32 = 170;
 /// Extra fill ticks per slave axis in dual-edge DMA mode.
 pub const DMA_DUAL_PER_SLAVE_TICKS: u32 = 10;
-/// DMA burst mode, one axis (the fill's lane of its own, entry by entry; in dual-edge mode its
-/// words alternate between setting and resetting the pin): at 1 MHz the busiest millisecond
-/// of the cruise has the CPU 80.3 % busy with full pulses, the fill with DMA's stores 76.1 %
-/// (bench/tests/firmware_dma.rs, `one_axis_runs_at_the_dma_cap`), 83 % in dual-edge mode (`cargo sim
-/// -- --point 1@1000000 --dma --dual-edge`), and back-to-back moves at 995 kHz see no late
-/// fill: the cost does not bind below the 1 MHz floor ([`DMA_FLOOR_TICKS`]).
+/// DMA burst mode, one axis (the fill's own lane, entry by entry): its cost does not bind
+/// below the 1 MHz floor ([`DMA_FLOOR_TICKS`]). Measured: `bench/tests/firmware_dma.rs`,
+/// `one_axis_runs_at_the_dma_cap`.
 pub const DMA_LANE_TICKS: u32 = 72;
 /// Extra fill ticks per slave axis in DMA burst mode.
 pub const DMA_PER_SLAVE_TICKS: u32 = 13;
-/// DMA burst mode: the shortest master period at a junction joined at speed, timer ticks, plus
-/// [`DMA_JUNCTION_PER_SLAVE_TICKS`] per slave (the more slaves of the two moves). A move change
-/// runs in one buffer fill: the last step's whole tick, the ramp half's work on the move
-/// entered, the next tick entering it (with a direction change: its own event) and the ramp
-/// half's work again, about 5 000 modeled cycles on one axis, where a half of 24 entries at
-/// 818 kHz lasts 2 112: back-to-back moves at the cruise caps had DMA read entries before the
-/// fill wrote them at some sender timings (1 axis at 814 kHz: 7 of 24 timings; with the
-/// sender waiting 0–104 000 cycles before each line). With junctions at 72 MHz / 150 ticks
-/// one timing of 12 still came late on one axis; at 180 none. 200 + 20 per slave (360, 300 and
-/// 225 kHz on 1, 3 and 7 axes): no late fill at any of 14 timings on 1, 3 and 7 axes in both
-/// edge modes at the cruise caps (`bench/tests/firmware_dma.rs` runs several). `$I` prints the
-/// one-axis figure (`[MSG:max junction rate N Hz]`).
+/// DMA burst mode: the shortest master period at a junction joined at speed, timer ticks (plus
+/// [`DMA_JUNCTION_PER_SLAVE_TICKS`] per slave of the busier move): a move change runs inside
+/// one buffer fill, which must end before DMA reaches the entries after it. Measured: no late
+/// fill in `bench/tests/firmware_dma.rs`'s back-to-back moves; `$I` prints the one-axis rate.
 pub const DMA_JUNCTION_BASE_TICKS: u32 = 200;
 /// Extra junction ticks per slave axis in DMA burst mode (see [`DMA_JUNCTION_BASE_TICKS`]).
 pub const DMA_JUNCTION_PER_SLAVE_TICKS: u32 = 20;
@@ -268,11 +235,9 @@ pub const DMA_FLOOR_TICKS: u32 = 72;
 /// same margin.
 pub const DMA_MARGIN_TICKS: u32 = 8;
 
-/// Timer ticks from an update event to the step handler's BSRR store: 57..71 modeled cycles
-/// on the virtual bench with its silicon-checked memory model (bench/golden/paper_532.json,
-/// `bsrr_offset_*`), rounded up to 1 µs. The firmware sets the compare event this much after
-/// the pulse width, so the high time is never shorter than asked even when the rising store is
-/// at its latest and the falling one at its earliest.
+/// Timer ticks from an update event to the step handler's BSRR store, at most (rounded up to
+/// 1 µs): the compare event comes this much after the pulse width, so the high time is never
+/// short. Measured: bench/golden/paper_532.json, `bsrr_offset_*`.
 pub const STORE_LATENCY_TICKS: u32 = 72;
 
 /// Spread of that latency (the instruction an interrupt lands on, flash wait states): the

@@ -21,7 +21,8 @@
 use crate::board::PinMap;
 use crate::planning::lookahead::{cruise_for, replan, Block, Buffer, Tail, LOOKAHEAD};
 use crate::motion::prepared::{DirState, Prepared};
-use crate::motion::queue::{Move, Overrides, Shared, State};
+use crate::motion::moves::{Move, Overrides};
+use crate::motion::shared::{Shared, State};
 use crate::motion::ramp::RampSlot;
 use crate::motion::ring::{RingProducer, RING};
 use core::sync::atomic::Ordering::{Relaxed, Release};

@@ -20,7 +20,7 @@
 
 use crate::num::u32_of;
 use crate::motion::prepared::RampPlan;
-use crate::motion::queue::{Move, Overrides, Rates};
+use crate::motion::moves::{Move, Overrides, Rates};
 use crate::motion::ramp::{Period, Profile, RampTable, IDX_ONE};
 use crate::motion::timing::Timing;
 use crate::motion::walk::DECEL_MARGIN;

@@ -18,7 +18,7 @@
 
 use crate::num::{f32_of_i64, f32_of_u64};
 use crate::grbl::protocol::Error;
-use crate::motion::queue::{Move, Ovr, Path};
+use crate::motion::moves::{Move, Ovr, Path};
 use crate::grbl::settings::Settings;
 use crate::motion::timing::Timing;
 
@@ -161,7 +161,7 @@ impl<const N: usize> Planner<N> {
                 accel = accel.min(lim.accel[i] / u);
             }
         }
-        // The overrides scale the asked speed later, in the feeder ([`crate::motion::queue::Rates`]).
+        // The overrides scale the asked speed later, in the feeder ([`crate::motion::moves::Rates`]).
         let (asked, ovr) = match feed {
             Some(f) => (f / 60.0, Ovr::Feed),
             None => (vmax, Ovr::Rapid),

@@ -3,9 +3,11 @@
 
 use ddastep::board::{pin_map, PinMap};
 use ddastep::motion::engine::Engine;
-use ddastep::motion::queue::{Feeder, Move, Shared, State};
+use ddastep::motion::moves::Move;
+use ddastep::motion::shared::{Shared, State};
+use ddastep::planning::feeder::Feeder;
 use ddastep::motion::ramp::{RampConfig, RampSlot, Shape};
-use ddastep::motion::sim::{apply_bsrr, Edge, TimerSim};
+use ddastep::motion::tim2_model::{apply_bsrr, Edge, TimerSim};
 use ddastep::motion::timing::Timing;
 use ddastep::motion::ring::MoveRing;
 

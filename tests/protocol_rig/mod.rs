@@ -8,10 +8,11 @@ use ddastep::motion::engine::Engine;
 use ddastep::grbl::protocol::Out;
 use ddastep::grbl::shell::{dispatch, idle_step, Requests};
 use heapless::spsc::{Consumer, Producer, Queue};
-use ddastep::motion::queue::{Feeder, Shared, State};
+use ddastep::motion::shared::{Shared, State};
+use ddastep::planning::feeder::Feeder;
 use ddastep::motion::ramp::RampSlot;
 use ddastep::grbl::settings::Settings;
-use ddastep::motion::sim::TimerSim;
+use ddastep::motion::tim2_model::TimerSim;
 use ddastep::TICKS_PER_MS;
 use ddastep::motion::ring::MoveRing;
 

@@ -11,7 +11,7 @@
 
 use super::Controller;
 use crate::grbl::protocol::Out;
-use crate::motion::queue::State;
+use crate::motion::shared::State;
 use crate::grbl::spindle::SpindleDir;
 
 /// Grbl's spindle-restart delay after a door, ms (`SAFETY_DOOR_SPINDLE_DELAY`).

@@ -27,7 +27,7 @@
 use super::Controller;
 use crate::num::round_i32;
 use crate::grbl::protocol::{Error, Out};
-use crate::motion::queue::State;
+use crate::motion::shared::State;
 use crate::grbl::report;
 use crate::grbl::spindle::Power;
 

@@ -6,7 +6,7 @@ use super::{Controller, Job, Jogging};
 use crate::grbl::jog;
 use crate::planning::planner::Planned;
 use crate::grbl::protocol::{Error, Out};
-use crate::motion::queue::State;
+use crate::motion::shared::State;
 
 impl<const N: usize> Controller<'_, N> {
     /// 0x85 arrived: cancel jogging (nothing happens unless jog moves are queued or running).

@@ -7,12 +7,12 @@
 //! G38.4 (the last `[PRB:]` position stays), while G38.3/G38.5 take the end position with
 //! flag 0. `[PRB:x,y,z:f]` is reported after every cycle that moved, then the line's `ok`.
 //!
-//! [`Shared::probe_arm`]: crate::motion::queue::Shared::probe_arm
-//! [`Shared::probe_input`]: crate::motion::queue::Shared::probe_input
+//! [`Shared::probe_arm`]: crate::motion::shared::Shared::probe_arm
+//! [`Shared::probe_input`]: crate::motion::shared::Shared::probe_input
 
 use super::{Controller, Job};
 use crate::grbl::protocol::Out;
-use crate::motion::queue::{State, PROBE_TRIPPED};
+use crate::motion::shared::{State, PROBE_TRIPPED};
 use crate::grbl::report;
 
 /// A probe cycle in a job: the G38 digit (2–5) plus [`ARMED`] once its move is queued.

@@ -13,7 +13,7 @@
 use super::Controller;
 use crate::grbl::limits;
 use crate::grbl::protocol::Out;
-use crate::motion::queue::State;
+use crate::motion::shared::State;
 use crate::grbl::report;
 
 /// Where a soft-limit trip stands.

@@ -4,7 +4,7 @@
 
 use super::{Controller, Jogging, FEED_RING};
 use crate::grbl::protocol::Out;
-use crate::motion::queue::State;
+use crate::motion::shared::State;
 use crate::grbl::report::{self, Status};
 
 /// Reports between `WCO:` refreshes: idle, busy.

@@ -10,7 +10,7 @@
 
 use super::Controller;
 use crate::grbl::gcode::{Modal, Motion};
-use crate::motion::queue::State;
+use crate::motion::shared::State;
 use crate::grbl::spindle::{duty, Power, SpindleDir, SpindleOut, FLOOD, MIST};
 
 impl<const N: usize> Controller<'_, N> {

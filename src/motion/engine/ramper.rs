@@ -1,10 +1,10 @@
 //! The ramp half of the engine: the ramp walk and everything it computes, in a lower-priority
 //! interrupt the step interrupt pends (see the parent module for the split).
 //!
-//! Who uses it: the firmware's ramp handler ([`Ramper::run`]), and [`super::Engine`] on the
+//! Who uses it: the firmware's ramp handler ([`Ramper::run`]), and the host's `Engine` on the
 //! host after each tick.
 //!
-//! Each run compares the step half's counters ([`super::Link`]) with its own copies and does
+//! Each run compares the step half's counters ([`Link`](super::link::Link)) with its own copies and does
 //! what they say, in this order: a move entered or ended, a start from rest to prime, a trigger
 //! fired (the walk starts down, if the trigger was the running move's), a hold on or off, the
 //! ramp milliseconds passed; then every distance the walk needs next (the trigger, the one from a
@@ -15,7 +15,7 @@
 use core::sync::atomic::Ordering::Relaxed;
 
 use crate::motion::prepared::{Prepared, RampPlan};
-use crate::motion::queue::Shared;
+use crate::motion::shared::Shared;
 use crate::motion::ramp::{Period, RampSlot, RAMP_LEN};
 use crate::motion::ring::RingPeek;
 use crate::motion::walk::{base_at, scaled, Step as WalkStep, Walk, TRIGGER};

@@ -21,9 +21,10 @@
 
 use core::sync::atomic::Ordering::Relaxed;
 
-use super::{bump, piece, slave_bits, toggle, Phase, Stepper};
+use super::extend::piece;
+use super::state::{bump, Phase, Stepper};
+use super::word::{slave_bits, toggle};
 use crate::TICKS_PER_MS;
-use crate::motion::burst::tail;
 use crate::motion::prepared::Slave;
 
 impl<const N: usize, const L: usize> Stepper<'_, N, L> {
@@ -263,6 +264,15 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
         self.word = last;
         made
     }
+}
+
+/// `s[i..]` without the call the slice index makes at `opt-level = "z"` (the fill runs it per
+/// half; the DMA fill uses it too).
+#[inline(always)]
+pub(crate) fn tail<T>(s: &mut [T], i: usize) -> &mut [T] {
+    let i = i.min(s.len());
+    // SAFETY: `i ≤ s.len()`: the rest of the slice, borrowed from `s`.
+    unsafe { core::slice::from_raw_parts_mut(s.as_mut_ptr().add(i), s.len() - i) }
 }
 
 /// Slave-major walks: `walkK` runs the K slaves from `s` on over the steps whose words are

@@ -1,0 +1,242 @@
+//! The ramp table: one timer period per millisecond of acceleration and the distance walked
+//! up to each entry, built once when settings change; the engine's lookups (interpolated
+//! period, distance) on it.
+//!
+//! Who uses it: the settings build it; the engine's ramp walk reads it; the look-ahead's
+//! searches (`ramp/search.rs`) map speeds and distances onto its indices.
+
+use super::shape::{mean_millihz, s_curve_stretch, RampConfig, Shape};
+use crate::motion::rate::{period_of_millihz, Period, MAX_RATE_HZ, MIN_RATE_HZ};
+use crate::num::{f32_of_u64, u64_of};
+use crate::TIMER_HZ;
+
+/// Entries (milliseconds) in the firmware's table.
+pub const RAMP_LEN: usize = 512;
+/// Fraction bits of a table index: the engine walks `walk_q / 2^20` entries per millisecond,
+/// so one table (built for the fastest acceleration) serves every slower one.
+pub const IDX_FRAC: u32 = 20;
+/// One whole entry as a Q20 index.
+pub const IDX_ONE: u32 = 1 << IDX_FRAC;
+pub(super) const IDX_MASK: u32 = IDX_ONE - 1;
+/// One step in the table's distance sums.
+pub const SUM_ONE: u32 = 256;
+
+/// Why a table cannot be built.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RampError {
+    /// Acceleration of zero.
+    ZeroAccel,
+    /// `vmax < v0`.
+    VmaxBelowV0,
+    /// A rate outside [`MIN_RATE_HZ`]..=[`MAX_RATE_HZ`].
+    RateOutOfRange,
+    /// The ramp needs more milliseconds than the table has; `reachable_vmax` fits.
+    TooLong { reachable_vmax: u32 },
+}
+
+/// A ramp table of up to `L` milliseconds.
+pub struct RampTable<const L: usize = RAMP_LEN> {
+    pub(super) periods: [Period; L],
+    /// `sums[i]`: steps made walking entries `0..i` at one entry per ms, in 1/256 step
+    /// ([`SUM_ONE`]): the distance scale of the look-ahead and of the engine's decel trigger.
+    pub(super) sums: [u32; L],
+    pub(super) len: u16,
+    cfg: RampConfig,
+}
+
+impl<const L: usize> Default for RampTable<L> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const L: usize> RampTable<L> {
+    /// An empty table (no entries: every move cruises at its own rate).
+    pub const fn new() -> Self {
+        RampTable {
+            periods: [Period::ZERO; L],
+            sums: [0; L],
+            len: 0,
+            cfg: RampConfig { v0: 0, vmax: 0, accel: 0, shape: Shape::Trapezoid },
+        }
+    }
+
+    /// Milliseconds the ramp from `v0` to `vmax` takes with this shape (for a config that
+    /// [`Self::build`] accepts: `accel > 0`, `v0 ≤ vmax ≤ MAX_RATE_HZ`).
+    pub fn ramp_ms(cfg: &RampConfig) -> u64 {
+        // 32-bit integers (`dv` · 1000 ≤ 10^9): the ceiling of the exact quotient, no float.
+        let dv = cfg.vmax.saturating_sub(cfg.v0).min(MAX_RATE_HZ);
+        let ms = (dv * 1000).div_ceil(cfg.accel.max(1)) as u64;
+        match cfg.shape {
+            Shape::Trapezoid => ms,
+            // The logistic's steepest slope is span/2 / norm of the mean slope.
+            Shape::SCurve => u64_of(f32_of_u64(ms) * s_curve_stretch()) + 1,
+        }
+    }
+
+    /// Builds the table in place (no 4 KiB copy on the stack). On error the table is empty.
+    pub fn build(&mut self, cfg: RampConfig) -> Result<(), RampError> {
+        self.len = 0;
+        if cfg.accel == 0 {
+            return Err(RampError::ZeroAccel);
+        }
+        if cfg.v0 < MIN_RATE_HZ || cfg.vmax > MAX_RATE_HZ {
+            return Err(RampError::RateOutOfRange);
+        }
+        if cfg.vmax < cfg.v0 {
+            return Err(RampError::VmaxBelowV0);
+        }
+        let n = Self::ramp_ms(&cfg).max(1);
+        if n > L as u64 {
+            let reachable = match cfg.shape {
+                // 64-bit integers: the same whole part as the exact quotient.
+                Shape::Trapezoid => cfg.v0 as u64 + cfg.accel as u64 * L as u64 / 1000,
+                Shape::SCurve => {
+                    cfg.v0 as u64 + u64_of(cfg.accel as f32 * L as f32 / 1000.0 / s_curve_stretch())
+                }
+            };
+            return Err(RampError::TooLong { reachable_vmax: reachable.saturating_sub(1) as u32 });
+        }
+        let n = n as usize;
+        for (i, p) in self.periods[..n].iter_mut().enumerate() {
+            *p = period_of_millihz(mean_millihz(&cfg, i, n));
+        }
+        // Rates must never fall along the table (rounding at the top could otherwise wobble).
+        for i in 1..n {
+            if self.periods[i] > self.periods[i - 1] {
+                self.periods[i] = self.periods[i - 1];
+            }
+        }
+        // The last millisecond's mean is below `vmax` when the ramp ends inside it: one more
+        // entry at `vmax` itself, so every cruise up to `vmax` has an index to walk to.
+        let top = period_of_millihz(cfg.vmax as u64 * 1000);
+        let mut n = n;
+        if n < L && self.periods[n - 1] > top {
+            self.periods[n] = top;
+            n += 1;
+        }
+        // Distance walked: the rate is interpolated between entries, so integrate each
+        // entry-to-entry stretch as a trapezoid (the last entry counts flat).
+        let per_ms = |p: Period| (TIMER_HZ / 1000 * 16 * SUM_ONE) / p.to_bits().max(1);
+        let mut sum = 0u32;
+        for i in 0..n {
+            self.sums[i] = sum;
+            let a = per_ms(self.periods[i]);
+            let b = if i + 1 < n { per_ms(self.periods[i + 1]) } else { a };
+            // (72 MHz · 16 · 256 / 1000 fits in 32 bits: no 64-bit division in the firmware.)
+            sum = sum.saturating_add((a + b) / 2);
+        }
+        self.len = n as u16;
+        self.cfg = cfg;
+        Ok(())
+    }
+
+    /// Highest index (Q20) the table can be walked to: its last entry.
+    #[inline(always)]
+    pub fn top_q(&self) -> u32 {
+        (self.len.max(1) as u32 - 1) << IDX_FRAC
+    }
+
+    /// Period at a fractional index (Q20), interpolated between entries; `idx_q ≤ top_q()`.
+    /// Integer only (the engine calls it once per ms).
+    #[inline(always)]
+    pub fn period_at(&self, idx_q: u32) -> Period {
+        let i = (idx_q >> IDX_FRAC) as usize;
+        let f = idx_q & IDX_MASK;
+        let p = self.periods[i].to_bits();
+        if f == 0 || i + 1 >= self.len as usize {
+            return Period::from_bits(p);
+        }
+        let d = p - self.periods[i + 1].to_bits();
+        Period::from_bits(p - ((d as u64 * f as u64) >> IDX_FRAC) as u32)
+    }
+
+    /// Steps per ms at entry `idx_q >> 20` (1/256 step): the slope of [`Self::sum_at`].
+    #[inline(always)]
+    pub fn per_ms_at(&self, idx_q: u32) -> u32 {
+        let i = (idx_q >> IDX_FRAC) as usize;
+        if i + 1 < self.len as usize {
+            self.sums[i + 1] - self.sums[i]
+        } else if i > 0 && i < self.len as usize {
+            self.sums[i] - self.sums[i - 1]
+        } else {
+            0
+        }
+    }
+
+    /// Distance walked from index 0 to `idx_q` at one entry per ms, in 1/256 step.
+    #[inline(always)]
+    pub fn sum_at(&self, idx_q: u32) -> u32 {
+        let i = (idx_q >> IDX_FRAC) as usize;
+        let f = idx_q & IDX_MASK;
+        let s = self.sums[i];
+        if f == 0 || i + 1 >= self.len as usize {
+            return s;
+        }
+        let d = self.sums[i + 1] - s;
+        s + ((d as u64 * f as u64) >> IDX_FRAC) as u32
+    }
+
+
+    /// Number of entries (milliseconds of ramp).
+    #[inline(always)]
+    pub fn len(&self) -> usize {
+        self.len as usize
+    }
+
+    /// True when the table has no entries.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// What the table was built from.
+    pub fn config(&self) -> RampConfig {
+        self.cfg
+    }
+
+    /// Period of entry `i` (the caller keeps `i < len`).
+    #[inline(always)]
+    pub fn period(&self, i: usize) -> Period {
+        self.periods[i]
+    }
+
+    /// The entries in use.
+    pub fn periods(&self) -> &[Period] {
+        &self.periods[..self.len as usize]
+    }
+
+
+    /// Bytes of RAM the table takes.
+    pub const fn size_bytes() -> usize {
+        core::mem::size_of::<Self>()
+    }
+}
+
+#[cfg(test)]
+pub(super) mod tests {
+    use super::*;
+
+    /// A fixed xorshift stream: `next(n)` is in `0..n`.
+    pub(in crate::motion::ramp) fn xorshift() -> impl FnMut(u32) -> u32 {
+        let mut r = 0x2545_F491_4F6C_DD1Du64;
+        move |n| {
+            r ^= r << 13;
+            r ^= r >> 7;
+            r ^= r << 17;
+            (r % n as u64) as u32
+        }
+    }
+
+    #[test]
+    fn ramp_ms_is_the_ceiling_of_the_exact_quotient() {
+        let mut next = xorshift();
+        for i in 0..100_000 {
+            let v0 = 1 + next(MAX_RATE_HZ);
+            let vmax = v0 + next(MAX_RATE_HZ - v0 + 1);
+            let accel = 1 + if i % 2 == 0 { next(u32::MAX) } else { next(10_000) };
+            let cfg = RampConfig { v0, vmax, accel, shape: Shape::Trapezoid };
+            let f64_ceil = libm::ceil((vmax - v0) as f64 * 1000.0 / accel as f64) as u64;
+            assert_eq!(RampTable::<RAMP_LEN>::ramp_ms(&cfg), f64_ceil, "{cfg:?}");
+        }
+    }
+}
