@@ -32,7 +32,8 @@ use crate::grbl::coords::Offsets;
 use crate::grbl::gcode::{self, Modal, Stop};
 use crate::planning::inverse_time;
 use crate::planning::planner::{Limits, Planned, Planner};
-use crate::grbl::protocol::{put_error, put_ok, Error, LineBuf, LineEvent, Out, LINE_LEN, REPLY_ROOM, RX_BUFFER_LEN};
+use crate::error::Error;
+use crate::grbl::protocol::{put_error, put_ok, LineBuf, LineEvent, Out, LINE_LEN, REPLY_ROOM, RX_BUFFER_LEN};
 use crate::motion::queue::{Feeder, Overrides, Shared, State};
 use crate::motion::ramp::{RampConfig, RampSlot};
 use crate::grbl::report;
@@ -272,7 +273,7 @@ impl<'a, const N: usize> Controller<'a, N> {
             addr_of_mut!((*p).stored).write(stored);
             addr_of_mut!((*p).axes).write(axes);
             addr_of_mut!((*p).ramped).write(Ramped::wanted(&settings, axes));
-            addr_of_mut!((*p).limits).write(Limits::new(&settings, 1));
+            addr_of_mut!((*p).limits).write(settings.planner_limits(1));
             addr_of_mut!((*p).profile_dirty).write(true);
             addr_of_mut!((*p).lines).write(LineBuf::new());
             addr_of_mut!((*p).modal).write(Modal::RESET);
@@ -604,7 +605,7 @@ impl<'a, const N: usize> Controller<'a, N> {
         };
         self.ramped = self.settings.build_profile(self.axes, &mut guard);
         drop(guard);
-        self.limits = Limits::new(&self.settings, self.ramped.cfg.vmax);
+        self.limits = self.settings.planner_limits(self.ramped.cfg.vmax);
         self.profile_dirty = false;
         self.pulse_changed = true;
     }

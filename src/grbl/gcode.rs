@@ -10,14 +10,13 @@
 //! to the decimal (as `str::parse` gives; [`decimal_f32`]).
 
 use crate::planning::arc::{Arc, Center};
+use crate::planning::planner::MAX_MM;
 use crate::grbl::coords::{Offsets, G28};
 use crate::num::{round_u32, u32_of};
-use crate::grbl::protocol::Error;
+use crate::error::Error;
 use crate::grbl::spindle::{SpindleDir, FLOOD, MIST};
 use crate::AXIS_NAMES;
 
-/// Largest axis target accepted, mm (beyond it: `error:33`).
-pub const MAX_MM: f32 = 1e6;
 /// Largest line number (Grbl's MAX_LINE_NUMBER).
 pub const MAX_LINE_NUMBER: f32 = 10_000_000.0;
 /// Longest dwell, s (keeps the wrapping millisecond clock unambiguous).

@@ -10,12 +10,13 @@
 //! Each move walks it at its own acceleration's fraction (from the axes it moves) and scales
 //! it to its master's share of the path, so axes that do not move never slow a move down.
 
-use crate::grbl::protocol::Error;
+use crate::error::Error;
 use crate::encoder::{self, EncoderSettings};
 use crate::motion::ramp::{Profile, RampConfig, RampError, RampTable, Shape, MAX_RATE_HZ};
 #[allow(unused_imports)]
 use crate::motion::ramp::MAX_RATE_HZ as _;
-use crate::num::{round_u32, u32_of};
+use crate::num::{round_u32, sqrt, u32_of};
+use crate::planning::planner::{Limits, JUNCTION_DEVIATION_MM};
 use crate::motion::timing::{ns_to_ticks, Timing};
 use crate::MAX_AXES;
 
@@ -522,6 +523,20 @@ impl Settings {
         self.steps_per_mm.iter().take(axes.max(1)).fold(0.0f32, |a, &b| a.max(b))
     }
 
+    /// What the planner takes from the settings for `N` axes, with the ramp table's top rate.
+    pub fn planner_limits<const N: usize>(&self, vmax_hz: u32) -> Limits<N> {
+        Limits {
+            steps_per_mm: core::array::from_fn(|i| self.steps_per_mm[i]),
+            max_rate: core::array::from_fn(|i| self.max_rate[i]),
+            accel: core::array::from_fn(|i| self.accel[i]),
+            vmax_hz: vmax_hz.max(1),
+            // The table's own path units: the axes in use ($42), as `Settings::build_profile`.
+            per_mm: self.per_mm(self.axis_count(N)),
+            junction_dev: JUNCTION_DEVIATION_MM,
+            timing: self.timing(),
+        }
+    }
+
     /// The ramp table's top on `axes` axes once built (what the planner's limits take).
     pub fn wanted_vmax(s: &Settings, axes: usize) -> u32 {
         let mut p: Profile = Profile { ramp: crate::motion::ramp::RampTable::new(), timing: Timing::UNSET, per_mm: 0.0 };
@@ -547,7 +562,7 @@ impl Settings {
             top2 += v * v;
         }
         let accel = accel * c;
-        let vmax = u32_of(crate::planning::planner::sqrt(top2) * c).max(1).min(crate::motion::ramp::MAX_RATE_HZ);
+        let vmax = u32_of(sqrt(top2) * c).max(1).min(crate::motion::ramp::MAX_RATE_HZ);
         RampConfig {
             v0: self.ramp_start_hz.max(1).min(vmax),
             vmax,

@@ -26,7 +26,8 @@
 
 use super::Controller;
 use crate::num::round_i32;
-use crate::grbl::protocol::{Error, Out};
+use crate::error::Error;
+use crate::grbl::protocol::Out;
 use crate::motion::queue::State;
 use crate::grbl::report;
 use crate::grbl::spindle::Power;

@@ -5,7 +5,8 @@
 use super::{Controller, Job, Jogging};
 use crate::grbl::jog;
 use crate::planning::planner::Planned;
-use crate::grbl::protocol::{Error, Out};
+use crate::error::Error;
+use crate::grbl::protocol::Out;
 use crate::motion::queue::State;
 
 impl<const N: usize> Controller<'_, N> {
