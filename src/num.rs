@@ -1,6 +1,8 @@
-//! Float-to-integer conversions, out of line.
+//! Number helpers: float-to-integer conversions out of line, a small square root, and the
+//! wrapping clock comparison.
 //!
-//! Who uses it: the settings, G-code, planning and report code (never the step interrupt).
+//! Who uses it: the settings, G-code, planning, controller and report code (never the step
+//! interrupt).
 //!
 //! The library computes in `f32`, as Grbl does (the Cortex-M3 has no FPU: each `f64` operation
 //! would link a second, larger soft-float set and pass two registers per operand). Rust's `as`
@@ -143,8 +145,15 @@ pub fn sqrt(x: f32) -> f32 {
     f32::from_bits((((e + 126) as u32) << 23) + ((q + 1) >> 1))
 }
 
+/// `a - b` on a wrapping `u32` clock or counter (milliseconds, sequence numbers), signed:
+/// negative while `a` is before `b`. Exact while the two are less than 2^31 apart.
+#[inline]
+pub const fn wrapping_diff(a: u32, b: u32) -> i32 {
+    a.wrapping_sub(b) as i32
+}
+
 #[cfg(test)]
-mod sqrt_tests {
+mod helper_tests {
     use super::*;
 
     #[test]
@@ -165,5 +174,13 @@ mod sqrt_tests {
                 assert_eq!(sqrt(v).to_bits(), libm::sqrtf(v).to_bits(), "√{v}");
             }
         }
+    }
+
+    #[test]
+    fn wrapping_diff_is_signed_across_the_wrap() {
+        assert_eq!(wrapping_diff(1, u32::MAX), 2);
+        assert_eq!(wrapping_diff(u32::MAX, 1), -2);
+        assert_eq!(wrapping_diff(5, 5), 0);
+        assert!(wrapping_diff(0x7FFF_FFFF, 0) > 0 && wrapping_diff(0x8000_0000, 0) < 0);
     }
 }

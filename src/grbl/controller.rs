@@ -36,6 +36,7 @@ use crate::error::Error;
 use crate::grbl::protocol::{put_error, put_ok, LineBuf, LineEvent, Out, LINE_LEN, REPLY_ROOM, RX_BUFFER_LEN};
 use crate::motion::queue::{Feeder, Overrides, Shared, State};
 use crate::motion::ramp::{RampConfig, RampSlot};
+use crate::num::wrapping_diff;
 use crate::grbl::report;
 use crate::grbl::settings::{Ramped, Settings};
 use crate::grbl::spindle::{Power, PwmTiming, SpindleDir, SpindleOut};
@@ -687,7 +688,7 @@ impl<'a, const N: usize> Controller<'a, N> {
                     break 'run false;
                 }
                 let end = *job.dwell_end.get_or_insert(self.now.wrapping_add(ms));
-                if (self.now.wrapping_sub(end) as i32) < 0 {
+                if wrapping_diff(self.now, end) < 0 {
                     break 'run false;
                 }
                 job.dwell_ms = None;

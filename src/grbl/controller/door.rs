@@ -11,6 +11,7 @@
 
 use super::Controller;
 use crate::grbl::protocol::Out;
+use crate::num::wrapping_diff;
 use crate::motion::queue::State;
 use crate::grbl::spindle::SpindleDir;
 
@@ -100,7 +101,7 @@ impl<const N: usize> Controller<'_, N> {
                 self.door = Door::Stopping;
             }
             Door::Restoring(at) => {
-                if (self.now.wrapping_sub(at) as i32) >= 0 {
+                if wrapping_diff(self.now, at) >= 0 {
                     self.door = Door::Off;
                     self.shared.set_hold(false);
                 }

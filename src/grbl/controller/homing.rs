@@ -25,7 +25,7 @@
 //! Success clears the alarm lock; a full `$H` then runs the startup lines.
 
 use super::Controller;
-use crate::num::round_i32;
+use crate::num::{round_i32, wrapping_diff};
 use crate::error::Error;
 use crate::grbl::protocol::Out;
 use crate::motion::queue::State;
@@ -137,7 +137,7 @@ impl<const N: usize> Controller<'_, N> {
             self.planner.sync(self.shared.positions(), &self.limits);
             h.moving = false;
         }
-        if (self.now.wrapping_sub(h.start_at) as i32) < 0 {
+        if wrapping_diff(self.now, h.start_at) < 0 {
             self.homing = Some(h);
             return;
         }
