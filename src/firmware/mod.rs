@@ -19,7 +19,7 @@ mod app {
     use ddastep::board;
     use ddastep::grbl::controller::Controller;
     use ddastep::motion::engine::Engine;
-    use ddastep::grbl::shell::{dispatch, idle_step, Requests};
+    use ddastep::grbl::shell::{dispatch, idle_step, take_inputs, Inputs, Requests};
     use ddastep::motion::queue::{Feeder, Shared};
     use ddastep::planning::lookahead::Buffer;
     use ddastep::motion::ring::MoveRing;
@@ -228,14 +228,9 @@ mod app {
                 ctl.hard_limit(tx_in);
             }
             let idr = hw::gpioa_idr();
-            ctl.set_limit_inputs(idr);
-            // The probe: for `Pn:P` and the cycle's start; the level also backs up the edge
-            // (contact made between the controller's check and its arming).
-            let low = hw::probe_low();
-            ctl.set_probe_input(low);
-            ctl.set_door_input(hw::gpioc_idr() & 1 << ddastep::board::DOOR_PIN == 0);
+            let door_open = hw::gpioc_idr() & 1 << ddastep::board::DOOR_PIN == 0;
             limits::PROBE_INVERT.store(ctl.settings().probe_invert, Relaxed);
-            SHARED.probe_input(low != ctl.settings().probe_invert);
+            take_inputs(ctl, &SHARED, Inputs { gpioa_idr: idr, probe_low: hw::probe_low(), door_open });
             let invert = ctl.settings().limit_invert;
             let (counts, window) = encoder::read();
             ctl.encoder(counts, window, tx_in);
