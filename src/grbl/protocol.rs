@@ -1,5 +1,5 @@
-//! Grbl 1.1 wire format: realtime bytes, the line assembler, error codes and the byte sink that
-//! replies go to.
+//! Grbl 1.1 wire format: realtime bytes, the line assembler, and the byte sink that replies
+//! (`ok`, `error:N` with [`crate::error::Error`]'s numbers) go to.
 //!
 //! Who uses it: the firmware's USART RX interrupt calls [`realtime`] on every byte and keeps the
 //! others for [`crate::grbl::controller::Controller::byte`]; the controller uses the rest.
