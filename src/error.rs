@@ -1,6 +1,6 @@
 //! Grbl 1.1's numbered errors (`error:N`), the one error type of the library.
 //!
-//! Who uses it: the Grbl front end replies with it (`grbl::protocol::put_error`); the planner,
+//! Who uses it: the Grbl front end replies with it (`grbl::reply::put_error`); the planner,
 //! the arc checks and the encoder settings return it. A leaf, so planning and the encoder need
 //! not import the front end to return Grbl's numbers.
 

@@ -7,6 +7,7 @@ pub mod gcode;
 pub mod jog;
 pub mod limits;
 pub mod protocol;
+pub mod reply;
 pub mod report;
 pub mod settings;
 pub mod shell;

@@ -8,7 +8,8 @@ use core::sync::atomic::{AtomicBool, Ordering::Relaxed};
 use heapless::spsc::Consumer;
 
 use crate::grbl::controller::{Actions, Controller};
-use crate::grbl::protocol::{realtime, Out, Realtime};
+use crate::grbl::protocol::{realtime, Realtime};
+use crate::grbl::reply::Out;
 use crate::motion::queue::Shared;
 
 /// Requests the RX interrupt leaves for the idle loop (lock-free flags).

@@ -5,7 +5,7 @@
 use ddastep::board::pin_map;
 use ddastep::grbl::controller::{Actions, Controller};
 use ddastep::motion::engine::Engine;
-use ddastep::grbl::protocol::Out;
+use ddastep::grbl::reply::Out;
 use ddastep::grbl::shell::{dispatch, idle_step, take_inputs, Inputs, Requests};
 use heapless::spsc::{Consumer, Producer, Queue};
 use ddastep::motion::queue::{Feeder, Shared, State};

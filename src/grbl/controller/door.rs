@@ -10,7 +10,7 @@
 //! the door open get error:13.
 
 use super::{Controller, Door};
-use crate::grbl::protocol::Out;
+use crate::grbl::reply::Out;
 use crate::num::wrapping_diff;
 use crate::motion::queue::State;
 use crate::grbl::spindle::SpindleDir;

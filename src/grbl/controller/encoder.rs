@@ -10,7 +10,7 @@
 use super::Controller;
 use crate::encoder::loss::Reading;
 use crate::error::Error;
-use crate::grbl::protocol::Out;
+use crate::grbl::reply::Out;
 use crate::grbl::report;
 
 impl<const N: usize> Controller<'_, N> {

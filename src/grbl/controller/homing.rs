@@ -27,7 +27,7 @@
 use super::{Controller, Homing};
 use crate::num::{round_i32, wrapping_diff};
 use crate::error::Error;
-use crate::grbl::protocol::Out;
+use crate::grbl::reply::Out;
 use crate::motion::queue::State;
 use crate::grbl::report;
 use crate::grbl::spindle::Power;

@@ -7,7 +7,8 @@
 use super::{Controller, Job, Rate};
 use crate::error::Error;
 use crate::grbl::gcode::{self, Stop};
-use crate::grbl::protocol::{put_error, put_ok, LineEvent, Out, LINE_LEN, REPLY_ROOM};
+use crate::grbl::protocol::{LineEvent, LINE_LEN};
+use crate::grbl::reply::{put_error, put_ok, Out, REPLY_ROOM};
 use crate::grbl::report;
 use crate::grbl::store::STARTUP_LINES;
 use crate::motion::ramp::RampConfig;

@@ -7,7 +7,7 @@
 use super::lines::plan;
 use super::probe;
 use super::{Actions, Controller, Jogging, ENABLE_SETTLE_MS, FEED_RING, POLL_REPLY_ROOM};
-use crate::grbl::protocol::Out;
+use crate::grbl::reply::Out;
 use crate::grbl::report;
 use crate::grbl::spindle::{Power, PwmTiming};
 use crate::num::wrapping_diff;

@@ -6,7 +6,7 @@
 use super::{Controller, Door, Jogging, SoftLimit};
 use crate::grbl::coords::Offsets;
 use crate::grbl::gcode::Modal;
-use crate::grbl::protocol::Out;
+use crate::grbl::reply::Out;
 use crate::grbl::report;
 use crate::grbl::store::STARTUP_LINES;
 use crate::motion::queue::{Overrides, State};

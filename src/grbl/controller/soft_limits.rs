@@ -12,7 +12,7 @@
 
 use super::{Controller, SoftLimit};
 use crate::grbl::limits;
-use crate::grbl::protocol::Out;
+use crate::grbl::reply::Out;
 use crate::motion::queue::State;
 use crate::grbl::report;
 
