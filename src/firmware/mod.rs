@@ -229,8 +229,8 @@ mod app {
             }
             let idr = hw::gpioa_idr();
             let door_open = hw::gpioc_idr() & 1 << ddastep::board::DOOR_PIN == 0;
-            limits::PROBE_INVERT.store(ctl.settings().probe_invert, Relaxed);
             take_inputs(ctl, &SHARED, Inputs { gpioa_idr: idr, probe_low: hw::probe_low(), door_open });
+            limits::PROBE_INVERT.store(ctl.settings().probe_invert, Relaxed);
             let invert = ctl.settings().limit_invert;
             let (counts, window) = encoder::read();
             ctl.encoder(counts, window, tx_in);
