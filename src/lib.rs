@@ -12,6 +12,7 @@
 //! - [`board`]: the Blue Pill pin map as numbers (the firmware shell in `src/firmware/`
 //!   turns it into registers).
 //! - [`encoder`]: encoder feedback — TIM3 count extension, speed, step-loss detection.
+//! - [`error`]: Grbl's numbered errors, the one error type (a leaf: every layer returns it).
 //! - [`steptime`]: the step interrupt's self-measurement (DWT cycles), reported by `$I`.
 //!
 //! Nothing is re-exported at the crate root: a path names its layer (`ddastep::motion::engine`).
@@ -20,6 +21,7 @@
 
 pub mod board;
 pub mod encoder;
+pub mod error;
 pub mod grbl;
 pub mod motion;
 pub mod num;

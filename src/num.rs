@@ -1,7 +1,8 @@
-//! Number helpers: float-to-integer conversions (out of line), and a 64-by-32-bit [`mul_div`].
+//! Number helpers: float-to-integer conversions out of line, a 64-by-32-bit [`mul_div`], a small
+//! square root, and the wrapping clock comparison.
 //!
-//! Who uses it: the settings, G-code, planning and report code, status reports and the
-//! feeder (never the step interrupt).
+//! Who uses it: the settings, G-code, planning, controller and report code (never the step
+//! interrupt); the feeder uses [`mul_div`].
 //!
 //! The library computes in `f32`, as Grbl does (the Cortex-M3 has no FPU: each `f64` operation
 //! would link a second, larger soft-float set and pass two registers per operand). Rust's `as`
@@ -139,5 +140,88 @@ mod tests {
             prop_assert_eq!(mul_div(done, c, total / 2, total) as u64, reference(done, c, total / 2, total));
             prop_assert_eq!(mul_div(c, done, 0, total) as u64, reference(c, done, 0, total));
         }
+    }
+}
+
+/// Square root, correctly rounded like `libm::sqrtf`, in ~100 bytes of flash. Digit by digit:
+/// the 25-bit truncated root of the significand, then rounded half up; a tie cannot happen,
+/// since a 25-bit odd significand squared never fits in 24 bits. Negative inputs give NaN,
+/// like libm.
+pub fn sqrt(x: f32) -> f32 {
+    let bits = x.to_bits();
+    if bits > 1 << 31 {
+        return f32::NAN;
+    }
+    if bits == 0 || bits >= 0xFF << 23 {
+        return x; // ±0, +∞, NaN
+    }
+    let mut e = (bits >> 23) as i32 - 127;
+    let mut m = bits & ((1 << 23) - 1);
+    if e == -127 {
+        // Subnormal: normalize.
+        e += 1;
+        while m < 1 << 23 {
+            m <<= 1;
+            e -= 1;
+        }
+    } else {
+        m |= 1 << 23;
+    }
+    // Make the exponent even: √(m · 2^e) = √(m · 2^(e & 1)) · 2^(e >> 1), m now in [2^23, 2^25).
+    m <<= e & 1;
+    e >>= 1;
+    // q = ⌊√(m · 2^25)⌋ (25 bits), one bit at a time; the remainder stays below 2^28.
+    let (mut rem, mut s, mut q, mut r) = (m << 1, 0u32, 0u32, 1u32 << 24);
+    while r != 0 {
+        let t = s + r;
+        if t <= rem {
+            s = t + r;
+            rem -= t;
+            q += r;
+        }
+        rem <<= 1;
+        r >>= 1;
+    }
+    // A carry out of the significand correctly bumps the exponent.
+    f32::from_bits((((e + 126) as u32) << 23) + ((q + 1) >> 1))
+}
+
+/// `a - b` on a wrapping `u32` clock or counter (milliseconds, sequence numbers), signed:
+/// negative while `a` is before `b`. Exact while the two are less than 2^31 apart.
+#[inline]
+pub const fn wrapping_diff(a: u32, b: u32) -> i32 {
+    a.wrapping_sub(b) as i32
+}
+
+#[cfg(test)]
+mod helper_tests {
+    use super::*;
+
+    #[test]
+    fn sqrt_matches_libm() {
+        let mut x = 0x2545_F491_4F6C_DD1Du64;
+        let specials = [0.0, -0.0, 1.0, 2.0, 3800.0, 1e-45, 1.2e-38, 5e-39, f32::MAX, f32::INFINITY];
+        for v in specials {
+            assert_eq!(sqrt(v).to_bits(), libm::sqrtf(v).to_bits(), "√{v}");
+        }
+        assert!(sqrt(-1.0).is_nan() && sqrt(f32::NAN).is_nan());
+        for i in 0..200_000 {
+            // xorshift64: random bit patterns (every exponent) and random lengths² in mm².
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let v = if i % 2 == 0 { f32::from_bits((x >> 33) as u32) } else { (x >> 40) as f32 / (1u64 << 10) as f32 };
+            if v.is_finite() {
+                assert_eq!(sqrt(v).to_bits(), libm::sqrtf(v).to_bits(), "√{v}");
+            }
+        }
+    }
+
+    #[test]
+    fn wrapping_diff_is_signed_across_the_wrap() {
+        assert_eq!(wrapping_diff(1, u32::MAX), 2);
+        assert_eq!(wrapping_diff(u32::MAX, 1), -2);
+        assert_eq!(wrapping_diff(5, 5), 0);
+        assert!(wrapping_diff(0x7FFF_FFFF, 0) > 0 && wrapping_diff(0x8000_0000, 0) < 0);
     }
 }

@@ -6,10 +6,9 @@
 //! was entered: TIM2 keeps ticking every 0.5 ms even at rest). A hung idle loop, a stopped
 //! SysTick or a dead step interrupt all stop the feeding, and the IWDG resets the MCU.
 
-/// IWDG prescaler code (PR = 2: LSI / 16) and reload value: 625 counts of 16 / 40 kHz =
-/// 250 ms nominal (RM0008 §19.3; the LSI spreads 30–60 kHz, so 167–333 ms). Longest stall
-/// of a healthy idle loop: a flash page erase plus a 1 KiB write (~60 ms on silicon) or the
-/// TX drain before a restart (512 bytes at 115200 baud, 44 ms).
+/// IWDG prescaler code (PR = 2: LSI / 16) and reload value: 250 ms nominal, 167–333 ms over
+/// the LSI's spread (RM0008 §19.3), above a healthy idle loop's longest stall (a flash save, a
+/// TX drain); measured in `bench/tests/firmware_watchdog.rs`.
 pub const IWDG_PR: u16 = 2;
 pub const IWDG_RLR: u16 = 624;
 /// Modeled timeout at the nominal 40 kHz LSI, ms.

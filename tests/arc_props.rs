@@ -3,8 +3,8 @@
 
 use ddastep::planning::arc::{plane_axes, Arc, Segments};
 use ddastep::grbl::gcode::{parse, Modal};
-use ddastep::planning::planner::{to_steps, Limits, Planner};
-use ddastep::grbl::protocol::Error;
+use ddastep::planning::planner::{to_steps, Planner};
+use ddastep::error::Error;
 use ddastep::grbl::settings::Settings;
 use proptest::prelude::*;
 use std::f64::consts::PI;
@@ -166,7 +166,7 @@ proptest! {
         let seg = arc.segments(tol);
         let ends = check_chords(&arc, start, seg, tol as f64);
         // Step counts: the chords as planned moves add up to the whole arc's steps.
-        let lim = Limits::<3>::new(&Settings::BENCH, 60_000);
+        let lim = Settings::BENCH.planner_limits::<3>(60_000);
         let mut p = Planner::<3>::new();
         let start = start.map(|v| v as f32);
         p.set_position(&start.map(Some), &lim).unwrap();

@@ -142,7 +142,7 @@ fn accelerating_through_a_junction_keeps_the_speed() {
     let c = Chain { axes: 1, spm: [100.0; N], rate: [12_000.0; N], accel: [100.0; N], moves: vec![([2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], Some(12_000.0)), ([4.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], Some(12_000.0)), ([6.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], Some(12_000.0))] };
     let s = settings(&c);
     let mut rig = Rig::<N>::with_settings(&s);
-    let lim = Limits::<N>::new(&s, Settings::wanted_vmax(&s, N));
+    let lim = s.planner_limits::<N>(Settings::wanted_vmax(&s, N));
     run(&mut rig, &c, &lim, |_| true);
     assert_eq!(rig.net_steps()[0], 600);
     let t = rig.times(0);
@@ -164,7 +164,7 @@ proptest! {
         let s = settings(&c);
         let mut rig = Rig::<N>::with_settings(&s);
         let ramped = Settings::wanted_vmax(&s, N);
-        let lim = Limits::<N>::new(&s, ramped);
+        let lim = s.planner_limits::<N>(ramped);
         let seen = plan(&c, &s, &lim);
         prop_assume!(!seen.is_empty());
         let accel: [f64; N] = core::array::from_fn(|i| c.accel[i]);
@@ -230,7 +230,7 @@ proptest! {
     fn a_hold_across_move_boundaries_ends_exactly(c in chain(), at in 0.0f64..1.0) {
         let s = settings(&c);
         let mut rig = Rig::<N>::with_settings(&s);
-        let lim = Limits::<N>::new(&s, Settings::wanted_vmax(&s, N));
+        let lim = s.planner_limits::<N>(Settings::wanted_vmax(&s, N));
         let seen = plan(&c, &s, &lim);
         prop_assume!(seen.len() >= 2);
         let total: i64 = seen.iter().map(|m| m.steps.iter().map(|x| x.abs()).max().unwrap()).sum();

@@ -1,7 +1,7 @@
 //! The planner never asks the step interrupt for more than it sustains: the ceiling falls
 //! with every slave axis a move adds (`Timing::max_rate_for`).
 
-use ddastep::planning::planner::{Limits, Planner};
+use ddastep::planning::planner::Planner;
 use ddastep::motion::ramp::hz_of_period;
 use ddastep::grbl::settings::Settings;
 
@@ -13,7 +13,7 @@ fn cruise_is_clamped_to_the_ceiling_for_the_moves_axis_count() {
         s.set(110 + i, 600_000.0, 7).unwrap();
     }
     let t = s.timing();
-    let lim = Limits::<7>::new(&s, 1_000_000);
+    let lim = s.planner_limits::<7>(1_000_000);
     for axes in 1..=7usize {
         let mut p = Planner::<7>::new();
         let target: [f32; 7] = core::array::from_fn(|i| if i < axes { 100.0 - i as f32 } else { 0.0 });
@@ -44,7 +44,7 @@ fn dma_junctions_are_clamped_to_the_junction_rate() {
             let want = if dma { t.max_rate_for(slaves).min(ddastep::TIMER_HZ / (DMA_JUNCTION_BASE_TICKS + DMA_JUNCTION_PER_SLAVE_TICKS * slaves)) } else { u32::MAX };
             assert_eq!(t.max_junction_rate_for(slaves), want, "dma {dma}, {slaves} slaves");
         }
-        let lim = Limits::<7>::new(&s, 1_000_000);
+        let lim = s.planner_limits::<7>(1_000_000);
         for axes in [1usize, 3, 7] {
             let mut p = Planner::<7>::new();
             let mut last = None;

@@ -1,7 +1,7 @@
 //! G-code words, numbers and modal state against Grbl 1.1's rules and error codes.
 
 use ddastep::grbl::gcode::{parse, parse_number, Modal, Motion};
-use ddastep::grbl::protocol::Error;
+use ddastep::error::Error;
 
 fn num(s: &str) -> Result<f32, Error> {
     let mut i = 0;

@@ -4,7 +4,7 @@
 mod protocol_rig;
 
 use ddastep::grbl::gcode::parse_number;
-use ddastep::grbl::protocol::Error;
+use ddastep::error::Error;
 use ddastep::motion::ramp::Shape;
 use ddastep::grbl::settings::{Settings, SETTINGS_LEN};
 use proptest::prelude::*;

@@ -1,6 +1,6 @@
 //! Settings: Grbl's `$N=` rules, the flash image, and the profile derived for the engine.
 
-use ddastep::grbl::protocol::Error;
+use ddastep::error::Error;
 use ddastep::motion::ramp::RampSlot;
 use ddastep::grbl::settings::{crc32, Change, Settings, RAMP_SHAPE, SETTINGS_LEN};
 

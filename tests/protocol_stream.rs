@@ -87,7 +87,7 @@ fn listings_wait_for_tx_room_instead_of_being_cut() {
     let full = big.line("$$");
     let mut b = Bench::<3>::new(Settings::BENCH);
     b.take();
-    b.tx.cap = ddastep::grbl::protocol::REPLY_ROOM + 20;
+    b.tx.cap = ddastep::grbl::reply::REPLY_ROOM + 20;
     // The UART sends 20 bytes per millisecond here.
     for &c in b"$$\n" {
         assert!(b.ctl.byte(c, &mut b.tx));

@@ -11,7 +11,7 @@
 pub mod count;
 pub mod loss;
 
-use crate::grbl::protocol::Error;
+use crate::error::Error;
 
 /// `$87`: the axis the encoder watches (0 none, 1 = X … 7 = U).
 pub const AXIS: u16 = 87;

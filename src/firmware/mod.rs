@@ -37,7 +37,7 @@ mod app {
     use ddastep::board;
     use ddastep::grbl::controller::Controller;
     use ddastep::motion::engine::Engine;
-    use ddastep::grbl::shell::{dispatch, idle_step, Requests};
+    use ddastep::grbl::shell::{dispatch, idle_step, take_inputs, Inputs, Requests};
     use ddastep::motion::shared::Shared;
     use ddastep::planning::feeder::Feeder;
     use ddastep::planning::lookahead::Buffer;
@@ -246,14 +246,9 @@ mod app {
                 ctl.hard_limit(tx_in);
             }
             let idr = gpio::gpioa_idr();
-            ctl.set_limit_inputs(idr);
-            // The probe: for `Pn:P` and the cycle's start; the level also backs up the edge
-            // (contact made between the controller's check and its arming).
-            let low = gpio::probe_low();
-            ctl.set_probe_input(low);
-            ctl.set_door_input(gpio::gpioc_idr() & 1 << ddastep::board::DOOR_PIN == 0);
+            let door_open = gpio::gpioc_idr() & 1 << ddastep::board::DOOR_PIN == 0;
+            take_inputs(ctl, &SHARED, Inputs { gpioa_idr: idr, probe_low: gpio::probe_low(), door_open });
             limits::PROBE_INVERT.store(ctl.settings().probe_invert, Relaxed);
-            SHARED.probe_input(low != ctl.settings().probe_invert);
             let invert = ctl.settings().limit_invert;
             let (counts, window) = encoder::read();
             ctl.encoder(counts, window, tx_in);

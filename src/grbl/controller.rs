@@ -16,9 +16,20 @@
 //!
 //! Positions: the planner works in machine millimetres; work offsets ([`Offsets`]) turn
 //! program coordinates into machine ones in the interpreter, and reports subtract them again.
+//!
+//! This file holds the controller's state (the struct, the types of its fields, its in-place
+//! construction); each mechanism is a file of its own that works on it: `lines.rs` (bytes and
+//! lines in, jobs out), `poll.rs` (carrying jobs on, drivers, profile), `reset.rs` (banner, Ctrl-X),
+//! `access.rs` (what the shell reads and sets), and `door.rs`, `homing.rs`, `jogging.rs`, `probe.rs`,
+//! `soft_limits.rs`, `status.rs`, `system.rs` (`$` commands), `tool.rs` (spindle, coolant),
+//! `encoder.rs` (step-loss checks). They name this file's items; this file names none of theirs.
 
+mod access;
 mod door;
 mod homing;
+mod lines;
+mod poll;
+mod reset;
 mod encoder;
 mod jogging;
 mod probe;
@@ -29,19 +40,16 @@ mod tool;
 
 use crate::planning::arc::Segments;
 use crate::grbl::coords::Offsets;
-use crate::grbl::gcode::{self, Modal, Stop};
-use crate::planning::inverse_time;
+use crate::grbl::gcode::Modal;
 use crate::planning::planner::{Limits, Planned, Planner};
-use crate::grbl::protocol::{put_error, put_ok, Error, LineBuf, LineEvent, Out, LINE_LEN, REPLY_ROOM, RX_BUFFER_LEN};
+use crate::grbl::protocol::{LineBuf, RX_BUFFER_LEN};
 use crate::motion::moves::Overrides;
-use crate::motion::shared::{Shared, State};
+use crate::motion::shared::Shared;
 use crate::planning::feeder::Feeder;
-use crate::motion::ramp::{RampConfig, RampSlot};
-use crate::grbl::report;
+use crate::motion::ramp::RampSlot;
 use crate::grbl::settings::{Ramped, Settings};
 use crate::grbl::spindle::{Power, PwmTiming, SpindleDir, SpindleOut};
-use crate::grbl::store::{Stored, IMAGE_LEN, STARTUP_LINES};
-use soft_limits::SoftLimit;
+use crate::grbl::store::{Stored, STARTUP_LINES};
 
 /// Time from enabling the drivers to the first step, in poll milliseconds (2 ≥ 1 ms real).
 pub const ENABLE_SETTLE_MS: u32 = 2;
@@ -168,6 +176,55 @@ impl<const N: usize> Job<N> {
     }
 }
 
+/// Where a soft-limit trip stands (`soft_limits.rs`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum SoftLimit {
+    Off,
+    /// Tripped: holding until the engine has stopped, then this alarm is reported.
+    Stopping(u8),
+    /// ALARM:2 reported: waiting for Ctrl-X.
+    Locked,
+}
+
+/// Where the door cycle is (`door.rs`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Door {
+    /// No door state.
+    Off,
+    /// Opened: motion decelerating to a stop (`Door:2`).
+    Stopping,
+    /// Stopped with spindle and coolant off, the door still open (`Door:1`).
+    Ajar,
+    /// Stopped, the door closed: waiting for `~` (`Door:0`).
+    Ready,
+    /// `~` came: spindle and coolant back on, motion resumes at this poll time (`Door:3`).
+    Restoring(u32),
+}
+
+/// One `$H` cycle in progress (`homing.rs`) (kept small: the controller lives in a static slot).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Homing {
+    /// Axes of the group being homed (bit i = axis i).
+    group: u8,
+    /// The group after this one (X and Y after Z for `$H`), 0 for none.
+    next: u8,
+    /// 0 seek, 1 pull-off, 2 locate, 3 pull-off.
+    pass: u8,
+    /// Approach passes: axes whose switch closed.
+    found: u8,
+    /// A move of this pass was queued; `moving`: it has not been seen to end yet.
+    moved: bool,
+    moving: bool,
+    /// `$H` (startup lines follow), not `$HX`…
+    all: bool,
+    /// The stop epoch the pass's move was queued in: a newer one means it was stopped.
+    epoch: u32,
+    /// The pass may start (after the debounce pause), poll ms.
+    start_at: u32,
+    /// The pass's target of each axis, steps.
+    target: [i32; 3],
+}
+
 /// The Grbl-compatible controller for up to `N` axes (`$42` of them in use).
 pub struct Controller<'a, const N: usize> {
     feeder: Feeder<'a, N>,
@@ -227,9 +284,9 @@ pub struct Controller<'a, const N: usize> {
     /// The probe input is active (`$6` applied).
     probe_pin: bool,
     /// A `$H` cycle in progress (see `homing.rs`).
-    homing: Option<homing::Homing>,
+    homing: Option<Homing>,
     /// The safety door cycle (see `door.rs`), its input now, and a 0x84 waiting.
-    door: door::Door,
+    door: Door,
     door_pin: bool,
     door_event: bool,
 }
@@ -274,7 +331,7 @@ impl<'a, const N: usize> Controller<'a, N> {
             addr_of_mut!((*p).stored).write(stored);
             addr_of_mut!((*p).axes).write(axes);
             addr_of_mut!((*p).ramped).write(Ramped::wanted(&settings, axes));
-            addr_of_mut!((*p).limits).write(Limits::new(&settings, 1));
+            addr_of_mut!((*p).limits).write(settings.planner_limits(1));
             addr_of_mut!((*p).profile_dirty).write(true);
             addr_of_mut!((*p).lines).write(LineBuf::new());
             addr_of_mut!((*p).modal).write(Modal::RESET);
@@ -312,7 +369,7 @@ impl<'a, const N: usize> Controller<'a, N> {
             addr_of_mut!((*p).probe_pin).write(false);
             addr_of_mut!((*p).enc).write(crate::encoder::loss::Monitor::OFF);
             addr_of_mut!((*p).homing).write(None);
-            addr_of_mut!((*p).door).write(door::Door::Off);
+            addr_of_mut!((*p).door).write(Door::Off);
             addr_of_mut!((*p).door_pin).write(false);
             addr_of_mut!((*p).door_event).write(false);
             at.assume_init_mut()
@@ -344,571 +401,4 @@ impl<'a, const N: usize> Controller<'a, N> {
     fn next_startup(&self, i: usize) -> usize {
         (i..STARTUP_LINES).find(|&k| !self.stored.startup[k].as_bytes().is_empty()).unwrap_or(STARTUP_LINES)
     }
-
-    /// The settings in force.
-    pub fn settings(&self) -> &Settings {
-        &self.settings
-    }
-
-    /// What flash should hold (after [`Actions::save`]).
-    pub fn stored(&self) -> &Stored {
-        &self.stored
-    }
-
-    /// The flash image of [`Self::stored`].
-    pub fn image(&self) -> [u8; IMAGE_LEN] {
-        self.stored.to_bytes()
-    }
-
-    /// The ramp the profile was built with (what `$I` reports).
-    pub fn ramped(&self) -> &Ramped {
-        &self.ramped
-    }
-
-    /// Axes in use (`$42`, at most `N`).
-    pub fn axes(&self) -> usize {
-        self.axes
-    }
-
-    /// The work offsets in force.
-    pub fn offsets(&self) -> &Offsets<N> {
-        &self.offsets
-    }
-
-    /// The G-code modal state.
-    pub fn modal(&self) -> &Modal {
-        &self.modal
-    }
-
-    /// Moves queued or running.
-    pub fn pending_moves(&self) -> u32 {
-        self.feeder.pending()
-    }
-
-    /// The planner's absolute step position: where the engine ends once the queue runs out.
-    pub fn planned_steps(&self) -> [i64; N] {
-        *self.planner.position_steps()
-    }
-
-    /// True while a line (or a startup line) is being carried out: [`Self::byte`] takes
-    /// nothing until it is done (nor while asleep).
-    pub fn busy(&self) -> bool {
-        self.job.is_some() || self.startup_next < STARTUP_LINES || self.tripped()
-    }
-
-    /// Free bytes in the shell's RX ring, for `Bf:` in status reports (at most the announced
-    /// RX buffer size).
-    pub fn set_rx_free(&mut self, n: usize) {
-        self.rx_free = n.min(RX_BUFFER_LEN) as u32;
-    }
-
-    /// The limit inputs as the shell read them (GPIOA's input register), for `Pn:` in status
-    /// reports; `$5` applies here.
-    pub fn set_limit_inputs(&mut self, gpioa_idr: u32) {
-        self.limit_pins = crate::grbl::limits::active_pins(gpioa_idr, self.settings.limit_invert);
-    }
-
-    /// The start-up banner (also after a soft reset).
-    pub fn welcome(&mut self, out: &mut impl Out) {
-        out.put(report::BANNER);
-        if core::mem::take(&mut self.watchdog_note) {
-            out.put(report::WATCHDOG_RESET);
-        }
-        if self.alarm {
-            out.put(report::UNLOCK_HINT);
-        }
-    }
-
-    /// The MCU came up from a watchdog reset (call before [`Self::welcome`]): the banner is
-    /// followed by `[MSG:Reset by watchdog]`, and the controller is in the alarm state (the
-    /// position is not known to be right; no startup lines run).
-    pub fn watchdog_reset(&mut self) {
-        self.watchdog_note = true;
-        self.position_lost();
-    }
-
-    /// The position is not known to be right (a hard limit stopped the steps mid-move, or the
-    /// watchdog reset the MCU): the alarm state, and no startup lines (call before
-    /// [`Self::welcome`]).
-    pub fn position_lost(&mut self) {
-        self.alarm = true;
-        self.startup_next = STARTUP_LINES;
-    }
-
-    /// Takes one line byte; `false` when it cannot yet (a line is held, or fewer than
-    /// [`REPLY_ROOM`] TX bytes are free): keep the byte and offer it again after a `poll`.
-    #[must_use]
-    #[inline(never)]
-    pub fn byte(&mut self, b: u8, out: &mut impl Out) -> bool {
-        if self.busy() || self.sleep || self.resync || out.room() < REPLY_ROOM {
-            return false;
-        }
-        match self.lines.push(b) {
-            LineEvent::More => {}
-            LineEvent::Bad(e) => put_error(out, e),
-            LineEvent::Line(n) => {
-                let mut line = [0u8; LINE_LEN];
-                line[..n].copy_from_slice(self.lines.line());
-                let r = match line.first() {
-                    _ if n == 0 => Ok(()),
-                    Some(b'$') => self.system(&line[1..n], out),
-                    // G-code is locked out in alarm, and while jogging (Grbl's error:9).
-                    _ if self.alarm || self.jogging() => Err(Error::AlarmLock),
-                    _ => self.gcode(&line[..n], out),
-                };
-                match r {
-                    Err(e) => put_error(out, e),
-                    Ok(()) if self.job.is_none() => self.ok(out),
-                    Ok(()) => {}
-                }
-            }
-        }
-        true
-    }
-
-    /// `?` arrived: a status report goes out at the next `poll`.
-    pub fn status_request(&mut self) {
-        self.status_wanted = true;
-    }
-
-    /// Ctrl-X: stop at once, drop queued moves and any partial or held line, reset the modal
-    /// state, G92 and the tool length offset, take the engine's position, print the banner.
-    /// During motion this is ALARM:3 (positions stay exact, but Grbl asks for `$X`); from idle
-    /// or a completed feed hold (`Hold:0`) it is not. Startup lines run again (not in alarm).
-    pub fn soft_reset(&mut self, out: &mut impl Out) {
-        let state = self.shared.state();
-        let moving = state != State::Held && (self.feeder.pending() > 0 || state != State::Idle);
-        self.feeder.abort();
-        self.shared.set_hold(false);
-        self.shared.set_overrides(Overrides::NONE);
-        self.lines.clear();
-        self.job = None;
-        self.modal = Modal::RESET;
-        // A probe cycle ends (its edge must not stop a later move); Grbl keeps the last probe
-        // position, not its success flag.
-        self.shared.probe_disarm();
-        let prb = self.offsets.prb;
-        self.offsets = Offsets::new(self.stored.coords);
-        self.offsets.prb = prb;
-        self.jog = Jogging::Off;
-        self.check = false;
-        self.soft_limit = SoftLimit::Off;
-        self.door = door::Door::Off;
-        self.door_event = false;
-        self.pushed = self.shared.moves_done();
-        // The engine stops at its next tick; its position is final only then (see `poll`).
-        self.resync = true;
-        self.take_position();
-        self.wco_count = 0;
-        self.ovr_count = 0;
-        if self.homing.take().is_some() {
-            // Grbl's ALARM:6: reset during the homing cycle.
-            self.alarm = true;
-            report::alarm(out, report::ALARM_HOMING_RESET);
-        } else if moving {
-            self.alarm = true;
-            report::alarm(out, report::ALARM_RESET);
-        }
-        // Grbl wakes from `$SLP` into the alarm state.
-        self.alarm |= core::mem::take(&mut self.sleep);
-        self.startup_next = if self.alarm { STARTUP_LINES } else { self.next_startup(0) };
-        self.welcome(out);
-    }
-
-    /// Timekeeping and retries: rebuilds a pending profile, enables/disables the drivers,
-    /// finishes a jog cancel, carries on a held line (printing its `ok`), runs startup lines,
-    /// writes a requested status report.
-    pub fn poll(&mut self, now_ms: u32, out: &mut impl Out) -> Actions {
-        self.now = now_ms;
-        self.take_position();
-        if self.profile_dirty {
-            self.apply_profile();
-        }
-        self.feeder.service();
-        self.jog_poll(out);
-        self.homing_poll(out);
-        self.soft_limit_poll(out);
-        self.door_poll(out);
-        self.drive_enable();
-        if self.job.is_some() && out.room() >= POLL_REPLY_ROOM && self.advance(true, out) {
-            self.ok(out);
-        }
-        self.run_startup(out);
-        if self.status_wanted && out.room() >= report::status_len(N) {
-            self.status_wanted = false;
-            self.status(out);
-        }
-        let pulse = core::mem::take(&mut self.pulse_changed).then(|| self.settings.timing().pulse_ticks);
-        let pwm = (self.pwm_hz != self.settings.spindle_pwm_hz).then(|| {
-            self.pwm_hz = self.settings.spindle_pwm_hz;
-            PwmTiming::new(self.pwm_hz)
-        });
-        Actions {
-            spindle: self.spindle_out(),
-            pwm,
-            enable: self.drivers_on,
-            enable_pin_high: self.drivers_on == self.settings.enable_invert,
-            pulse_ticks: pulse,
-            save: core::mem::take(&mut self.save),
-            restart: core::mem::take(&mut self.restart),
-        }
-    }
-
-    /// A line's `ok`, and the reset `$C`/`$RST` asked to follow it.
-    fn ok(&mut self, out: &mut impl Out) {
-        if self.tripped() {
-            return; // a soft-limit trip: the line gets no reply (Grbl)
-        }
-        put_ok(out);
-        if core::mem::take(&mut self.reset_after) {
-            self.soft_reset(out);
-        }
-    }
-
-    /// After a soft reset: once the engine has stopped, its position is the planner's.
-    fn take_position(&mut self) {
-        if self.resync && self.shared.state() == State::Idle {
-            self.planner.sync(self.shared.positions(), &self.limits);
-            self.resync = false;
-        }
-    }
-
-    /// Queue empty and engine idle (not held): G4, flash writes, `$` settings may act.
-    fn drained(&self) -> bool {
-        self.feeder.pending() == 0 && self.shared.state() == State::Idle
-    }
-
-    /// Runs the `$N` lines, one job at a time (`>line:ok`, as Grbl reports them).
-    fn run_startup(&mut self, out: &mut impl Out) {
-        while self.startup_next < STARTUP_LINES && self.job.is_none() && out.room() >= REPLY_ROOM {
-            let Some(&text) = self.stored.startup.get(self.startup_next) else { break };
-            self.startup_next = self.next_startup(self.startup_next + 1);
-            let line = text.as_bytes();
-            if line.is_empty() {
-                continue;
-            }
-            out.put(b">");
-            out.put(line);
-            out.put(b":");
-            match self.gcode(line, out) {
-                Err(e) => put_error(out, e),
-                Ok(()) if self.job.is_none() && !self.tripped() => put_ok(out),
-                Ok(()) => {}
-            }
-        }
-    }
-
-    /// Rebuilds the ramp table and timing if the engine is parked; otherwise asks it to park.
-    fn apply_profile(&mut self) {
-        let Some(mut guard) = self.slot.try_write() else {
-            self.profile_dirty = true;
-            return;
-        };
-        self.ramped = self.settings.build_profile(self.axes, &mut guard);
-        drop(guard);
-        self.limits = Limits::new(&self.settings, self.ramped.cfg.vmax);
-        self.profile_dirty = false;
-        self.pulse_changed = true;
-    }
-
-    /// Drivers: on for motion (and M17), off `$1` ms after the machine goes idle.
-    fn drive_enable(&mut self) {
-        if !self.drivers_on {
-            self.enabled_at = None;
-            return;
-        }
-        self.enabled_at.get_or_insert(self.now);
-        let waiting = self.job.is_some_and(|j| j.mv.is_some() || j.mv2.is_some() || j.arc.is_some());
-        let keep = (self.m17 || self.settings.idle_delay_ms == 255) && !self.sleep;
-        if keep || waiting || !self.drained() {
-            self.idle_since = None;
-            return;
-        }
-        let since = *self.idle_since.get_or_insert(self.now);
-        if self.sleep || self.now.wrapping_sub(since) >= self.settings.idle_delay_ms as u32 {
-            self.drivers_on = false;
-            self.enabled_at = None;
-            self.idle_since = None;
-        }
-    }
-
-    fn drivers_ready(&self) -> bool {
-        self.drivers_on && self.enabled_at.is_some_and(|t| self.now.wrapping_sub(t) >= ENABLE_SETTLE_MS)
-    }
-
-    /// Pushes one planned move; false while it does not fit (or the drivers are settling).
-    fn push(&mut self, pl: Planned<N>, jog: bool, power: Power) -> bool {
-        if !self.drivers_ready() {
-            self.drivers_on = true;
-            return false;
-        }
-        if self.profile_dirty || self.feeder.push(pl.mv).is_err() {
-            return false;
-        }
-        self.feed_ring[self.pushed as usize % FEED_RING] = pl.mm_per_step;
-        let cruise_hz = crate::motion::ramp::hz_of_period(pl.mv.cruise());
-        self.power_ring[self.pushed as usize % FEED_RING] = Power { cruise_hz, ..power };
-        self.pushed = self.pushed.wrapping_add(1);
-        self.idle_since = None;
-        if jog {
-            self.jog = Jogging::On;
-        }
-        true
-    }
-
-    /// Carries the job on as far as it can; true when it just finished.
-    fn advance(&mut self, in_poll: bool, out: &mut impl Out) -> bool {
-        // The common wait, a move held for queue room, decided without copying the job out
-        // (a job is ~400 bytes; streaming polls this many times per line).
-        if self.job.as_ref().is_some_and(|j| j.waits_for_room()) && self.feeder.full() {
-            return false;
-        }
-        let Some(mut job) = self.job else { return false };
-        let done = 'run: {
-            if job.home && self.homing.is_some() {
-                break 'run false;
-            }
-            if let Some(l) = job.listing {
-                job.listing = self.list(l, out);
-                if job.listing.is_some() {
-                    break 'run false;
-                }
-            }
-            if let Some(t) = job.tool {
-                // Grbl stops for a spindle or coolant change (laser mode: see `tool_sync`).
-                if !self.drained() {
-                    break 'run false;
-                }
-                self.tool = t;
-                job.tool = None;
-            }
-            if let Some(ms) = job.dwell_ms {
-                // The dwell starts at a poll (its clock) once the queue has run out.
-                if !self.drained() || (job.dwell_end.is_none() && !in_poll) {
-                    break 'run false;
-                }
-                let end = *job.dwell_end.get_or_insert(self.now.wrapping_add(ms));
-                if (self.now.wrapping_sub(end) as i32) < 0 {
-                    break 'run false;
-                }
-                job.dwell_ms = None;
-            }
-            if job.save {
-                // The flash write stalls the CPU: only from a poll, with the machine at rest.
-                if !in_poll || !self.drained() {
-                    break 'run false;
-                }
-                self.stored.settings = self.settings;
-                self.stored.seq = self.stored.seq.wrapping_add(1);
-                self.save = true;
-                job.save = false;
-            }
-            if job.probe != 0 && job.probe & probe::ARMED == 0 && !self.probe_step(&mut job, out) {
-                break 'run false;
-            }
-            for slot in [&mut job.mv, &mut job.mv2] {
-                if let Some(pl) = *slot {
-                    if !self.push(pl, job.jog, job.power) {
-                        break 'run false;
-                    }
-                    *slot = None;
-                }
-            }
-            // Arc chords, one planned move at a time. `Arc::check_range` made planning
-            // infallible; were it not, the chord would merge into the next (the position stays
-            // exact).
-            while let Some(seg) = job.arc.as_mut() {
-                let Some(p) = seg.next() else {
-                    job.arc = None;
-                    break;
-                };
-                job.mv = plan(&mut self.planner, &p, job.rate, &self.limits, &self.ramped.cfg).unwrap_or(None);
-                if let Some(pl) = job.mv {
-                    if !self.push(pl, false, job.power) {
-                        break 'run false;
-                    }
-                    job.mv = None;
-                }
-            }
-            if job.probe & probe::ARMED != 0 && !self.probe_step(&mut job, out) {
-                break 'run false;
-            }
-            if job.drivers_off || job.pause || job.end {
-                if !self.drained() {
-                    break 'run false;
-                }
-                if job.drivers_off {
-                    self.drivers_on = false;
-                    self.m17 = false;
-                }
-                if job.pause && !self.check {
-                    self.shared.set_hold(true);
-                }
-                if job.end {
-                    out.put(report::PROGRAM_END);
-                }
-            }
-            true
-        };
-        self.job = if done { None } else { Some(job) };
-        done
-    }
-
-    /// Starts a job and carries it as far as it goes now.
-    fn start(&mut self, job: Job<N>, out: &mut impl Out) {
-        self.job = Some(job);
-        self.advance(false, out);
-    }
-
-    /// Marks the line being carried out (or a new job) to write the persistent image.
-    fn save_later(&mut self, out: &mut impl Out) {
-        match &mut self.job {
-            Some(j) => j.save = true,
-            None => {
-                let mut job = Job::none();
-                job.save = true;
-                self.start(job, out);
-            }
-        }
-    }
-
-    /// A G-code line: checked in full, then committed and started. In check mode (`$C`) the
-    /// state and position follow the line, but nothing moves, waits or is stored.
-    fn gcode(&mut self, line: &[u8], out: &mut impl Out) -> Result<(), Error> {
-        let block = gcode::parse::<N>(line)?;
-        if block.axes.get(self.axes..).unwrap_or_default().iter().any(Option::is_some) {
-            return Err(Error::UnsupportedCommand);
-        }
-        let mut fx = gcode::Effects::none();
-        let modal = self.modal.interpret_into(&block, self.planner.position_mm(), &self.offsets, &mut fx)?;
-        let mut planner = self.planner;
-        // G93: F is 1/minutes (checked positive where a motion needs it).
-        let rate = if modal.inverse_time { Rate::Minutes(1.0 / modal.feed) } else { Rate::Feed(modal.feed) };
-        let cfg = self.ramped.cfg;
-        let lim = &self.limits;
-        let mv = match &fx.motion {
-            Some((t, rapid)) => plan(&mut planner, t, if *rapid { Rate::Rapid } else { rate }, lim, &cfg)?,
-            None => None,
-        };
-        let mv2 = match &fx.home {
-            Some(t) => planner.line(t, None, lim)?,
-            None => None,
-        };
-        let (arc, rate) = match &fx.arc {
-            Some(a) => {
-                a.check_range(&self.limits.steps_per_mm)?;
-                let seg = a.segments(self.settings.arc_tolerance);
-                // G93 over an arc: its time shared by the (equal) chords.
-                let per = match rate {
-                    Rate::Minutes(t) => Rate::Minutes(t / seg.chords() as f32),
-                    r => r,
-                };
-                (Some(seg), per)
-            }
-            None => (None, Rate::Rapid),
-        };
-        // Soft limits: every target this line moves to, arc chord ends included (a chord
-        // between two points in the box stays in it).
-        let arc_out = arc.is_some_and(|mut seg| seg.any(|p| self.beyond_travel(&p)));
-        let home_out = fx.home.as_ref().is_some_and(|t| self.beyond_travel(t));
-        if arc_out || home_out || fx.motion.as_ref().is_some_and(|(t, _)| self.beyond_travel(t)) {
-            self.soft_limit_trip();
-            return Ok(());
-        }
-        // Commit: nothing below can fail. (The offsets change in place: a copy of them
-        // costs every line ~800 bytes of moves.)
-        // (The work offset is compared only when something it depends on may change.)
-        let store = fx.coord_write.is_some();
-        let wco_may_change = store || fx.g92.is_some() || fx.tlo.is_some() || modal.coord != self.modal.coord;
-        let wco = wco_may_change.then(|| self.offsets.wco(self.modal.coord));
-        if let Some((slot, v)) = &fx.coord_write {
-            self.offsets.stored.set(*slot, v);
-        }
-        if let Some(g) = &fx.g92 {
-            self.offsets.g92 = *g;
-        }
-        if let Some(t) = fx.tlo {
-            self.offsets.tlo = t;
-        }
-        let moves = mv.is_some() || mv2.is_some() || arc.is_some();
-        let (tool, power) = self.tool_sync(&modal, moves, fx.motion.is_some_and(|m| m.1));
-        if wco.is_some_and(|w| self.offsets.wco(modal.coord) != w) {
-            self.wco_count = 0;
-        }
-        self.modal = modal;
-        self.planner = planner;
-        if self.check {
-            if let Some(a) = &fx.arc {
-                // Check mode: only the position follows the arc.
-                // (Infallible after `check_range`: nothing may fail once committed.)
-                let _ = self.planner.line(a.target(), None, &self.limits);
-            }
-            if fx.stop == Some(Stop::End) {
-                out.put(report::PROGRAM_END);
-            }
-            return Ok(());
-        }
-        if store {
-            self.stored.coords = self.offsets.stored;
-        }
-        if fx.drivers == Some(true) {
-            self.drivers_on = true;
-            self.m17 = true;
-        }
-        // (Set field by field on `Job::none()` in its slot: struct-update syntax, or a job
-        // built on the stack and moved in, copies every field.)
-        let job = self.job.insert(Job::none());
-        job.dwell_ms = fx.dwell_ms;
-        job.mv = mv;
-        job.mv2 = mv2;
-        job.arc = arc;
-        job.rate = rate;
-        job.tool = tool;
-        job.power = power;
-        job.drivers_off = fx.drivers == Some(false);
-        job.pause = fx.stop == Some(Stop::Pause);
-        job.end = fx.stop == Some(Stop::End);
-        job.save = store;
-        job.probe = fx.probe;
-        self.advance(false, out);
-        Ok(())
-    }
-}
-
-/// Plans one straight move at `rate`. G93: the move starts and ends at rest (junction speed 0
-/// on both sides) and its master steps decide the cruise rate that makes it last its time on
-/// the ramp the engine will walk for it ([`inverse_time::cruise_hz`]), given to the planner as
-/// the equivalent feed, so its axis-rate clamps apply as to any feed.
-fn plan<const N: usize>(
-    planner: &mut Planner<N>,
-    target: &[f32; N],
-    rate: Rate,
-    lim: &Limits<N>,
-    cfg: &RampConfig,
-) -> Result<Option<Planned<N>>, Error> {
-    let feed = match rate {
-        Rate::Rapid => return planner.line(target, None, lim),
-        Rate::Feed(f) => f,
-        Rate::Minutes(t) => {
-            // At 1 mm/min no axis limit binds: the planner's rate is exactly master / (len·60).
-            let mut dry = *planner;
-            let feed = match dry.line(target, Some(1.0), lim)? {
-                Some(probe) => {
-                    let master = probe.mv.steps().iter().map(|s| s.unsigned_abs()).max().unwrap_or(0);
-                    let ramp = match probe.mv.path() {
-                        Some(p) => inverse_time::MasterRamp::new(p.share, p.accel, lim.per_mm, cfg),
-                        None => inverse_time::MasterRamp::new(1.0, 0.0, 0.0, cfg),
-                    };
-                    inverse_time::cruise_hz(master as u64, t * 60.0, &ramp) / probe.wanted_hz
-                }
-                None => 1.0,
-            };
-            // From rest to rest: no junction speed on either side.
-            planner.rest();
-            let planned = planner.line(target, Some(feed), lim);
-            planner.rest();
-            return planned;
-        }
-    };
-    planner.line(target, Some(feed), lim)
 }

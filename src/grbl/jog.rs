@@ -8,7 +8,7 @@
 
 use crate::grbl::coords::Offsets;
 use crate::grbl::gcode::{group, parse, Block, Modal, Motion, NonModal};
-use crate::grbl::protocol::Error;
+use crate::error::Error;
 
 /// A checked jog: machine target (mm) and feed (mm/min).
 #[derive(Clone, Copy, Debug, PartialEq)]

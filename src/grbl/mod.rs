@@ -8,6 +8,7 @@ pub mod jog;
 pub mod limits;
 pub mod overrides;
 pub mod protocol;
+pub mod reply;
 pub mod report;
 pub mod settings;
 pub mod shell;

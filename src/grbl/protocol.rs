@@ -1,5 +1,5 @@
-//! Grbl 1.1 wire format: realtime bytes, the line assembler, error codes and the byte sink that
-//! replies go to.
+//! Grbl 1.1 wire format, the receiving half: realtime bytes and the line assembler (replies:
+//! [`crate::grbl::reply`]).
 //!
 //! Who uses it: the firmware's USART RX interrupt calls [`realtime`] on every byte and keeps the
 //! others for [`crate::grbl::controller::Controller::byte`]; the controller uses the rest.
@@ -7,6 +7,8 @@
 //! Flow control is Grbl's character counting: a sender keeps at most 128 unacknowledged bytes in
 //! flight and counts one `ok`/`error:N` per line, so every line (also an empty one, and `\r\n`
 //! counted as one ending) gets exactly one reply, sent only once the line has been acted on.
+
+use crate::error::Error;
 
 /// Longest line kept (after whitespace and comments are stripped); Grbl keeps 80.
 pub const LINE_LEN: usize = 128;
@@ -45,196 +47,6 @@ pub const fn realtime(b: u8) -> Option<Realtime> {
         0x84 => Some(Realtime::Door),
         0x80..=0xFF => Some(Realtime::Extended(b)),
         _ => None,
-    }
-}
-
-/// Grbl 1.1 error codes (`error:N`), numbered as in Grbl's `doc/csv/error_codes_en_US.csv`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[repr(u8)]
-pub enum Error {
-    /// A word without its letter (or a byte that is no letter).
-    ExpectedCommandLetter = 1,
-    /// Missing or malformed number (also: more than 15 significant digits).
-    BadNumberFormat = 2,
-    /// Unknown or malformed `$` command, or a setting value out of range.
-    InvalidStatement = 3,
-    /// Negative value where only positive ones make sense.
-    NegativeValue = 4,
-    /// Homing is not enabled (we have no homing yet).
-    SettingDisabled = 5,
-    /// Step pulse shorter than the minimum (1 µs here; Grbl says 3 µs).
-    StepPulseMin = 6,
-    /// The persistent store could not be read (Grbl's EEPROM read failure).
-    SettingReadFail = 7,
-    /// `$` command that needs the machine idle.
-    NotIdle = 8,
-    /// G-code locked out in alarm state (`$X` unlocks).
-    AlarmLock = 9,
-    /// Soft limits need homing.
-    SoftLimitNeedsHoming = 10,
-    /// Line longer than [`LINE_LEN`].
-    LineOverflow = 11,
-    /// `$X`/`$H` with the safety door open.
-    CheckDoor = 13,
-    /// A `$N`/`$I=` line longer than the store keeps.
-    LineLengthExceeded = 14,
-    /// A jog target beyond the soft limits.
-    TravelExceeded = 15,
-    /// A `$J=` line with a word jogging does not take.
-    InvalidJogCommand = 16,
-    /// G/M code or word we do not support.
-    UnsupportedCommand = 20,
-    /// Two commands of one modal group in a block.
-    ModalGroupViolation = 21,
-    /// G1 without a feed rate.
-    UndefinedFeedRate = 22,
-    /// G/M command needs an integer value.
-    CommandValueNotInteger = 23,
-    /// Two commands that both use the axis words.
-    AxisCommandConflict = 24,
-    /// A word given twice in a block.
-    WordRepeated = 25,
-    /// A command that needs axis words has none.
-    NoAxisWords = 26,
-    /// Line number out of range.
-    InvalidLineNumber = 27,
-    /// A command misses its value word (G4 without P).
-    ValueWordMissing = 28,
-    /// G10 P beyond the six coordinate systems.
-    UnsupportedCoordSys = 29,
-    /// G53 without G0 or G1 in force.
-    G53InvalidMotionMode = 30,
-    /// Axis words with no command to use them.
-    AxisWordsExist = 31,
-    /// G2/G3 without an axis word in the selected plane.
-    NoAxisWordsInPlane = 32,
-    /// Target out of range (beyond ±1e6 mm or ±(2^31 - 1) steps).
-    InvalidTarget = 33,
-    /// G2/G3 R form: the radius is shorter than half the chord.
-    ArcRadiusError = 34,
-    /// G2/G3 IJK form without an offset in the selected plane.
-    NoOffsetsInPlane = 35,
-    /// Value words no command uses.
-    UnusedWords = 36,
-    /// G43.1 without Z, or with another axis.
-    G43DynamicAxisError = 37,
-    /// A value beyond its maximum (tool number > 255).
-    MaxValueExceeded = 38,
-}
-
-/// Where replies go: a bounded buffer that drops what does not fit (never blocks, never
-/// panics). Replies are short, so a full TX ring only truncates a report.
-///
-/// The controller checks [`Out::room`] before it starts a reply, so with a sink that reports
-/// its room no `ok` is ever lost: it takes no line byte unless [`REPLY_ROOM`] bytes are free,
-/// writes long listings (`$$`, `$#`) a line at a time as room appears, and delays a status
-/// report until it fits. The TX ring should hold at least 400 bytes.
-pub trait Out {
-    /// Writes as many of `bytes` as fit.
-    fn put(&mut self, bytes: &[u8]);
-    /// Bytes that fit now (`usize::MAX` for a sink that cannot tell).
-    fn room(&self) -> usize {
-        usize::MAX
-    }
-}
-
-/// Free TX bytes needed before a line byte is taken: the longest single reply (`$I` with its
-/// build-info string, the DMA caps and the step path's self-measurement line with its late
-/// fills, or `$N` with two stored lines).
-pub const REPLY_ROOM: usize = 392;
-
-impl<const C: usize> Out for heapless::Vec<u8, C> {
-    fn put(&mut self, bytes: &[u8]) {
-        let n = bytes.len().min(C - self.len());
-        let _ = self.extend_from_slice(&bytes[..n]);
-    }
-    fn room(&self) -> usize {
-        C - self.len()
-    }
-}
-
-impl Out for heapless::spsc::Producer<'_, u8> {
-    fn put(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            if self.enqueue(b).is_err() {
-                break;
-            }
-        }
-    }
-    fn room(&self) -> usize {
-        self.capacity() - self.len()
-    }
-}
-
-/// Writes `ok`.
-pub fn put_ok(out: &mut impl Out) {
-    out.put(b"ok\r\n");
-}
-
-/// Writes `error:N`.
-pub fn put_error(out: &mut impl Out, e: Error) {
-    out.put(b"error:");
-    put_u32(out, e as u32);
-    out.put(b"\r\n");
-}
-
-/// Writes an unsigned decimal.
-pub fn put_u32(out: &mut impl Out, v: u32) {
-    put_padded(out, v, 1);
-}
-
-/// Writes `v` in decimal with at least `width` digits (leading zeros; at most 10).
-fn put_padded(out: &mut impl Out, mut v: u32, width: usize) {
-    let mut buf = [b'0'; 10];
-    let mut start = buf.len();
-    for (i, d) in buf.iter_mut().enumerate().rev() {
-        *d = b'0' + (v % 10) as u8;
-        v /= 10;
-        start = i;
-        if v == 0 && i + width <= 10 {
-            break;
-        }
-    }
-    out.put(buf.get(start..).unwrap_or_default());
-}
-
-/// Writes `x` rounded to `decimals` places (0..=3, halves away from zero), e.g. `-1.250`.
-/// Non-finite values and magnitudes beyond 1e15 are written as 0 (reports only; never reached
-/// by settings).
-///
-/// Exact, in integers: `x` is `m · 2^e` with a 24-bit `m`, so `m · 10^decimals` (below 2^34)
-/// shifted by `e` and rounded once is the decimal of `x` itself. (`x · 1000` in `f32` would
-/// round first, and a value just below a half could print one digit up.)
-pub fn put_fixed(out: &mut impl Out, x: f32, decimals: u32) {
-    let decimals = decimals.min(3);
-    // NonZero: dividing by it has no panic path.
-    let scale = core::num::NonZeroU32::new(10u32.pow(decimals)).unwrap_or(core::num::NonZeroU32::MIN);
-    let bits = x.to_bits();
-    let exp = (bits >> 23 & 0xFF) as i32;
-    let m = bits & 0x7F_FFFF | if exp == 0 { 0 } else { 0x80_0000 };
-    let e = exp.max(1) - 150;
-    let p = m as u64 * scale.get() as u64;
-    let scaled = match e {
-        _ if exp == 0xFF => 0, // ±∞, NaN
-        0..=29 => p << e,      // below 2^63; from 2^30 up, |x| ≥ 2^53 > 10^15
-        -63..=-1 => (p + (1 << (-e - 1))) >> -e,
-        _ => 0, // too small to round up to 1
-    };
-    let scaled = if scaled < 1_000_000_000_000_000 { scaled } else { 0 };
-    if scaled != 0 && bits >> 31 != 0 {
-        out.put(b"-");
-    }
-    let hi = (scaled / 1_000_000_000) as u32;
-    let lo = (scaled % 1_000_000_000) as u32;
-    if hi > 0 {
-        put_u32(out, hi);
-        put_padded(out, lo / scale, 9 - decimals as usize);
-    } else {
-        put_u32(out, lo / scale);
-    }
-    if decimals > 0 {
-        out.put(b".");
-        put_padded(out, lo % scale, decimals as usize);
     }
 }
 
@@ -345,64 +157,5 @@ impl LineBuf {
         self.paren = false;
         self.semicolon = false;
         self.ended = false;
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    extern crate std;
-    use super::*;
-    use std::{format, string::String};
-
-    /// The former formatting (the `f32` widened to `f64`, whose product with 10^decimals is
-    /// exact, rounded; 64-bit integers), as the reference.
-    fn reference(x: f32, decimals: u32) -> String {
-        let scale = 10i64.pow(decimals);
-        let s = libm::round(x as f64 * scale as f64);
-        let s = if s.is_finite() && libm::fabs(s) < 1e15 { s as i64 } else { 0 };
-        let (sign, a, scale) = (if s < 0 { "-" } else { "" }, s.unsigned_abs(), scale as u64);
-        match decimals {
-            0 => format!("{sign}{a}"),
-            d => format!("{sign}{}.{:0w$}", a / scale, a % scale, w = d as usize),
-        }
-    }
-
-    fn fixed(x: f32, decimals: u32) -> String {
-        let mut b = heapless::Vec::<u8, 64>::new();
-        put_fixed(&mut b, x, decimals);
-        String::from_utf8(b.to_vec()).unwrap()
-    }
-
-    #[test]
-    fn put_fixed_matches_64_bit_formatting() {
-        let edges = [
-            0.0, -0.0, 0.0004, -0.0004, -0.0005, 1.25, -1.2345, 999_999.999_5, 999_999_999.0, 1e9,
-            1_000_000_000.000_5, 999_999_999_999.999, 999_999_999_999_999.0, 1e15, -1e15, 3e38, 1e-40, 0.0005, -0.0125, 2.5e-4,
-            f32::NAN, f32::INFINITY, f32::NEG_INFINITY,
-        ];
-        let mut r = 0x9E37_79B9_7F4A_7C15u64;
-        let random = (0..20_000).map(|_| {
-            r ^= r << 13;
-            r ^= r >> 7;
-            r ^= r << 17;
-            // Magnitudes from 10^-4 to 10^16, both signs.
-            let m = (r >> 11) as f64 / (1u64 << 53) as f64;
-            let v = libm::pow(10.0, -4.0 + 20.0 * m) as f32;
-            if r & 1 == 0 { v } else { -v }
-        });
-        for x in edges.into_iter().chain(random) {
-            for d in 0..=3 {
-                assert_eq!(fixed(x, d), reference(x, d), "{x} with {d} decimals");
-            }
-        }
-        assert_eq!(fixed(1.5, 7), "1.500");
-        assert_eq!(put_u32_text(u32::MAX), "4294967295");
-        assert_eq!(put_u32_text(0), "0");
-    }
-
-    fn put_u32_text(v: u32) -> String {
-        let mut b = heapless::Vec::<u8, 16>::new();
-        put_u32(&mut b, v);
-        String::from_utf8(b.to_vec()).unwrap()
     }
 }

@@ -7,7 +7,8 @@
 use crate::grbl::coords::{Offsets, G28, G30};
 use crate::grbl::gcode::{Modal, Motion};
 use crate::grbl::spindle::{SpindleDir, FLOOD, MIST};
-use crate::grbl::protocol::{put_fixed, put_u32, Out, RX_BUFFER_LEN};
+use crate::grbl::protocol::RX_BUFFER_LEN;
+use crate::grbl::reply::{put_fixed, put_u32, Out};
 use crate::motion::moves::Overrides;
 use crate::motion::ramp::Shape;
 use crate::grbl::settings::Ramped;
@@ -416,7 +417,7 @@ mod tests {
             "[VER:1.1h.ddastep:]\r\n[OPT:VMH+,15,128]\r\n[MSG:max step rate 166666 Hz]\r\n\
              [MSG:ramp 1000-60000 Hz 1000000 Hz/s trapezoid]\r\n"
         );
-        assert!(info.len() <= crate::grbl::protocol::REPLY_ROOM);
+        assert!(info.len() <= crate::grbl::reply::REPLY_ROOM);
         let t = crate::steptime::StepTimeReport { entries: 9, min: 190, mean: 191.44, max: 1402, load: 0.0812, peak_load: 0.156, late: 2 };
         assert_eq!(text(|o| step_time(o, &t, false)), "[MSG:step isr 190/191.4/1402 cycles min/mean/max, load 8.1 % peak 15.6 %]\r\n");
         assert_eq!(text(|o| step_time(o, &t, true)), "[MSG:step fill 190/191.4/1402 cycles min/mean/max, load 8.1 % peak 15.6 %, late 2]\r\n");
@@ -431,7 +432,7 @@ mod tests {
             step_time(o, &worst, true);
             o.put(b"ok\r\n");
         });
-        assert!(all.len() <= crate::grbl::protocol::REPLY_ROOM, "{}", all.len());
+        assert!(all.len() <= crate::grbl::reply::REPLY_ROOM, "{}", all.len());
     }
 
     #[test]

@@ -1,5 +1,5 @@
 //! What the firmware shell runs around the controller, kept here so the host rigs run the same
-//! code: the RX interrupt's realtime-byte dispatch and one pass of the idle loop.
+//! code: the RX interrupt's realtime-byte dispatch, the idle loop's sampled inputs and one pass of it.
 //!
 //! Who uses it: `src/firmware` (USART1 interrupt and `idle`) and `tests/protocol_rig`.
 
@@ -9,7 +9,8 @@ use heapless::spsc::Consumer;
 
 use crate::grbl::controller::{Actions, Controller};
 use crate::grbl::overrides;
-use crate::grbl::protocol::{realtime, Out, Realtime};
+use crate::grbl::protocol::{realtime, Realtime};
+use crate::grbl::reply::Out;
 use crate::motion::shared::Shared;
 
 /// Requests the RX interrupt leaves for the idle loop (lock-free flags).
@@ -107,4 +108,26 @@ pub fn idle_step<const N: usize>(
     let act = ctl.poll(now_ms, out);
     req.door_lock.store(ctl.door_active(), Relaxed);
     act
+}
+
+/// What the shell samples for one idle pass.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Inputs {
+    /// GPIOA's input register: the limit pins (pulled up; a pressed switch reads 0).
+    pub gpioa_idr: u32,
+    /// The probe pin reads low (pulled to ground; `$6` not applied).
+    pub probe_low: bool,
+    /// The safety door input is active (door open).
+    pub door_open: bool,
+}
+
+/// Hands one idle pass's pin inputs to the controller (limit pins for `Pn:` and homing, the
+/// probe and door levels) and the probe level to the engine's probe check (backing up the edge
+/// interrupt: contact made between the controller's check and its arming). Call before
+/// [`idle_step`] (and the encoder's `Controller::encoder`).
+pub fn take_inputs<const N: usize>(ctl: &mut Controller<'_, N>, shared: &Shared<N>, inputs: Inputs) {
+    ctl.set_limit_inputs(inputs.gpioa_idr);
+    ctl.set_probe_input(inputs.probe_low);
+    ctl.set_door_input(inputs.door_open);
+    shared.probe_input(inputs.probe_low != ctl.settings().probe_invert);
 }

@@ -12,6 +12,7 @@
 //! Each page sees every second write, halving flash wear per page.
 
 use crate::grbl::coords::{Coords, COORDS_LEN};
+use crate::num::wrapping_diff;
 use crate::grbl::settings::{copy_bytes, crc32, put4, Settings, SETTINGS_LEN};
 
 /// Bytes a stored text line can hold (Grbl keeps 80 with its terminator).
@@ -154,7 +155,7 @@ impl Stored {
     /// stack 2 KiB more).
     pub fn newest(pages: [&[u8]; 2]) -> Option<usize> {
         match [seq_of(pages[0]), seq_of(pages[1])] {
-            [Some(a), Some(b)] if (b.wrapping_sub(a) as i32) > 0 => Some(1),
+            [Some(a), Some(b)] if wrapping_diff(b, a) > 0 => Some(1),
             [Some(_), _] => Some(0),
             [None, Some(_)] => Some(1),
             [None, None] => None,

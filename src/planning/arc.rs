@@ -24,9 +24,9 @@
 //! the start-to-target differences, not from the rounded center, so a full circle's travel is
 //! exactly a turn.)
 
-use crate::grbl::gcode::MAX_MM;
-use crate::planning::planner::to_steps;
-use crate::grbl::protocol::Error;
+use crate::planning::planner::{to_steps, MAX_MM};
+use crate::error::Error;
+use crate::num::sqrt;
 use crate::planning::trig::{atan2, sin_cos};
 use core::f32::consts::PI;
 
@@ -290,8 +290,4 @@ fn at<const N: usize>(v: &[f32; N], i: usize) -> f32 {
 
 fn hypot(x: f32, y: f32) -> f32 {
     sqrt(x * x + y * y)
-}
-
-fn sqrt(x: f32) -> f32 {
-    crate::planning::planner::sqrt(x)
 }

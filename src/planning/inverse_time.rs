@@ -23,6 +23,7 @@
 
 use crate::planning::lookahead::walk_of;
 use crate::motion::ramp::{RampConfig, RampTable, Shape, IDX_ONE};
+use crate::num::sqrt;
 
 /// The ramp a move's master runs on, in master steps: start rate (steps/s) and acceleration
 /// (steps/s²).
@@ -75,9 +76,9 @@ pub fn cruise_hz(steps: u64, seconds: f32, ramp: &MasterRamp) -> f32 {
     let c = v0 * v0 + n * a;
     let d = b * b - 4.0 * c;
     if d < 0.0 {
-        return crate::planning::planner::sqrt(c);
+        return sqrt(c);
     }
-    2.0 * c / (b + crate::planning::planner::sqrt(d))
+    2.0 * c / (b + sqrt(d))
 }
 
 /// How long a move of `steps` master steps at cruise `v` lasts on the ramp `ramp`, s (the
@@ -90,7 +91,7 @@ pub fn duration_s(steps: u64, v: f32, ramp: &MasterRamp) -> f32 {
     let peak2 = v0 * v0 + n * a;
     if v * v >= peak2 {
         // Triangle: up to the peak and down again.
-        return 2.0 * (crate::planning::planner::sqrt(peak2) - v0) / a;
+        return 2.0 * (sqrt(peak2) - v0) / a;
     }
     ((v - v0) * (v - v0) + n * a) / (a * v)
 }

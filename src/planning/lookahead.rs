@@ -205,7 +205,7 @@ mod tests {
 
     /// The cruise index is the lowest one at which the scaled table is at least as fast as
     /// the cruise, for random tables, scales and rates (also between entries, where rounding
-    /// the index down used to leave the table a 1/16 tick slow).
+    /// the index down would leave the table up to a 1/16 tick slow).
     #[test]
     fn cruise_index_is_the_first_index_fast_enough() {
         let mut r = 0x9E37_79B9_7F4A_7C15u64;

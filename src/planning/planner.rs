@@ -16,16 +16,18 @@
 //! Each move also carries its junction speed with the move before it (junction deviation
 //! `$11`, Grbl's formula); the look-ahead ([`crate::planning::lookahead`]) does the rest.
 
-use crate::num::{f32_of_i64, f32_of_u64};
-use crate::grbl::protocol::Error;
+use crate::num::{f32_of_i64, f32_of_u64, sqrt};
+use crate::error::Error;
 use crate::motion::moves::{Move, Ovr, Path};
-use crate::grbl::settings::Settings;
 use crate::motion::timing::Timing;
+
+/// Largest axis target accepted, mm (beyond it: `error:33`; G-code words and arc chord ends).
+pub const MAX_MM: f32 = 1e6;
 
 /// Junction deviation `$11`, mm (Grbl's default; the setting is shown fixed at this value).
 pub const JUNCTION_DEVIATION_MM: f32 = 0.010;
 
-/// What the planner needs from the settings, for `N` axes.
+/// What the planner needs from the settings, for `N` axes (`Settings::planner_limits` builds it).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Limits<const N: usize> {
     /// `$100+i`, steps/mm.
@@ -42,22 +44,6 @@ pub struct Limits<const N: usize> {
     pub junction_dev: f32,
     /// Step timing: a move with more slave axes has a lower ceiling (`Timing::max_rate_for`).
     pub timing: Timing,
-}
-
-impl<const N: usize> Limits<N> {
-    /// Limits from settings and the ramp's top rate.
-    pub fn new(s: &Settings, vmax_hz: u32) -> Self {
-        Limits {
-            steps_per_mm: core::array::from_fn(|i| s.steps_per_mm[i]),
-            max_rate: core::array::from_fn(|i| s.max_rate[i]),
-            accel: core::array::from_fn(|i| s.accel[i]),
-            vmax_hz: vmax_hz.max(1),
-            // The table's own path units: the axes in use ($42), as `Settings::build_profile`.
-            per_mm: s.per_mm(s.axis_count(N)),
-            junction_dev: JUNCTION_DEVIATION_MM,
-            timing: s.timing(),
-        }
-    }
 }
 
 /// A planned move and what status reports need to know about it.
@@ -235,49 +221,6 @@ pub fn junction_speed<const N: usize>(a: &[f32; N], b: &[f32; N], axis_accel: &[
     sqrt(acc * dev * sin_d2 / (1.0 - sin_d2))
 }
 
-/// Square root, correctly rounded like `libm::sqrtf`, in ~100 bytes of flash. Digit by digit:
-/// the 25-bit truncated root of the significand, then rounded half up; a tie cannot happen,
-/// since a 25-bit odd significand squared never fits in 24 bits. Negative inputs give NaN,
-/// like libm.
-pub(crate) fn sqrt(x: f32) -> f32 {
-    let bits = x.to_bits();
-    if bits > 1 << 31 {
-        return f32::NAN;
-    }
-    if bits == 0 || bits >= 0xFF << 23 {
-        return x; // ±0, +∞, NaN
-    }
-    let mut e = (bits >> 23) as i32 - 127;
-    let mut m = bits & ((1 << 23) - 1);
-    if e == -127 {
-        // Subnormal: normalize.
-        e += 1;
-        while m < 1 << 23 {
-            m <<= 1;
-            e -= 1;
-        }
-    } else {
-        m |= 1 << 23;
-    }
-    // Make the exponent even: √(m · 2^e) = √(m · 2^(e & 1)) · 2^(e >> 1), m now in [2^23, 2^25).
-    m <<= e & 1;
-    e >>= 1;
-    // q = ⌊√(m · 2^25)⌋ (25 bits), one bit at a time; the remainder stays below 2^28.
-    let (mut rem, mut s, mut q, mut r) = (m << 1, 0u32, 0u32, 1u32 << 24);
-    while r != 0 {
-        let t = s + r;
-        if t <= rem {
-            s = t + r;
-            rem -= t;
-            q += r;
-        }
-        rem <<= 1;
-        r >>= 1;
-    }
-    // A carry out of the significand correctly bumps the exponent.
-    f32::from_bits((((e + 126) as u32) << 23) + ((q + 1) >> 1))
-}
-
 /// Absolute steps of a position in mm: `round(mm × steps/mm)`, within ±(2^31 - 1).
 pub fn to_steps(mm: f32, steps_per_mm: f32) -> Result<i64, Error> {
     let s = libm::roundf(mm * steps_per_mm);
@@ -287,94 +230,5 @@ pub fn to_steps(mm: f32, steps_per_mm: f32) -> Result<i64, Error> {
         Ok(crate::num::i32_of(s) as i64)
     } else {
         Err(Error::InvalidTarget)
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::motion::ramp::period_of_hz;
-
-    /// The bench settings with the table top the firmware would build for 3 axes.
-    fn lim() -> Limits<3> {
-        let s = Settings::BENCH;
-        Limits::new(&s, s.ramp_config(3, &s.timing()).vmax)
-    }
-
-    #[test]
-    fn many_small_moves_never_accumulate_rounding() {
-        let mut p = Planner::<3>::new();
-        let l = lim();
-        let mut steps = [0i64; 3];
-        let mut mm = [0.0f32; 3];
-        for _ in 0..1000 {
-            mm[0] += 0.001;
-            mm[1] -= 0.0049;
-            if let Some(pl) = p.line(&mm, Some(100.0), &l).unwrap() {
-                for (s, d) in steps.iter_mut().zip(pl.mv.steps()) {
-                    *s += *d as i64;
-                }
-            }
-        }
-        assert_eq!(steps, [100, -490, 0]);
-        assert_eq!(p.position_steps(), &steps);
-    }
-
-    #[test]
-    fn g1_rate_follows_the_feed_and_axis_limits() {
-        let mut p = Planner::<3>::new();
-        let l = lim();
-        // 50:30:20 mm at F = 600·√3800 mm/min: X runs 500 mm/s = 50 kHz.
-        let f = 600.0 * libm::sqrtf(3800.0);
-        let pl = p.line(&[50.0, 30.0, 20.0], Some(f), &l).unwrap().unwrap();
-        assert_eq!(pl.mv.steps(), &[5000, 3000, 2000]);
-        assert_eq!(pl.mv.cruise(), period_of_hz(50_000));
-        // A feed above X's 36 000 mm/min limit: X is held at 60 kHz.
-        let pl = p.line(&[150.0, 30.0, 20.0], Some(1e9), &l).unwrap().unwrap();
-        assert_eq!(pl.mv.cruise(), period_of_hz(60_000));
-        // G0 on one axis: its max rate.
-        let pl = p.line(&[150.0, 40.0, 20.0], None, &l).unwrap().unwrap();
-        assert_eq!(pl.mv.cruise(), period_of_hz(60_000));
-        // A table that tops out lower clamps the cruise (documented in $I).
-        let slow = Limits { vmax_hz: 20_000, ..l };
-        let pl = p.line(&[0.0, 40.0, 20.0], None, &slow).unwrap().unwrap();
-        assert_eq!(pl.mv.cruise(), period_of_hz(20_000));
-        assert!(pl.wanted_hz > 59_000.0);
-        // Very slow feeds stop at 1 step/s.
-        let pl = p.line(&[0.01, 40.0, 20.0], Some(1e-6), &l).unwrap().unwrap();
-        assert_eq!(pl.mv.cruise(), period_of_hz(1));
-    }
-
-    #[test]
-    fn sqrt_matches_libm() {
-        let mut x = 0x2545_F491_4F6C_DD1Du64;
-        let specials = [0.0, -0.0, 1.0, 2.0, 3800.0, 1e-45, 1.2e-38, 5e-39, f32::MAX, f32::INFINITY];
-        for v in specials {
-            assert_eq!(sqrt(v).to_bits(), libm::sqrtf(v).to_bits(), "√{v}");
-        }
-        assert!(sqrt(-1.0).is_nan() && sqrt(f32::NAN).is_nan());
-        for i in 0..200_000 {
-            // xorshift64: random bit patterns (every exponent) and random lengths² in mm².
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            let v = if i % 2 == 0 { f32::from_bits((x >> 33) as u32) } else { (x >> 40) as f32 / (1u64 << 10) as f32 };
-            if v.is_finite() {
-                assert_eq!(sqrt(v).to_bits(), libm::sqrtf(v).to_bits(), "√{v}");
-            }
-        }
-    }
-
-    #[test]
-    fn out_of_range_targets_change_nothing() {
-        let mut p = Planner::<3>::new();
-        let l = lim();
-        assert_eq!(p.line(&[3e7, 0.0, 0.0], None, &l), Err(Error::InvalidTarget));
-        assert_eq!(p.line(&[f32::NAN, 0.0, 0.0], None, &l), Err(Error::InvalidTarget));
-        assert_eq!(p.position_steps(), &[0, 0, 0]);
-        assert_eq!(p.line(&[0.004, 0.0, 0.0], None, &l), Ok(None));
-        assert_eq!(p.position_mm(), &[0.004, 0.0, 0.0]);
-        assert_eq!(p.set_position(&[None, Some(-2.0), None], &l), Ok([0, -200, 0]));
-        assert_eq!(p.position_mm(), &[0.004, -2.0, 0.0]);
     }
 }

@@ -5,8 +5,8 @@
 use ddastep::board::pin_map;
 use ddastep::grbl::controller::{Actions, Controller};
 use ddastep::motion::engine::Engine;
-use ddastep::grbl::protocol::Out;
-use ddastep::grbl::shell::{dispatch, idle_step, Requests};
+use ddastep::grbl::reply::Out;
+use ddastep::grbl::shell::{dispatch, idle_step, take_inputs, Inputs, Requests};
 use heapless::spsc::{Consumer, Producer, Queue};
 use ddastep::motion::shared::{Shared, State};
 use ddastep::planning::feeder::Feeder;
@@ -185,8 +185,6 @@ impl<const N: usize> Bench<N> {
             }
             self.shared.probe_input(active);
         }
-        let active = self.probe_contact();
-        self.ctl.set_probe_input(active);
         if self.shared.positions() != before && !self.enabled {
             self.stepped_while_disabled = true;
         }
@@ -215,12 +213,17 @@ impl<const N: usize> Bench<N> {
         })
     }
 
-    /// One pass of the firmware's idle loop (the encoder check, then the library's
-    /// `idle_step`).
+    /// One pass of the firmware's idle loop (the library's `take_inputs`, the encoder check,
+    /// then the library's `idle_step`).
     fn idle_step(&mut self) {
-        // GPIOA as the shell reads it: pulled up, a pressed (NO) switch pulls its pin low.
-        self.ctl.set_limit_inputs(!(self.limit_mask() as u32) & 0xFFFF);
-        self.ctl.set_door_input(self.door_open);
+        let inputs = Inputs {
+            // GPIOA as the shell reads it: pulled up, a pressed (NO) switch pulls its pin low.
+            gpioa_idr: !(self.limit_mask() as u32) & 0xFFFF,
+            // The probe in contact pulls its pin low.
+            probe_low: self.probe_contact(),
+            door_open: self.door_open,
+        };
+        take_inputs(&mut self.ctl, self.shared, inputs);
         if let Some(e) = &self.encoder {
             self.ctl.encoder(e.last.0, e.last.1, &mut self.tx);
         }

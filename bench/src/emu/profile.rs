@@ -56,7 +56,8 @@ impl Symbols {
     }
 
     // start addresses of the functions whose demangled name (generics stripped, e.g.
-    // `ddastep::grbl::controller::Controller<_>::gcode`) equals `name`
+    // `ddastep::grbl::controller::lines::<impl ddastep::grbl::controller::Controller<_>>::gcode`)
+    // equals `name`
     pub fn addresses(&self, name: &str) -> Vec<u32> {
         self.0.iter().filter(|s| s.2 == name).map(|s| s.0).collect()
     }

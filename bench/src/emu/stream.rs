@@ -71,7 +71,10 @@ pub fn stream_segments(board: &mut Board, n: usize, seed: u64) -> Result<StreamR
     for (i, l) in lines.iter().enumerate() {
         if i == 40 {
             board.reset_step_isr_stats();
-            board.time_functions(&["ddastep::grbl::controller::Controller<_>::gcode", "ddastep::grbl::controller::Controller<_>::push"])?;
+            board.time_functions(&[
+                "ddastep::grbl::controller::lines::<impl ddastep::grbl::controller::Controller<_>>::gcode",
+                "ddastep::grbl::controller::poll::<impl ddastep::grbl::controller::Controller<_>>::push",
+            ])?;
         }
         let r = board.send_line_wait_ok(l)?;
         ensure!(r.contains("ok"), "{l}: {r}");

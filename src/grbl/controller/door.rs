@@ -9,8 +9,9 @@
 //! In the alarm state and in check mode the door is not acted on (Grbl); `$X` and `$H` with
 //! the door open get error:13.
 
-use super::Controller;
-use crate::grbl::protocol::Out;
+use super::{Controller, Door};
+use crate::grbl::reply::Out;
+use crate::num::wrapping_diff;
 use crate::motion::shared::State;
 use crate::grbl::spindle::SpindleDir;
 
@@ -18,21 +19,6 @@ use crate::grbl::spindle::SpindleDir;
 const SPINDLE_DELAY_MS: u32 = 4000;
 /// Grbl's coolant-restart delay after a door, ms (`SAFETY_DOOR_COOLANT_DELAY`).
 const COOLANT_DELAY_MS: u32 = 1000;
-
-/// Where the door cycle is.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) enum Door {
-    /// No door state.
-    Off,
-    /// Opened: motion decelerating to a stop (`Door:2`).
-    Stopping,
-    /// Stopped with spindle and coolant off, the door still open (`Door:1`).
-    Ajar,
-    /// Stopped, the door closed: waiting for `~` (`Door:0`).
-    Ready,
-    /// `~` came: spindle and coolant back on, motion resumes at this poll time (`Door:3`).
-    Restoring(u32),
-}
 
 impl<const N: usize> Controller<'_, N> {
     /// The door input as the shell read it: `open` when the pin is active (pulled to ground).
@@ -100,7 +86,7 @@ impl<const N: usize> Controller<'_, N> {
                 self.door = Door::Stopping;
             }
             Door::Restoring(at) => {
-                if (self.now.wrapping_sub(at) as i32) >= 0 {
+                if wrapping_diff(self.now, at) >= 0 {
                     self.door = Door::Off;
                     self.shared.set_hold(false);
                 }

@@ -9,7 +9,8 @@
 
 use super::Controller;
 use crate::encoder::loss::Reading;
-use crate::grbl::protocol::{Error, Out};
+use crate::error::Error;
+use crate::grbl::reply::Out;
 use crate::grbl::report;
 
 impl<const N: usize> Controller<'_, N> {

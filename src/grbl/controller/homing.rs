@@ -24,37 +24,13 @@
 //! end, so machine zero is the max end's switch and the soft-limit box `-$130+i ..= 0` holds.
 //! Success clears the alarm lock; a full `$H` then runs the startup lines.
 
-use super::Controller;
-use crate::num::round_i32;
-use crate::grbl::protocol::{Error, Out};
+use super::{Controller, Homing};
+use crate::num::{round_i32, wrapping_diff};
+use crate::error::Error;
+use crate::grbl::reply::Out;
 use crate::motion::shared::State;
 use crate::grbl::report;
 use crate::grbl::spindle::Power;
-
-/// One homing cycle in progress (kept small: the controller lives in a static slot).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) struct Homing {
-    /// Axes of the group being homed (bit i = axis i).
-    group: u8,
-    /// The group after this one (X and Y after Z for `$H`), 0 for none.
-    next: u8,
-    /// 0 seek, 1 pull-off, 2 locate, 3 pull-off.
-    pass: u8,
-    /// Approach passes: axes whose switch closed.
-    found: u8,
-    /// A move of this pass was queued; `moving`: it has not been seen to end yet.
-    moved: bool,
-    moving: bool,
-    /// `$H` (startup lines follow), not `$HX`…
-    all: bool,
-    /// The stop epoch the pass's move was queued in: a newer one means it was stopped.
-    epoch: u32,
-    /// The pass may start (after the debounce pause), poll ms.
-    start_at: u32,
-    /// The pass's target of each axis, steps.
-    target: [i32; 3],
-}
-
 
 impl<const N: usize> Controller<'_, N> {
     /// `$H` (`axis` `None`) or `$HX`/`$HY`/`$HZ`: checks and starts the cycle; the line's `ok`
@@ -136,7 +112,7 @@ impl<const N: usize> Controller<'_, N> {
             self.planner.sync(self.shared.positions(), &self.limits);
             h.moving = false;
         }
-        if (self.now.wrapping_sub(h.start_at) as i32) < 0 {
+        if wrapping_diff(self.now, h.start_at) < 0 {
             self.homing = Some(h);
             return;
         }

@@ -5,7 +5,8 @@
 use super::{Controller, Job, Jogging};
 use crate::grbl::jog;
 use crate::planning::planner::Planned;
-use crate::grbl::protocol::{Error, Out};
+use crate::error::Error;
+use crate::grbl::reply::Out;
 use crate::motion::shared::State;
 
 impl<const N: usize> Controller<'_, N> {
@@ -67,7 +68,7 @@ impl<const N: usize> Controller<'_, N> {
                 if self.job.is_some_and(|j| j.jog) {
                     // A jog line waiting for queue room is one of the queued jogs: flushed too.
                     self.job = None;
-                    crate::grbl::protocol::put_ok(out);
+                    crate::grbl::reply::put_ok(out);
                 }
                 self.pushed = self.shared.moves_done();
                 self.planner.sync(self.shared.positions(), &self.limits);

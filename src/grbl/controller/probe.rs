@@ -11,7 +11,7 @@
 //! [`Shared::probe_input`]: crate::motion::shared::Shared::probe_input
 
 use super::{Controller, Job};
-use crate::grbl::protocol::Out;
+use crate::grbl::reply::Out;
 use crate::motion::shared::{State, PROBE_TRIPPED};
 use crate::grbl::report;
 

@@ -10,21 +10,11 @@
 //! without a hold, ALARM:1 is reported, and the position is lost (the shell restarts the MCU
 //! at the Ctrl-X, which boots in the alarm state).
 
-use super::Controller;
+use super::{Controller, SoftLimit};
 use crate::grbl::limits;
-use crate::grbl::protocol::Out;
+use crate::grbl::reply::Out;
 use crate::motion::shared::State;
 use crate::grbl::report;
-
-/// Where a soft-limit trip stands.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) enum SoftLimit {
-    Off,
-    /// Tripped: holding until the engine has stopped, then this alarm is reported.
-    Stopping(u8),
-    /// ALARM:2 reported: waiting for Ctrl-X.
-    Locked,
-}
 
 impl<const N: usize> Controller<'_, N> {
     /// True when soft limits are on and `target` (machine mm) leaves the travel box.

@@ -3,7 +3,7 @@
 //! 10th (20th) and after an override changes, but never in the same report as `WCO:`.
 
 use super::{Controller, Jogging, FEED_RING};
-use crate::grbl::protocol::Out;
+use crate::grbl::reply::Out;
 use crate::motion::shared::State;
 use crate::grbl::report::{self, Status};
 

@@ -6,8 +6,8 @@ use super::{Controller, Job, Listing};
 use crate::grbl::coords::Coords;
 use crate::grbl::gcode;
 use crate::num::u32_of;
-use crate::planning::planner::Limits;
-use crate::grbl::protocol::{Error, Out};
+use crate::error::Error;
+use crate::grbl::reply::Out;
 use crate::grbl::report::{self, PARAM_LINES, SETTING_LEN};
 use crate::grbl::settings::{Change, Settings};
 use crate::grbl::store::{Text, STARTUP_LINES};
@@ -65,7 +65,7 @@ impl<const N: usize> Controller<'_, N> {
                 need_idle(idle)?;
                 for (i, t) in self.stored.startup.iter().enumerate() {
                     out.put(b"$N");
-                    crate::grbl::protocol::put_u32(out, i as u32);
+                    crate::grbl::reply::put_u32(out, i as u32);
                     out.put(b"=");
                     out.put(t.as_bytes());
                     out.put(b"\r\n");
@@ -163,7 +163,7 @@ impl<const N: usize> Controller<'_, N> {
             Change::Pins => self.restart = true,
             Change::Profile => {
                 self.axes = self.settings.axis_count(N);
-                self.limits = Limits::new(&self.settings, self.ramped.cfg.vmax);
+                self.limits = self.settings.planner_limits(self.ramped.cfg.vmax);
                 self.apply_profile();
                 self.planner.sync(self.shared.positions(), &self.limits);
             }

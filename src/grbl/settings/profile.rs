@@ -1,0 +1,147 @@
+//! What the engine and the planner derive from the settings: the step [`Timing`], the ramp
+//! table (built into a [`Profile`]) with its [`Ramped`] report, and the planner's [`Limits`].
+//!
+//! Who uses it: the controller (at start-up and after a `$N=` that changes the profile), `$I`.
+
+use super::values::Settings;
+use crate::motion::ramp::{Profile, RampConfig, RampError, RampTable};
+use crate::motion::timing::{ns_to_ticks, Timing};
+use crate::num::{round_u32, sqrt, u32_of};
+use crate::planning::planner::{Limits, JUNCTION_DEVIATION_MM};
+use crate::MAX_AXES;
+
+/// Absolute floor of the step period (ticks; 144 = 500 kHz, the engine's design limit). The
+/// binding limits are the pulse rule and the step handler's measured cost, both applied by
+/// `Timing::min_period_for`.
+pub const ISR_FLOOR_TICKS: u32 = 144;
+
+/// The ramp the profile was built with, for `$I` and the planner's clamp.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Ramped {
+    pub cfg: RampConfig,
+    /// Fastest master rate the timing allows.
+    pub max_rate_hz: u32,
+    /// The axis limits asked for a faster top than fits in the table.
+    pub table_limited: bool,
+    /// The cap is dual-edge mode's (`$580`).
+    pub dual: bool,
+    /// The cap is DMA burst mode's (`$581`).
+    pub dma: bool,
+    /// DMA burst mode: the fastest master rate at a junction joined at speed (one axis;
+    /// `Timing::max_junction_rate_for`); 0 in the other modes (no junction limit of their own).
+    pub junction_hz: u32,
+}
+
+impl Ramped {
+    /// What `s` asks for on `axes` axes, before the table is built.
+    pub fn wanted(s: &Settings, axes: usize) -> Ramped {
+        let timing = s.timing();
+        Ramped::of(s.ramp_config(axes, &timing), &timing, false)
+    }
+
+    /// The report of `cfg` under `timing`.
+    fn of(cfg: RampConfig, timing: &Timing, table_limited: bool) -> Ramped {
+        let junction_hz = if timing.dma { timing.max_junction_rate_for(0) } else { 0 };
+        Ramped { cfg, max_rate_hz: timing.max_rate_hz(), table_limited, dual: timing.dual, dma: timing.dma, junction_hz }
+    }
+}
+
+impl Settings {
+    /// Step timing in timer ticks.
+    pub fn timing(&self) -> Timing {
+        // f32 like the rest of the settings math.
+        let pulse = ns_to_ticks(round_u32(self.pulse_us * 1000.0));
+        let dir = ns_to_ticks(round_u32(self.dir_setup_us * 1000.0));
+        let t = Timing::new(pulse, dir, ISR_FLOOR_TICKS);
+        if self.dma_burst {
+            t.burst(self.dual_edge)
+        } else if self.dual_edge {
+            t.dual_edge(0)
+        } else {
+            t
+        }
+    }
+
+    /// Table rate per mm/s of path speed on the first `axes` axes: the largest `$100+i`, so a
+    /// move's master never runs faster than the table.
+    pub fn per_mm(&self, axes: usize) -> f32 {
+        self.steps_per_mm.iter().take(axes.max(1)).fold(0.0f32, |a, &b| a.max(b))
+    }
+
+    /// What the planner takes from the settings for `N` axes, with the ramp table's top rate.
+    pub fn planner_limits<const N: usize>(&self, vmax_hz: u32) -> Limits<N> {
+        Limits {
+            steps_per_mm: core::array::from_fn(|i| self.steps_per_mm[i]),
+            max_rate: core::array::from_fn(|i| self.max_rate[i]),
+            accel: core::array::from_fn(|i| self.accel[i]),
+            vmax_hz: vmax_hz.max(1),
+            // The table's own path units: the axes in use ($42), as `Settings::build_profile`.
+            per_mm: self.per_mm(self.axis_count(N)),
+            junction_dev: JUNCTION_DEVIATION_MM,
+            timing: self.timing(),
+        }
+    }
+
+    /// The ramp table's top on `axes` axes once built (what the planner's limits take).
+    pub fn wanted_vmax(s: &Settings, axes: usize) -> u32 {
+        let mut p: Profile = Profile { ramp: crate::motion::ramp::RampTable::new(), timing: Timing::UNSET, per_mm: 0.0 };
+        s.build_profile(axes, &mut p).cfg.vmax
+    }
+
+    /// The ramp asked for by the first `axes` axes (before the table's length is considered).
+    /// The table is in path units (rate = path speed × [`Self::per_mm`]): its acceleration is
+    /// twice the largest `$120+i` (a diagonal may accelerate faster than one axis; each move
+    /// walks it at its own fraction), its top the fastest path speed the axes allow together.
+    pub fn ramp_config(&self, axes: usize, timing: &Timing) -> RampConfig {
+        let _ = timing;
+        // max/min, not clamp, here and below: clamp's panic message would link integer
+        // formatting into the firmware.
+        #[allow(clippy::manual_clamp, reason = "clamp's panic path costs flash")]
+        let axes = axes.max(1).min(MAX_AXES);
+        let c = self.per_mm(axes);
+        let mut accel = 0.0f32;
+        let mut top2 = 0.0f32;
+        for i in 0..axes {
+            accel = accel.max(self.accel[i] * 2.0);
+            let v = self.max_rate[i] / 60.0;
+            top2 += v * v;
+        }
+        let accel = accel * c;
+        let vmax = u32_of(sqrt(top2) * c).max(1).min(crate::motion::ramp::MAX_RATE_HZ);
+        RampConfig {
+            v0: self.ramp_start_hz.max(1).min(vmax),
+            vmax,
+            accel: u32_of(accel.min(u32::MAX as f32)).max(1),
+            shape: self.shape,
+        }
+    }
+
+    /// Rebuilds `profile` (table and timing) for `axes` axes. A ramp too long for the table is
+    /// built steeper (moves walk it at their own fraction), so the top stays the axes' max rate.
+    pub fn build_profile<const L: usize>(&self, axes: usize, profile: &mut Profile<L>) -> Ramped {
+        let timing = self.timing();
+        let mut cfg = self.ramp_config(axes, &timing);
+        let mut table_limited = false;
+        profile.timing = timing;
+        profile.per_mm = self.per_mm(axes);
+        for attempt in 0..6 {
+            match profile.ramp.build(cfg) {
+                // Too long for the table: a steeper table (every move walks it at its own
+                // fraction, so no move runs faster), down to a lower top only as a last resort.
+                Err(RampError::TooLong { .. }) if attempt < 4 => {
+                    let ms = crate::num::f32_of_u64(RampTable::<L>::ramp_ms(&cfg));
+                    cfg.accel = u32_of((cfg.accel as f32 * ms / (L as f32 - 2.0).max(1.0)).min(u32::MAX as f32 / 2.0)) + 1;
+                }
+                Err(RampError::TooLong { reachable_vmax }) => {
+                    table_limited = true;
+                    cfg.vmax = reachable_vmax.max(cfg.v0);
+                }
+                // Unreachable with the ranges `set` enforces; an empty table means every move
+                // cruises at its own (clamped) rate, so the clamp falls to the start rate.
+                Err(_) => cfg.vmax = cfg.v0,
+                Ok(()) => break,
+            }
+        }
+        Ramped::of(cfg, &timing, table_limited)
+    }
+}
