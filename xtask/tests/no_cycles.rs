@@ -3,7 +3,6 @@
 use std::process::Command;
 
 #[test]
-#[ignore = "enabled by the lead after the merge"]
 fn the_workspace_has_no_import_cycles() {
     let root = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
     let out = Command::new(env!("CARGO_BIN_EXE_xtask")).args(["cycles", "--root", root]).output().expect("xtask runs");
