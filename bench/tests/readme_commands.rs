@@ -69,6 +69,8 @@ fn plan(cmd: &str) -> Option<Plan> {
         "cargo la" => Skip("the checker's name in prose; the forms with a capture run"),
         "cargo test-host" => Skip("the test suite this test belongs to (CI runs it in .ci/run)"),
         "cargo build --release" => Run(&[]),
+        "cargo test -p ddastep --target host-tuple" => Skip("the library's tests: part of cargo test-host, which CI runs"),
+        "cargo xtask cycles" => Run(&[]),
         "cargo run --release" => Skip("flashes a board: needs a debug probe and probe-rs"),
         "cargo sim -- --help" => Run(&[]),
         "cargo sim -- --serve" => Skip("serves until Ctrl-C; the --max-seconds form below runs"),
