@@ -125,10 +125,10 @@ impl Settings {
 
     /// The ramp asked for by the first `axes` axes (before the table's length is considered).
     /// The table is in path units (rate = path speed × [`Self::per_mm`]): its acceleration is
-    /// the fastest path acceleration a move may have (`√Σ $120+i²`, at least twice the largest
-    /// `$120+i`; each move walks it at its own fraction), its top the fastest path speed the
-    /// axes allow together (at most [`MAX_RATE_HZ`], which [`Self::per_mm`] keeps above every
-    /// move's own cap), its start `$40` on the finest axis.
+    /// twice the largest `$120+i` (a diagonal may accelerate faster than one axis; each move
+    /// walks it at its own fraction), its top the fastest path speed the axes allow together
+    /// (at most [`MAX_RATE_HZ`], which [`Self::per_mm`] keeps above every move's own cap), its
+    /// start `$40` on the finest axis.
     pub fn ramp_config(&self, axes: usize, timing: &Timing) -> RampConfig {
         let _ = timing;
         // max/min, not clamp, here and below: clamp's panic message would link integer
@@ -138,15 +138,13 @@ impl Settings {
         let c = self.per_mm(axes);
         let finest = self.steps_per_mm.iter().take(axes).fold(0.0f32, |a, &b| a.max(b));
         let mut accel = 0.0f32;
-        let mut accel2 = 0.0f32;
         let mut top2 = 0.0f32;
         for i in 0..axes {
             accel = accel.max(self.accel[i] * 2.0);
-            accel2 += self.accel[i] * self.accel[i];
             let v = self.max_rate[i] / 60.0;
             top2 += v * v;
         }
-        let accel = accel.max(sqrt(accel2)) * c;
+        let accel = accel * c;
         let vmax = u32_of(sqrt(top2) * c).max(1).min(MAX_RATE_HZ);
         // `$40` in steps/s of the finest axis: the same path speed in the table's units.
         let v0 = if c < finest { round_u32(self.ramp_start_hz as f32 * (c / finest)) } else { self.ramp_start_hz };
