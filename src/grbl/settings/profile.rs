@@ -145,11 +145,14 @@ impl Settings {
             top2 += v * v;
         }
         let accel = accel * c;
+        #[allow(clippy::manual_clamp, reason = "clamp's panic path costs flash")]
         let vmax = u32_of(sqrt(top2) * c).max(1).min(MAX_RATE_HZ);
         // `$40` in steps/s of the finest axis: the same path speed in the table's units.
         let v0 = if c < finest { round_u32(self.ramp_start_hz as f32 * (c / finest)) } else { self.ramp_start_hz };
+        #[allow(clippy::manual_clamp, reason = "clamp's panic path costs flash")]
+        let v0 = v0.max(1).min(vmax);
         RampConfig {
-            v0: v0.max(1).min(vmax),
+            v0,
             vmax,
             accel: u32_of(accel.min(u32::MAX as f32)).max(1),
             shape: self.shape,
