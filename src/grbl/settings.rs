@@ -5,7 +5,8 @@
 //! [`Settings::from_bytes`] / [`Settings::to_bytes`]).
 //!
 //! One ramp table serves every move. It is in path units: its rate is the path speed times the
-//! largest `$100+i`, its acceleration twice the largest `$120+i` in those units, its top the
+//! largest `$100+i` (or less, where a 1 MHz top would stop a coarser axis short of its own
+//! cap: `Settings::per_mm`), its acceleration twice the largest `$120+i` in those units, its top the
 //! fastest path speed all axes allow together (capped by what fits in the table's 1.024 s).
 //! Each move walks it at its own acceleration's fraction (from the axes it moves) and scales
 //! it to its master's share of the path, so axes that do not move never slow a move down.

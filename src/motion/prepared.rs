@@ -8,8 +8,9 @@
 //! Ramp positions are Q20 indices into the one ramp table, which is in *path* units: the
 //! table's rate `T` is the path speed times `per_mm` (the profile's steps per mm), the same
 //! for every move, so the index at a junction means the same speed on both sides and carries
-//! over from move to move. The move's master runs at `T / scale` (`scale` ≥ 1, Q16: the
-//! share of the path speed its master sees) and walks `walk_q / 2^20` entries per ms (its
+//! over from move to move. The move's master runs at `T / scale` (Q16: the share of the
+//! path speed its master sees; ≥ 1 unless the table's units are coarser than the finest
+//! axis, `Settings::per_mm`) and walks `walk_q / 2^20` entries per ms (its
 //! own acceleration as a fraction of the table's).
 
 use core::sync::atomic::AtomicU32;

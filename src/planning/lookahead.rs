@@ -119,12 +119,13 @@ pub fn cruise_for<const L: usize>(rates: &Rates, o: Overrides, scale: u32, min_b
     (cruise, cruise_index(table, scale, cruise.to_bits().max(min_bits)))
 }
 
-/// How a move walks the table: its master's share of the table rate `s` (≤ 1: master steps
-/// per mm of path `share` over the table's `per_mm`) and its walk rate (Q20 entries per ms,
-/// at least one unit: its path acceleration `accel`, mm/s², as a fraction of the table's
-/// `t_accel`, table steps/s²).
+/// How a move walks the table: its master's share of the table rate `s` (master steps per mm
+/// of path `share` over the table's `per_mm`: ≤ 1 unless the table's units are below the
+/// finest axis's, see `Settings::per_mm`; at most 2^16, so `scale` stays ≥ 1) and its walk
+/// rate (Q20 entries per ms, at least one unit: its path acceleration `accel`, mm/s², as a
+/// fraction of the table's `t_accel`, table steps/s²).
 pub fn walk_of(share: f32, accel: f32, per_mm: f32, t_accel: f32) -> (f32, u32) {
-    let s = (share / per_mm).clamp(1e-6, 1.0);
+    let s = (share / per_mm).clamp(1e-6, 65536.0);
     let r = (accel * per_mm / t_accel).clamp(0.0, 1.0);
     (s, u32_of(r * IDX_ONE as f32).max(1))
 }

@@ -38,7 +38,8 @@ pub struct Limits<const N: usize> {
     pub accel: [f32; N],
     /// Top of the ramp table (table rate = path speed × `per_mm`).
     pub vmax_hz: u32,
-    /// Table rate per mm/s of path speed: the largest `$100+i`.
+    /// Table rate per mm/s of path speed (`Settings::per_mm`: the largest `$100+i`, or less
+    /// where the table's top could not hold every move's cap otherwise).
     pub per_mm: f32,
     /// Junction deviation, mm.
     pub junction_dev: f32,

@@ -4,7 +4,7 @@
 //! Who uses it: the controller (at start-up and after a `$N=` that changes the profile), `$I`.
 
 use super::values::Settings;
-use crate::motion::ramp::{Profile, RampConfig, RampError, RampTable};
+use crate::motion::ramp::{Profile, RampConfig, RampError, RampTable, MAX_RATE_HZ};
 use crate::motion::timing::{ns_to_ticks, Timing};
 use crate::num::{round_u32, sqrt, u32_of};
 use crate::planning::planner::{Limits, JUNCTION_DEVIATION_MM};
@@ -62,10 +62,45 @@ impl Settings {
         }
     }
 
-    /// Table rate per mm/s of path speed on the first `axes` axes: the largest `$100+i`, so a
-    /// move's master never runs faster than the table.
+    /// Table rate per mm/s of path speed on the first `axes` axes: the largest `$100+i`, so no
+    /// move's master runs faster than the table and `$40` is the finest axis's start, unless
+    /// the table's top would then pass [`MAX_RATE_HZ`]: then lower, so that the fastest path
+    /// speed a move may need ([`Self::top_path`]) is exactly the top, and a coarser axis still
+    /// reaches its own limits whatever the finer ones' (a finer axis's master scales the
+    /// table up). The top at `MAX_RATE_HZ` leaves the table's low end (its distance sums, in
+    /// 1/256 step) the most resolution that range allows.
     pub fn per_mm(&self, axes: usize) -> f32 {
-        self.steps_per_mm.iter().take(axes.max(1)).fold(0.0f32, |a, &b| a.max(b))
+        #[allow(clippy::manual_clamp, reason = "clamp's panic path costs flash")]
+        let axes = axes.max(1).min(MAX_AXES);
+        let finest = self.steps_per_mm.iter().take(axes).fold(0.0f32, |a, &b| a.max(b));
+        finest.min(MAX_RATE_HZ as f32 / self.top_path(axes))
+    }
+
+    /// The fastest path speed (mm/s) a move on the first `axes` axes may need: no faster than
+    /// all of them at their `$110+i` together, nor than the engine's cap for its master
+    /// (`Timing::max_rate_for` its slaves) over the smallest share of the path a master of
+    /// that many axes can have (`1 / √Σ 1/$100+i²` over the coarsest ones).
+    fn top_path(&self, axes: usize) -> f32 {
+        let timing = self.timing();
+        // 1/$100+i, coarsest first (insertion sort: at most seven).
+        let mut inv = [0.0f32; MAX_AXES];
+        let mut v2 = 0.0f32;
+        for i in 0..axes {
+            let v = self.max_rate[i] / 60.0;
+            v2 += v * v;
+            let mut x = 1.0 / self.steps_per_mm[i];
+            for slot in inv.iter_mut().take(i + 1) {
+                if x > *slot {
+                    core::mem::swap(&mut x, slot);
+                }
+            }
+        }
+        let (mut inv2, mut capped) = (0.0f32, 0.0f32);
+        for (slaves, x) in inv.iter().take(axes).enumerate() {
+            inv2 += x * x;
+            capped = capped.max(timing.max_rate_for(slaves as u32) as f32 * sqrt(inv2));
+        }
+        sqrt(v2).min(capped)
     }
 
     /// What the planner takes from the settings for `N` axes, with the ramp table's top rate.
@@ -91,7 +126,9 @@ impl Settings {
     /// The ramp asked for by the first `axes` axes (before the table's length is considered).
     /// The table is in path units (rate = path speed × [`Self::per_mm`]): its acceleration is
     /// twice the largest `$120+i` (a diagonal may accelerate faster than one axis; each move
-    /// walks it at its own fraction), its top the fastest path speed the axes allow together.
+    /// walks it at its own fraction), its top the fastest path speed the axes allow together
+    /// (at most [`MAX_RATE_HZ`], which [`Self::per_mm`] keeps above every move's own cap), its
+    /// start `$40` on the finest axis.
     pub fn ramp_config(&self, axes: usize, timing: &Timing) -> RampConfig {
         let _ = timing;
         // max/min, not clamp, here and below: clamp's panic message would link integer
@@ -99,6 +136,7 @@ impl Settings {
         #[allow(clippy::manual_clamp, reason = "clamp's panic path costs flash")]
         let axes = axes.max(1).min(MAX_AXES);
         let c = self.per_mm(axes);
+        let finest = self.steps_per_mm.iter().take(axes).fold(0.0f32, |a, &b| a.max(b));
         let mut accel = 0.0f32;
         let mut top2 = 0.0f32;
         for i in 0..axes {
@@ -107,9 +145,14 @@ impl Settings {
             top2 += v * v;
         }
         let accel = accel * c;
-        let vmax = u32_of(sqrt(top2) * c).max(1).min(crate::motion::ramp::MAX_RATE_HZ);
+        #[allow(clippy::manual_clamp, reason = "clamp's panic path costs flash")]
+        let vmax = u32_of(sqrt(top2) * c).max(1).min(MAX_RATE_HZ);
+        // `$40` in steps/s of the finest axis: the same path speed in the table's units.
+        let v0 = if c < finest { round_u32(self.ramp_start_hz as f32 * (c / finest)) } else { self.ramp_start_hz };
+        #[allow(clippy::manual_clamp, reason = "clamp's panic path costs flash")]
+        let v0 = v0.max(1).min(vmax);
         RampConfig {
-            v0: self.ramp_start_hz.max(1).min(vmax),
+            v0,
             vmax,
             accel: u32_of(accel.min(u32::MAX as f32)).max(1),
             shape: self.shape,

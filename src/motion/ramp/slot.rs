@@ -14,7 +14,8 @@ use crate::motion::timing::Timing;
 pub struct Profile<const L: usize = RAMP_LEN> {
     pub ramp: RampTable<L>,
     pub timing: Timing,
-    /// Table rate per mm/s of path speed (steps/mm of the finest axis): a move whose master
+    /// Table rate per mm/s of path speed (`Settings::per_mm`: steps/mm of the finest axis, or
+    /// fewer where the table's top needs it): a move whose master
     /// makes `share` steps per mm of path runs at `share / per_mm` of the table's rate. Zero
     /// (not set) means table rates are master rates.
     pub per_mm: f32,
