@@ -1,5 +1,6 @@
 //! What the firmware shell runs around the controller, kept here so the host rigs run the same
-//! code: the RX interrupt's realtime-byte dispatch, the idle loop's sampled inputs and one pass of it.
+//! code: the RX interrupt's realtime-byte dispatch, the idle loop's sampled inputs and one pass of it,
+//! and how the step output is built from the settings (at boot and when it is rebuilt at rest).
 //!
 //! Who uses it: `src/firmware` (USART1 interrupt and `idle`) and `tests/protocol_rig`.
 
@@ -7,7 +8,11 @@ use core::sync::atomic::{AtomicBool, Ordering::Relaxed};
 
 use heapless::spsc::Consumer;
 
+use crate::board::PinMap;
 use crate::grbl::controller::{Actions, Controller};
+use crate::grbl::settings::Settings;
+use crate::motion::burst::Layout;
+use crate::motion::timing::DMA_MARGIN_TICKS;
 use crate::grbl::overrides;
 use crate::grbl::protocol::{realtime, Realtime};
 use crate::grbl::reply::Out;
@@ -44,7 +49,7 @@ impl Requests {
         }
     }
 
-    /// A Ctrl-X is waiting for the idle loop (the firmware restarts after a hard limit on it).
+    /// A Ctrl-X is waiting for the idle loop (after a hard limit the firmware's output is rebuilt on it).
     pub fn reset_pending(&self) -> bool {
         self.reset.load(Relaxed)
     }
@@ -108,6 +113,26 @@ pub fn idle_step<const N: usize>(
     let act = ctl.poll(now_ms, out);
     req.door_lock.store(ctl.door_active(), Relaxed);
     act
+}
+
+/// How the step output is built: the pin map, and in DMA burst mode (`$581`) the buffers'
+/// layout and the falling edge's compare value (0 in dual-edge mode).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StepOutput<const N: usize> {
+    pub pins: PinMap<N>,
+    pub burst: Option<(Layout, u32)>,
+}
+
+impl<const N: usize> StepOutput<N> {
+    /// The output `$0`, `$2`, `$3`, `$580` and `$581` ask for.
+    pub fn of(s: &Settings) -> Self {
+        let pins = s.pins::<N>();
+        let burst = s.dma_burst.then(|| {
+            let fall = if pins.dual { 0 } else { s.timing().pulse_ticks + DMA_MARGIN_TICKS };
+            (Layout::for_pulse(fall), fall)
+        });
+        StepOutput { pins, burst }
+    }
 }
 
 /// What the shell samples for one idle pass.
