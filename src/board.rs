@@ -116,19 +116,11 @@ impl<const N: usize> PinMap<N> {
         self
     }
 
-    /// The BSRR word that puts every step pin at its idle level: inactive (`step_off`), or low
-    /// in dual-edge mode (where the engine's shadow of their level starts).
+    /// The BSRR word that puts every step pin at its idle level before this map runs: inactive
+    /// (`step_off`); none in dual-edge mode, where either level is idle (the engine takes the
+    /// pins' levels as they are, so no edge is made: `Engine::rebuild`).
     pub const fn idle_word(&self) -> u32 {
-        if !self.dual {
-            return self.step_off;
-        }
-        let mut w = 0;
-        let mut i = 0;
-        while i < N {
-            w |= self.step_on[i] << 16;
-            i += 1;
-        }
-        w
+        self.step_off
     }
 }
 

@@ -12,14 +12,22 @@ use ddastep_bench::emu::{Board, HZ};
 use firmware_rig::*;
 
 /// Sends a setting and expects exactly `ok` and nothing after it (no banner), then lets the
-/// output settle (the rebuild follows the flash write).
-fn set(b: &mut Board, line: &str) {
+/// output settle (the rebuild follows the flash write). Returns how many step pin edges the
+/// change made (only a change of the idle level makes one: single-edge `$2`, leaving dual-edge).
+fn set(b: &mut Board, line: &str) -> usize {
     let mark = b.serial_output().len();
+    let edges = b.edges().len();
     b.serial_send(format!("{line}\n").as_bytes());
     let done = b.run_until(HZ / 2, |b| b.serial_output()[mark..].contains("\r\n")).unwrap();
     assert!(done, "{line}: no reply");
     b.run_seconds(0.02).unwrap();
     assert_eq!(&b.serial_output()[mark..], "ok\r\n", "{line}");
+    b.edges()[edges..].iter().filter(|e| e.port == 1 && STEP_PINS.contains(&e.pin)).count()
+}
+
+/// [`set`] for a change that keeps every step pin's level.
+fn set_quiet(b: &mut Board, line: &str) {
+    assert_eq!(set(b, line), 0, "{line}: step pin edges");
 }
 
 /// One axis's step pin after `mark` (an index into `b.edges()`): the pulses it made (active
@@ -102,22 +110,30 @@ fn a_pasted_settings_block_answers_every_line_without_a_banner() {
 #[test]
 fn moves_stay_exact_across_every_mode_switch() {
     let mut b = up();
+    // Taken only at rest: during a move, error:8 (Grbl's "not idle"), and nothing changes.
+    ok(&mut b, "G91 G1 X1 F600");
+    b.run_seconds(0.02).unwrap();
+    assert!(reply(&mut b, "$2=1").ends_with("error:8"), "not refused");
+    wait_idle(&mut b, 1.0);
+    assert_eq!(stored(&mut b).map_or(0, |s| s.settings.step_invert), 0);
     move_is_exact(&mut b, 0, 0, false, "interrupt");
-    set(&mut b, "$3=2");
+    set_quiet(&mut b, "$3=2");
     move_is_exact(&mut b, 0, 2, false, "interrupt $3=2");
-    set(&mut b, "$2=1");
+    assert_eq!(set(&mut b, "$2=1"), 1, "X's step pin to its idle level, high");
     move_is_exact(&mut b, 1, 2, false, "interrupt $2=1 $3=2");
-    set(&mut b, "$580=1");
+    // Into dual-edge mode: the pins toggle from the levels they have (X high), no edge.
+    set_quiet(&mut b, "$580=1");
     move_is_exact(&mut b, 1, 2, true, "dual-edge");
-    set(&mut b, "$581=1");
+    // (Y is high now: the DMA fill toggles it from there.)
+    set_quiet(&mut b, "$581=1");
     assert!(reply(&mut b, "$I").contains(" Hz dual-edge DMA]"));
     move_is_exact(&mut b, 1, 2, true, "DMA dual-edge");
-    set(&mut b, "$580=0");
+    let _ = set(&mut b, "$580=0");
     move_is_exact(&mut b, 1, 2, false, "DMA");
-    set(&mut b, "$3=1");
+    set_quiet(&mut b, "$3=1");
     move_is_exact(&mut b, 1, 1, false, "DMA $3=1");
     // 20 µs pulses need longer entries: a new layout, in place.
-    set(&mut b, "$0=20");
+    set_quiet(&mut b, "$0=20");
     move_is_exact(&mut b, 1, 1, false, "DMA $0=20");
     let widths: Vec<u64> = {
         let e: Vec<_> = b.edges().iter().filter(|e| e.port == 1 && e.pin == STEP_PINS[0]).collect();
@@ -125,19 +141,19 @@ fn moves_stay_exact_across_every_mode_switch() {
     };
     let last = *widths.last().unwrap();
     assert!(last >= 20 * HZ / 1_000_000, "pulse {last} cycles");
-    set(&mut b, "$581=0");
+    set_quiet(&mut b, "$581=0");
     move_is_exact(&mut b, 1, 1, false, "interrupt again");
-    set(&mut b, "$0=3");
-    set(&mut b, "$2=0");
+    set_quiet(&mut b, "$0=3");
+    assert_eq!(set(&mut b, "$2=0"), 1, "X's step pin to its idle level, low");
     move_is_exact(&mut b, 0, 1, false, "interrupt $2=0");
-    set(&mut b, "$580=1");
+    set_quiet(&mut b, "$580=1");
     move_is_exact(&mut b, 0, 1, true, "dual-edge again");
-    set(&mut b, "$580=0");
+    let _ = set(&mut b, "$580=0");
     move_is_exact(&mut b, 0, 1, false, "single-edge again");
     assert!(b.system_resets().is_empty(), "MCU reset at {:?}", b.system_resets());
     assert!(b.watchdog_resets().is_empty());
     assert_eq!(b.serial_output().matches("Grbl").count(), 1, "one banner, at boot");
-    // The position is the sum of the moves (12 of them).
+    // The position is the sum of the moves (X1, then 12 of X0.05 Y-0.03).
     let s = status(&mut b);
-    assert!(s.contains("MPos:0.600,-0.360,"), "{s}");
+    assert!(s.contains("MPos:1.600,-0.360,"), "{s}");
 }

@@ -31,14 +31,14 @@ pub fn install(engine: Engine<'static, AXES>, shared: &'static Shared<AXES>, out
 
 /// Rebuilds the output at rest (or stopped by a hard limit) as `out` asks, with a pulse of
 /// `pulse_ticks`: TIM2 and the output's interrupts stop, the step pins go to their idle level
-/// (as at boot, before the new mode runs; the enable pin stays as `$4` and the controller set
-/// it), then the engine takes the pin map and TIM2 starts again.
+/// before the new mode runs (dual-edge mode toggles from the levels they have; the enable pin
+/// stays as `$4` and the controller set it), the engine takes the pin map, TIM2 starts again.
 pub fn rebuild(shared: &'static Shared<AXES>, out: &StepOutput<AXES>, pulse_ticks: u32, nvic: &mut cortex_m::peripheral::NVIC) {
     tim2::stop();
     let mut engine = if burst::active() { burst::uninstall() } else { step::uninstall() };
-    engine.rebuild(out.pins);
     // SAFETY: BSRR takes any word; the idle word sets or resets only the step pins.
     gpiob().bsrr().write(|w| unsafe { w.bits(out.pins.idle_word()) });
+    engine.rebuild(out.pins, gpiob().odr().read().bits());
     tim2::configure();
     install(engine, shared, out, nvic);
     // (DMA mode: its layout holds the pulse, `StepOutput::of` sized it.)

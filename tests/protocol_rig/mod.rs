@@ -229,8 +229,9 @@ impl<const N: usize> Bench<N> {
         }
         let a = idle_step(&mut self.ctl, &mut self.rx_out, &mut self.tx, self.now_ms, self.req);
         if a.reinit {
-            // As the firmware's `output::rebuild` (at rest): the engine takes the new pin map.
-            self.engine.rebuild(self.ctl.settings().pins());
+            // As the firmware's `output::rebuild` (at rest): the engine takes the new pin map
+            // (the rig models no pin levels).
+            self.engine.rebuild(self.ctl.settings().pins(), 0);
         }
         self.enabled = a.enable;
         self.actions.push(a);

@@ -43,8 +43,8 @@ pub struct Stepper<'a, const N: usize, const L: usize = RAMP_LEN> {
     pub(super) ramp: &'a RampSlot<L>,
     pub(super) step_off: u32,
     /// Dual-edge mode: each step toggles its pin; `level` shadows the step pins' level (the
-    /// pins are low when the engine is built or rebuilt: boot and `Engine::rebuild`'s caller
-    /// drive them low).
+    /// pins are low when the engine is built: boot drives them low; `Engine::rebuild` takes
+    /// their levels).
     pub(super) dual: bool,
     pub(super) level: u32,
     // The edge about to happen.
@@ -115,10 +115,10 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
     }
 
     /// See `Engine::rebuild`: the pin map's words, no pending edge or filler, no ramp register.
-    pub(in crate::motion::engine) fn rebuild(&mut self, pins: PinMap<N>) {
+    pub(in crate::motion::engine) fn rebuild(&mut self, pins: PinMap<N>, high: u32) {
         self.step_off = pins.step_off;
         self.dual = pins.dual;
-        self.level = 0;
+        self.level = high & pins.step_on.iter().fold(0, |m, s| m | s);
         self.word = 0;
         self.extend = 0;
         self.pend = (core::ptr::null_mut(), 0);
