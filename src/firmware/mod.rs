@@ -221,8 +221,6 @@ mod app {
             }
             let now = MILLIS.load(Relaxed);
             let halted = limits::HALTED.load(Relaxed);
-            // Ctrl-X after a hard limit: the soft reset (in `idle_step`), then the output rebuilt.
-            let clear_halt = halted && REQUESTS.reset_pending();
             if halted && !hard_reported {
                 hard_reported = true;
                 ctl.hard_limit(tx_in);
@@ -239,6 +237,9 @@ mod app {
             limits::arm(ctl.settings().hard_limits, invert, ddastep::grbl::limits::active_pins(idr, invert), ctl.homing_watch());
             gpio::ENABLE_OFF_HIGH.store(!ctl.settings().enable_invert, Relaxed);
             gpio::set_enable(act.enable_pin_high);
+            // Ctrl-X after a hard limit: the soft reset (in `idle_step`), then the output rebuilt
+            // (HALTED read again: a trip just before the Ctrl-X is cleared by it too).
+            let clear_halt = act.reset && limits::HALTED.load(Relaxed);
             let mut rebuild = act.reinit || clear_halt;
             if let Some(ticks) = act.pulse_ticks {
                 // (DMA mode: a pulse its buffers' layout cannot hold rebuilds it with a new one.)

@@ -74,6 +74,9 @@ pub struct Actions {
     /// rebuild the step output at rest (`Engine::rebuild`; the controller is at rest until the
     /// next poll).
     pub reinit: bool,
+    /// A Ctrl-X was taken in this pass (set by `shell::idle_step`; after a hard limit the
+    /// shell rebuilds the step output on it).
+    pub reset: bool,
     /// Spindle/laser PWM compare value and the spindle and coolant pins, every poll.
     pub spindle: SpindleOut,
     /// New spindle PWM timing for TIM1 (at the first poll and after `$33` changes).

@@ -49,10 +49,6 @@ impl Requests {
         }
     }
 
-    /// A Ctrl-X is waiting for the idle loop (after a hard limit the firmware's output is rebuilt on it).
-    pub fn reset_pending(&self) -> bool {
-        self.reset.load(Relaxed)
-    }
 }
 
 /// One received byte in the RX interrupt: realtime bytes act at once (feed hold, resume,
@@ -86,7 +82,8 @@ pub fn idle_step<const N: usize>(
     now_ms: u32,
     req: &Requests,
 ) -> Actions {
-    if req.reset.swap(false, Relaxed) {
+    let reset = req.reset.swap(false, Relaxed);
+    if reset {
         // Bytes before the Ctrl-X belong to the old stream.
         while rx.dequeue().is_some() {}
         ctl.soft_reset(out);
@@ -112,7 +109,7 @@ pub fn idle_step<const N: usize>(
     ctl.set_rx_free(rx.capacity() - rx.len());
     let act = ctl.poll(now_ms, out);
     req.door_lock.store(ctl.door_active(), Relaxed);
-    act
+    Actions { reset, ..act }
 }
 
 /// How the step output is built: the pin map, and in DMA burst mode (`$581`) the buffers'

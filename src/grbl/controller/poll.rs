@@ -51,6 +51,7 @@ impl<const N: usize> Controller<'_, N> {
             pulse_ticks: pulse,
             save: core::mem::take(&mut self.save),
             reinit: core::mem::take(&mut self.reinit),
+            reset: false,
         }
     }
 
