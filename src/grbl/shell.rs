@@ -72,7 +72,8 @@ pub fn dispatch<const N: usize>(b: u8, shared: &Shared<N>, req: &Requests) -> Op
     None
 }
 
-/// One pass of the idle loop: a pending soft reset (dropping the RX bytes before it), a status
+/// One pass of the idle loop: a pending soft reset (dropping the RX bytes before it; the
+/// returned `Actions::reset` says it ran), a status
 /// request, a jog cancel, line bytes into the controller while it takes them (and the RX
 /// ring's free room for `Bf:`), then its poll.
 pub fn idle_step<const N: usize>(
