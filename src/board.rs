@@ -115,5 +115,12 @@ impl<const N: usize> PinMap<N> {
         self.dual = true;
         self
     }
+
+    /// The BSRR word that puts every step pin at its idle level before this map runs: inactive
+    /// (`step_off`); none in dual-edge mode, where either level is idle (the engine takes the
+    /// pins' levels as they are, so no edge is made: `Engine::rebuild`).
+    pub const fn idle_word(&self) -> u32 {
+        self.step_off
+    }
 }
 

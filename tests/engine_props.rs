@@ -356,3 +356,40 @@ proptest! {
         prop_assert_eq!(out[0].len(), out[1].len());
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+
+    /// The output rebuilt at rest between moves with any `$2`, `$3` and `$580` (the firmware's
+    /// in-place settings): every move's steps and directions exact as the new map says, the
+    /// positions kept, and in dual-edge mode every step a toggle from the level the pin had
+    /// (no edge lost or added at the change).
+    #[test]
+    fn rebuilding_at_rest_keeps_counts_and_positions(
+        maps in prop::collection::vec((0u8..8, 0u8..8, any::<bool>()), 1..6),
+        moves in prop::collection::vec(prop::array::uniform3(-300i64..300), 1..6),
+    ) {
+        let mut rig = Rig::<3>::trapezoid(1000, 60_000, 2_000_000);
+        let mut want = [0i64; 3];
+        for (i, mv) in moves.iter().enumerate() {
+            let (step_inv, dir_inv, dual) = maps[i % maps.len()];
+            let pins = ddastep::board::pin_map::<3>(step_inv, dir_inv);
+            rig.rebuild(if dual { pins.dual_edge() } else { pins });
+            let from = rig.steps.len();
+            if mv.iter().all(|&s| s == 0) {
+                continue;
+            }
+            rig.push(*mv, 20_000);
+            rig.run_to_idle(1_000_000);
+            let mut net = [0i64; 3];
+            for s in &rig.steps[from..] {
+                net[s.axis] += if s.positive { 1 } else { -1 };
+            }
+            prop_assert_eq!(net, *mv, "move {} with {:?}", i, maps[i % maps.len()]);
+            for a in 0..3 {
+                want[a] += mv[a];
+            }
+            prop_assert_eq!(rig.shared.positions().map(i64::from), want);
+        }
+    }
+}

@@ -219,3 +219,30 @@ fn hard_limit_drops_the_queue_and_locks_until_reset() {
     assert!(b.take().ends_with("[MSG:'$H'|'$X' to unlock]\r\n"));
     assert_eq!(b.line("G0 X1"), "error:9\r\n");
 }
+
+/// Ctrl-X right after a hard limit, the engine still in its cut move (the firmware's step timer
+/// is stopped until the Ctrl-X rebuilds its output): the banner and the unlock hint, no
+/// ALARM:3 (the controller is in alarm already, as Grbl's reset after a hard limit), the pass
+/// tells the shell it took a Ctrl-X, and the position is the engine's once it has stopped.
+#[test]
+fn ctrl_x_after_a_hard_limit_keeps_the_alarm_without_alarm_3() {
+    let mut b = Bench::<3>::with_defaults();
+    b.take();
+    assert_eq!(b.line("G1 X50 F30000"), "ok\r\n");
+    b.run_ms(50);
+    b.ctl.hard_limit(&mut b.tx);
+    assert_eq!(b.take(), "ALARM:1\r\n[MSG:Reset to continue]\r\n");
+    assert_eq!(b.shared.state(), ddastep::motion::shared::State::Run);
+    b.actions.clear();
+    b.byte(0x18);
+    assert_eq!(b.take(), "\r\nGrbl 1.1h ['$' for help]\r\n[MSG:'$H'|'$X' to unlock]\r\n");
+    assert!(b.actions.last().unwrap().reset);
+    b.run_ms(5);
+    assert!(b.actions.iter().skip(1).all(|a| !a.reset));
+    let at = b.shared.positions();
+    assert!(at[0] > 0 && at[0] < 50 * 250, "{at:?}");
+    assert!(b.status().starts_with("<Alarm|"));
+    assert_eq!(b.line("$X"), "[MSG:Caution: Unlocked]\r\nok\r\n");
+    b.run_ms(5);
+    assert_eq!(b.shared.positions(), at);
+}

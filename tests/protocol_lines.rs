@@ -158,11 +158,11 @@ fn settings_list_change_and_refuse_while_moving() {
     assert_eq!(b.line("$$"), "error:8\r\n");
     b.run_to_idle(1000);
     assert_eq!(b.shared.positions(), [200, 0, 0]);
-    // Direction invert needs the pin map rebuilt: the shell is told to restart.
+    // Direction invert needs the pin map rebuilt: the shell is told to rebuild the step output.
     b.actions.clear();
     assert_eq!(b.line("$3=5"), "ok\r\n");
     b.tick_ms();
-    assert!(b.actions.iter().any(|a| a.restart && a.save));
+    assert!(b.actions.iter().any(|a| a.reinit && a.save));
     // A shorter pulse: CCR1 gets the new width.
     b.actions.clear();
     assert_eq!(b.line("$0=2"), "ok\r\n");
@@ -394,7 +394,7 @@ fn flash_write_comes_before_the_next_line_moves() {
     assert_eq!(b.take(), "");
     b.tick_ms();
     let a = *b.actions.last().unwrap();
-    assert!(a.save && !a.restart);
+    assert!(a.save && !a.reinit);
     assert_eq!(b.take(), "ok\r\n");
     assert_eq!(b.ctl.pending_moves(), 0, "no move before the flash write");
     rx.drain(..taken);

@@ -161,7 +161,7 @@ fn dual_edge_is_a_pin_setting_with_its_own_rate_rule() {
     use ddastep::motion::timing::{DUAL_BASE_TICKS as BASE, DUAL_LONG_TICKS as LONG, HANDLER_PER_SLAVE_TICKS as SLAVE, STORE_JITTER_TICKS as JIT};
     let mut s = Settings::BENCH;
     assert_eq!(s.get(DUAL_EDGE, 3), Some((0.0, 0)));
-    // Like `$2`: the engine's pin map changes, so the MCU restarts.
+    // Like `$2`: the engine's pin map changes, so the step output is rebuilt at rest.
     assert_eq!(s.set(DUAL_EDGE, 1.0, 3), Ok(Change::Pins));
     assert!(s.dual_edge && s.timing().dual);
     assert_eq!(s.get(DUAL_EDGE, 3), Some((1.0, 0)));
@@ -201,12 +201,12 @@ fn dual_edge_is_a_pin_setting_with_its_own_rate_rule() {
 }
 
 #[test]
-fn dma_burst_is_a_restarting_flag_whose_cap_is_the_fill_cost() {
+fn dma_burst_is_a_pin_flag_whose_cap_is_the_fill_cost() {
     use ddastep::grbl::settings::DMA_BURST;
     use ddastep::motion::timing::{DMA_BASE_TICKS, DMA_DUAL_BASE_TICKS, DMA_DUAL_PER_SLAVE_TICKS, DMA_FLOOR_TICKS, DMA_LANE_TICKS, DMA_MARGIN_TICKS, DMA_PER_SLAVE_TICKS};
     let mut s = Settings::BENCH;
     assert_eq!(s.get(DMA_BURST, 3), Some((0.0, 0)));
-    // Like `$580`: the step output changes how it is built, so the MCU restarts.
+    // Like `$580`: the step output changes how it is built, so it is rebuilt at rest.
     assert_eq!(s.set(DMA_BURST, 1.0, 3), Ok(Change::Pins));
     assert!(s.dma_burst && s.timing().dma && !s.timing().dual);
     assert_eq!(s.set(DMA_BURST, f32::NAN, 3), Err(Error::BadNumberFormat));

@@ -141,11 +141,14 @@ proptest! {
 }
 
 #[test]
-fn pin_invert_setting_answers_ok_and_reaches_flash_before_the_restart() {
+fn pin_invert_setting_answers_ok_and_reaches_flash_with_no_restart() {
     let mut b = boot();
     // Let the banner finish, so the TX interrupt is off when the reply is queued.
     b.run_seconds(0.1).unwrap();
     ok(&mut b, "$3=5");
     let saved = stored(&mut b).expect("an image in flash");
     assert_eq!(saved.settings.dir_invert, 5);
+    b.run_seconds(0.1).unwrap();
+    assert_eq!(b.serial_output().matches("Grbl").count(), 1, "{}", b.serial_output());
+    assert!(b.system_resets().is_empty());
 }

@@ -38,8 +38,9 @@ struct State {
 
 struct Slot(UnsafeCell<State>);
 
-// SAFETY: written by `init` with interrupts off, then only by the fill interrupt (one context,
-// never re-entered); DMA reads the half the fill is not writing.
+// SAFETY: written by `install` and read back by `uninstall` with the fill interrupt masked
+// and DMA off, otherwise only by the fill interrupt (one context, never re-entered); DMA reads
+// the half the fill is not writing.
 unsafe impl Sync for Slot {}
 
 static STATE: Slot = Slot(UnsafeCell::new(State {
@@ -65,17 +66,19 @@ pub fn active() -> bool {
 }
 
 /// The compare value of the falling edge for a pulse of `ticks` in DMA mode, if the buffers'
-/// layout holds it (else the layout must change: a restart).
+/// layout holds it (else the layout must change: a rebuild, `output::rebuild`).
 pub fn fall_ticks(ticks: u32) -> Option<u32> {
     let fall = ticks + ddastep::motion::timing::DMA_MARGIN_TICKS;
     (fall < MAX_TICK.load(Relaxed) / 2).then_some(fall)
 }
 
 /// Fills both halves, hands the engine to the fill interrupt, starts DMA1 (in `init`,
-/// interrupts off; TIM2 starts counting later, in `tim2::start`).
+/// interrupts off, or at rest from `output::rebuild`; TIM2 starts counting later, in
+/// `tim2::start`).
 pub fn install(burst: Burst<'static, AXES>, layout: Layout, fall: u32, dual: bool, nvic: &mut cortex_m::peripheral::NVIC) {
     let n = 2 * layout.half;
-    // SAFETY: interrupts are off and DMA is not running yet: no other access.
+    // SAFETY: the fill interrupt is masked (not yet unmasked, or by `uninstall`) and DMA is
+    // off: no other access.
     let s = unsafe { &mut *STATE.0.get() };
     let burst = s.burst.write(burst);
     s.off = burst.step_off();
@@ -86,11 +89,31 @@ pub fn install(burst: Burst<'static, AXES>, layout: Layout, fall: u32, dual: boo
     // SAFETY: RTIC's lowest priority (with SysTick), below the serial interrupt: a fill runs
     // for a whole half (up to ~150 µs near the cap), longer than one byte's time at 115200
     // baud, so above the USART it would lose received bytes; the serial interrupt is short
-    // against a half's time. Unmasking is what `init` is for.
+    // against a half's time. The engine and buffers are in place.
     unsafe {
         nvic.set_priority(pac::Interrupt::DMA1_CHANNEL1, super::step::nvic_priority(1));
         cortex_m::peripheral::NVIC::unmask(pac::Interrupt::DMA1_CHANNEL1);
     }
+}
+
+/// Masks the fill interrupt and turns DMA off (TIM2 stopped), takes the engine back; interrupt
+/// mode from here until the next `install`.
+pub fn uninstall() -> ddastep::motion::engine::Engine<'static, AXES> {
+    cortex_m::peripheral::NVIC::mask(pac::Interrupt::DMA1_CHANNEL1);
+    cortex_m::peripheral::NVIC::unpend(pac::Interrupt::DMA1_CHANNEL1);
+    let dma = dma1();
+    for ch in [dma.ch1(), dma.ch2(), dma.ch5()] {
+        // Channel off (CR's reset value).
+        ch.cr().reset();
+    }
+    // SAFETY: IFCR is write-1-to-clear; channel 1's four flags.
+    dma.ifcr().write(|w| unsafe { w.bits(ISR_CH1) });
+    HALF.store(0, Relaxed);
+    MAX_TICK.store(0, Relaxed);
+    // SAFETY: `install` wrote the engine (DMA mode is on); the fill interrupt is masked and
+    // DMA off, and `install` writes it again before unmasking (the copy read here is the only
+    // one used).
+    unsafe { (*STATE.0.get()).burst.assume_init_read() }.into_engine()
 }
 
 /// Channel 1 played a half (or the whole buffer): fill it again. Times itself like the step

@@ -6,11 +6,11 @@
 //! neither a switch's release nor its bounce trips), the handler
 //! stops TIM2 and its interrupt, drives every step pin low and sets [`HALTED`]; the idle loop
 //! then reports ALARM:1. The engine is not touched: its move is cut where the timer stopped,
-//! so the Ctrl-X that follows restarts the MCU, leaving the engine's position and a marker in
-//! .uninit RAM: the next boot starts from that position, in the alarm state (as Grbl, which
-//! keeps its position across the reset but wants `$H` or `$X`, the position being suspect).
+//! and the Ctrl-X that follows rebuilds the step output in place (`output::rebuild`: the
+//! engine takes the stop, keeping its position) and leaves the controller in the alarm state
+//! (as Grbl, which keeps its position across the reset but wants `$H` or `$X`, the position
+//! being suspect).
 
-use core::mem::MaybeUninit;
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering::Relaxed};
 
 use ddastep::board;
@@ -19,7 +19,7 @@ use stm32f1xx_hal::pac;
 use super::gpio;
 use super::tim2::tim2;
 
-/// The limit interrupt stopped the step output (cleared only by the restart).
+/// The limit interrupt stopped the step output (cleared by the Ctrl-X's rebuild).
 pub static HALTED: AtomicBool = AtomicBool::new(false);
 /// Bit 0: `$21` on; bit 1: `$5` (pins inverted); bits 8–10: pins already active at the last
 /// poll (a carriage resting on or leaving its switch: the release bounce must not trip);
@@ -33,14 +33,6 @@ const LINES: u32 = 0b111;
 const PROBE_LINE: u32 = 1 << board::PROBE_PIN;
 /// `$6` (probe input inverted), written by `idle`.
 pub static PROBE_INVERT: AtomicBool = AtomicBool::new(false);
-/// Marker in RAM the startup code leaves alone: "restarted after a hard limit".
-const LOST_MAGIC: u32 = 0x4C49_4D54;
-/// Axes whose position survives the restart.
-const AXES: usize = super::axes::AXES;
-/// The marker, then the engine's position at the restart.
-#[link_section = ".uninit.DDASTEP_LOST"]
-static mut LOST: MaybeUninit<[u32; 1 + AXES]> = MaybeUninit::uninit();
-
 fn exti() -> &'static pac::exti::RegisterBlock {
     // SAFETY: `setup` runs in init; afterwards `arm` writes IMR (idle) and the handler writes
     // PR (rc_w1: clearing its own lines); the two registers are independent.
@@ -107,28 +99,4 @@ pub fn on_edge<const N: usize>(shared: &ddastep::motion::shared::Shared<N>) {
     // SAFETY: BSRR takes any word; this one resets only the step pins.
     gpio::gpiob().bsrr().write(|w| unsafe { w.bits(low) });
     HALTED.store(true, Relaxed);
-}
-
-/// The position left by a restart after a hard limit (once: the marker is cleared).
-pub fn take_lost_marker() -> Option<[i32; AXES]> {
-    // SAFETY: init only, before interrupts; plain words in .uninit (any value is valid).
-    unsafe {
-        let p = core::ptr::addr_of_mut!(LOST) as *mut u32;
-        let lost = p.read_volatile() == LOST_MAGIC;
-        p.write_volatile(0);
-        lost.then(|| core::array::from_fn(|i| p.add(1 + i).read_volatile() as i32))
-    }
-}
-
-/// Ctrl-X after a hard limit: restart the MCU, leaving `pos` (the engine's) for the next boot.
-pub fn restart_lost(pos: [i32; AXES]) -> ! {
-    // SAFETY: idle only; the words are read by the next boot's init.
-    unsafe {
-        let p = core::ptr::addr_of_mut!(LOST) as *mut u32;
-        for (i, v) in pos.iter().enumerate() {
-            p.add(1 + i).write_volatile(*v as u32);
-        }
-        p.write_volatile(LOST_MAGIC);
-    }
-    cortex_m::peripheral::SCB::sys_reset()
 }

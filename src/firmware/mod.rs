@@ -3,6 +3,7 @@
 //! - `gpio`: pin modes, the BSRR outputs and the inputs; `boot`: GPIOB before RAM exists;
 //! - `tim2`: the step timer and the DMA1 channels it drives; `pulse`: the step pulse width;
 //! - `step`: the step and ramp interrupts; `burst`: DMA burst mode's buffers and fill interrupt;
+//! - `output`: which of the two runs the engine, built in `init` and rebuilt at rest;
 //! - `tim1_pwm`: the spindle PWM; `encoder`: TIM3 as the encoder counter;
 //! - `limits`: the limit and probe EXTIs; `watchdog`: the IWDG and the reset cause;
 //! - `flash_store`: the settings pages; `dwt`: the cycle counter; `panic`, `mem`;
@@ -20,6 +21,7 @@ mod flash_store;
 mod gpio;
 mod limits;
 mod mem;
+mod output;
 mod panic;
 mod pulse;
 mod setup;
@@ -34,10 +36,9 @@ use defmt_rtt as _;
 mod app {
     use core::sync::atomic::{AtomicBool, AtomicU32, Ordering::Relaxed};
 
-    use ddastep::board;
     use ddastep::grbl::controller::Controller;
     use ddastep::motion::engine::Engine;
-    use ddastep::grbl::shell::{dispatch, idle_step, take_inputs, Inputs, Requests};
+    use ddastep::grbl::shell::{dispatch, idle_step, take_inputs, Inputs, Requests, StepOutput};
     use ddastep::motion::shared::Shared;
     use ddastep::planning::feeder::Feeder;
     use ddastep::planning::lookahead::Buffer;
@@ -50,7 +51,7 @@ mod app {
 
     use super::axes::AXES;
     use super::setup::Board;
-    use super::{burst, dwt, encoder, flash_store, gpio, limits, pulse, step, tim1_pwm, tim2, watchdog};
+    use super::{dwt, encoder, flash_store, gpio, limits, output, pulse, tim1_pwm, tim2, watchdog};
 
     /// Lock-free state shared with the step interrupt.
     pub static SHARED: Shared<AXES> = Shared::new();
@@ -78,6 +79,8 @@ mod app {
         tx_out: Consumer<'static, u8>,
         controller: &'static mut Controller<'static, AXES>,
         flash: stm32f1xx_hal::flash::Parts,
+        /// For the output's vectors when it is rebuilt (`output::rebuild`).
+        nvic: cortex_m::peripheral::NVIC,
     }
 
     #[init(local = [
@@ -102,18 +105,9 @@ mod app {
         let (mv_in, mv_out) = cx.local.moves.split();
         let (rx_in, rx_out) = cx.local.rxq.split();
         let (tx_in, tx_out) = cx.local.txq.split();
-        let mut pins = board::pin_map::<AXES>(settings.step_invert, settings.dir_invert);
-        if settings.dual_edge {
-            // Dual-edge stepping (`$580`, fixed until the next boot: a change restarts).
-            pins = pins.dual_edge();
-            tim2::no_falling_edge();
-        }
-        // After a hard limit's restart: the position the engine had (the feeder and the
-        // controller start from it).
-        let lost = limits::take_lost_marker();
-        if let Some(p) = lost {
-            SHARED.set_positions(p);
-        }
+        // Pin map and mode (`$2`, `$3`, `$580`, `$581`; a change rebuilds them at rest).
+        let out = StepOutput::<AXES>::of(&settings);
+        let pins = out.pins;
         let engine = Engine::new(&SHARED, mv_out, &PROFILE, pins);
         let controller = Controller::init(
             cx.local.ctl,
@@ -128,20 +122,8 @@ mod app {
         if by_watchdog {
             controller.watchdog_reset();
         }
-        if lost.is_some() {
-            controller.position_lost();
-        }
         limits::setup();
-        if settings.dma_burst {
-            // DMA burst output (`$581`, fixed until the next boot: a change restarts).
-            let dual = settings.dual_edge;
-            let fall = if dual { 0 } else { settings.timing().pulse_ticks + ddastep::motion::timing::DMA_MARGIN_TICKS };
-            let layout = ddastep::motion::burst::Layout::for_pulse(fall);
-            let engine = ddastep::motion::burst::Burst::new(engine, &SHARED, layout.max_tick);
-            burst::install(engine, layout, fall, dual, &mut core.NVIC);
-        } else {
-            step::install(engine, &mut core.NVIC);
-        }
+        output::install(engine, &SHARED, &out, &mut core.NVIC);
         defmt::info!("ddastep up: 72 MHz, {} axes", AXES);
         tim2::start();
         watchdog::start();
@@ -155,6 +137,7 @@ mod app {
                 tx_out,
                 controller,
                 flash: board.flash,
+                nvic: core.NVIC,
             },
         )
     }
@@ -220,7 +203,7 @@ mod app {
     }
 
     /// The protocol loop: bytes into the controller, its actions onto the pins and flash.
-    #[idle(local = [rx_out, tx_in, controller, flash], shared = [tx])]
+    #[idle(local = [rx_out, tx_in, controller, flash, nvic], shared = [tx])]
     fn idle(mut cx: idle::Context) -> ! {
         let ctl = cx.local.controller;
         let tx_in = cx.local.tx_in;
@@ -238,9 +221,6 @@ mod app {
             }
             let now = MILLIS.load(Relaxed);
             let halted = limits::HALTED.load(Relaxed);
-            if halted && REQUESTS.reset_pending() {
-                limits::restart_lost(SHARED.positions());
-            }
             if halted && !hard_reported {
                 hard_reported = true;
                 ctl.hard_limit(tx_in);
@@ -257,10 +237,13 @@ mod app {
             limits::arm(ctl.settings().hard_limits, invert, ddastep::grbl::limits::active_pins(idr, invert), ctl.homing_watch());
             gpio::ENABLE_OFF_HIGH.store(!ctl.settings().enable_invert, Relaxed);
             gpio::set_enable(act.enable_pin_high);
-            let mut restart = act.restart;
+            // Ctrl-X after a hard limit: the soft reset (in `idle_step`), then the output rebuilt
+            // (HALTED read again: a trip just before the Ctrl-X is cleared by it too).
+            let clear_halt = act.reset && limits::HALTED.load(Relaxed);
+            let mut rebuild = act.reinit || clear_halt;
             if let Some(ticks) = act.pulse_ticks {
-                // (DMA mode: a pulse its buffers' layout cannot hold restarts with a new one.)
-                restart |= !pulse::set_pulse_ticks(ticks);
+                // (DMA mode: a pulse its buffers' layout cannot hold rebuilds it with a new one.)
+                rebuild |= !pulse::set_pulse_ticks(ticks);
             }
             if let Some(t) = act.pwm {
                 tim1_pwm::set_timing(t);
@@ -270,8 +253,17 @@ mod app {
                 tim1_pwm::set_duty(spindle.ccr);
                 gpio::set_tool_outputs(spindle);
             }
-            if act.save || restart {
+            if act.save {
                 flash_store::save(cx.local.flash, &ctl.image());
+            }
+            if rebuild {
+                // At rest (the settings that ask for it are taken only then) or halted.
+                let s = ctl.settings();
+                output::rebuild(&SHARED, &StepOutput::of(s), s.timing().pulse_ticks, cx.local.nvic);
+                if clear_halt {
+                    limits::HALTED.store(false, Relaxed);
+                    hard_reported = false;
+                }
             }
             gpio::heartbeat(now);
             watchdog::stall_hook();
@@ -280,12 +272,6 @@ mod app {
             }
             if tx_in.len() > 0 {
                 cx.shared.tx.lock(|tx| tx.listen());
-            }
-            if restart {
-                // Let the reply leave (TX interrupt on, above), then reset: the engine takes
-                // the pin map at boot.
-                while tx_in.len() > 0 {}
-                cortex_m::peripheral::SCB::sys_reset();
             }
         }
     }

@@ -7,7 +7,7 @@ use super::tim2::tim2;
 
 /// New step pulse width: CCR1 is preloaded, so it takes effect at the next update event.
 /// Nothing in dual-edge mode (`tim2::no_falling_edge`: the compare interrupt is off). `false` when
-/// DMA burst mode's buffers cannot hold the pulse (their layout follows it: a restart).
+/// DMA burst mode's buffers cannot hold the pulse (their layout follows it: a rebuild).
 pub fn set_pulse_ticks(ticks: u32) -> bool {
     let dier = tim2().dier().read();
     let ccr = if burst::active() {

@@ -5,8 +5,9 @@
 //! priority 1, below the serial interrupt: near the rate cap the step interrupt leaves little
 //! time, and a ramp run there must not hold off a received byte (the USART keeps one). Its
 //! work tolerates the short delays (a trigger's walk down starting some steps late ends a
-//! fraction of a walk high). Neither half shares anything with RTIC's resources: `init` moves
-//! each in once (before interrupts are on) and only its handler touches it afterwards.
+//! fraction of a walk high). Neither half shares anything with RTIC's resources: `install`
+//! moves each in (in `init`, or at rest with the vectors masked) and only its handler touches
+//! it until `uninstall` masks the vectors and takes it back.
 
 use core::cell::UnsafeCell;
 use core::mem::MaybeUninit;
@@ -23,8 +24,9 @@ use super::tim2::{tim2, SR_CC1IF, SR_UIF};
 /// One half of the engine, owned by its interrupt.
 struct Slot<T>(UnsafeCell<MaybeUninit<T>>);
 
-// SAFETY: written once by `init` with interrupts off, then touched only by its handler (one
-// context, never re-entered).
+// SAFETY: written by `install` and read back by `uninstall` while its vector is masked (or
+// before interrupts are on), otherwise touched only by its handler (one context, never
+// re-entered).
 unsafe impl<T> Sync for Slot<T> {}
 
 static STEPPER: Slot<Stepper<'static, AXES>> = Slot(UnsafeCell::new(MaybeUninit::uninit()));
@@ -39,7 +41,8 @@ pub(super) const fn nvic_priority(p: u8) -> u8 {
 /// The vector the ramp half runs in.
 const RAMP_IRQ: pac::Interrupt = pac::Interrupt::TIM4;
 
-/// Hands the two halves to their interrupts and enables them (in `init`, interrupts still off).
+/// Hands the two halves to their interrupts and enables them (in `init`, interrupts still off,
+/// or at rest from `output::rebuild`, TIM2 stopped).
 pub fn install(engine: Engine<'static, AXES>, nvic: &mut cortex_m::peripheral::NVIC) {
     let (mut stepper, ramper) = engine.split();
     // The NVIC's ISPR word for the ramp vector (what `NVIC::pend` writes), as a plain store.
@@ -49,19 +52,30 @@ pub fn install(engine: Engine<'static, AXES>, nvic: &mut cortex_m::peripheral::N
         let ispr = core::ptr::addr_of!((*cortex_m::peripheral::NVIC::PTR).ispr[irq / 32]);
         stepper.set_pend(ispr.cast::<u32>().cast_mut(), 1 << (irq % 32));
     }
-    // SAFETY: interrupts are off and neither handler has run yet: no other access.
+    // SAFETY: both vectors are masked (not yet unmasked, or by `uninstall`): no other access.
     unsafe {
         (*STEPPER.0.get()).write(stepper);
         (*RAMPER.0.get()).write(ramper);
     }
     // SAFETY: the priorities are above RTIC's tasks (TIM2) and at its lowest (the ramp);
-    // unmasking is what `init` is for.
+    // the halves are in place.
     unsafe {
         nvic.set_priority(pac::Interrupt::TIM2, nvic_priority(4));
         nvic.set_priority(RAMP_IRQ, nvic_priority(1));
         cortex_m::peripheral::NVIC::unmask(RAMP_IRQ);
         cortex_m::peripheral::NVIC::unmask(pac::Interrupt::TIM2);
     }
+}
+
+/// Masks both vectors (TIM2 stopped) and takes the halves back, as one engine.
+pub fn uninstall() -> Engine<'static, AXES> {
+    for irq in [pac::Interrupt::TIM2, RAMP_IRQ] {
+        cortex_m::peripheral::NVIC::mask(irq);
+        cortex_m::peripheral::NVIC::unpend(irq);
+    }
+    // SAFETY: `install` wrote both slots (interrupt mode is on); their handlers are masked now,
+    // and `install` writes them again before unmasking (the copies read here are the only ones used).
+    unsafe { Engine::join((*STEPPER.0.get()).assume_init_read(), (*RAMPER.0.get()).assume_init_read()) }
 }
 
 /// The step interrupt: store the precomputed word first, then compute the next one (a tick

@@ -18,7 +18,8 @@ pub const SR_CC1IF: u32 = 1 << 1;
 pub fn tim2() -> &'static pac::tim2::RegisterBlock {
     // SAFETY: a shared reference to MMIO; every access is one volatile load or store. After
     // init the step interrupt writes SR and ARR, `pulse` (idle) only CCR1, which is preloaded,
-    // and the limit handler stops the timer (CR1, DIER, SR).
+    // and the limit handler stops the timer (CR1, DIER, SR); `output::rebuild` (idle) sets it
+    // up again only once it is stopped and its interrupts are masked.
     unsafe { &*pac::TIM2::ptr() }
 }
 
@@ -33,7 +34,8 @@ const DIER_CC3DE: u32 = 1 << 11;
 /// DMA1's registers (the fill interrupt owns channel 1's flags after `init`).
 #[inline(always)]
 pub fn dma1() -> &'static pac::dma1::RegisterBlock {
-    // SAFETY: after init only the fill interrupt touches DMA1 (ISR read, IFCR write).
+    // SAFETY: after init only the fill interrupt touches DMA1 (ISR read, IFCR write), and
+    // `burst::uninstall` (idle) once the fill interrupt is masked.
     unsafe { &*pac::DMA1::ptr() }
 }
 
@@ -113,6 +115,11 @@ pub fn setup(rcc: &mut stm32f1xx_hal::rcc::Rcc) {
     use stm32f1xx_hal::rcc::{Enable, Reset};
     pac::TIM2::enable(rcc);
     pac::TIM2::reset(rcc);
+    configure();
+}
+
+/// TIM2's registers for interrupt mode, stopped (at boot, and when the output is rebuilt).
+pub fn configure() {
     let t = tim2();
     t.psc().write(|w| w.psc().set(0));
     t.arr().write(|w| w.arr().set(IDLE_ARR));
@@ -124,6 +131,15 @@ pub fn setup(rcc: &mut stm32f1xx_hal::rcc::Rcc) {
     t.dier().write(|w| w.uie().enabled().cc1ie().enabled());
     // Counting starts in `start`.
     t.cr1().write(|w| w.arpe().enabled().urs().counter_only());
+}
+
+/// Stops TIM2: the counter, every interrupt and DMA request, the flags (the output is rebuilt
+/// next; the step pins stay as they are).
+pub fn stop() {
+    let t = tim2();
+    t.cr1().modify(|_, w| w.cen().disabled());
+    t.dier().reset();
+    t.sr().reset();
 }
 
 /// Starts TIM2 counting: the last thing `init` does, so the first update event does not wait

@@ -70,9 +70,13 @@ pub struct Actions {
     /// The persistent image changed: write [`Controller::image`] to flash (only ever asked
     /// while the machine is idle: the flash write stalls the CPU).
     pub save: bool,
-    /// `$2`/`$3` (or `$RST`) changed the pin map, which the engine takes at boot: save, then
-    /// reset the MCU.
-    pub restart: bool,
+    /// `$2`, `$3`, `$580`, `$581` (or `$RST`) changed the pin map or the step output's mode:
+    /// rebuild the step output at rest (`Engine::rebuild`; the controller is at rest until the
+    /// next poll).
+    pub reinit: bool,
+    /// A Ctrl-X was taken in this pass (set by `shell::idle_step`; after a hard limit the
+    /// shell rebuilds the step output on it).
+    pub reset: bool,
     /// Spindle/laser PWM compare value and the spindle and coolant pins, every poll.
     pub spindle: SpindleOut,
     /// New spindle PWM timing for TIM1 (at the first poll and after `$33` changes).
@@ -252,7 +256,7 @@ pub struct Controller<'a, const N: usize> {
     enabled_at: Option<u32>,
     idle_since: Option<u32>,
     save: bool,
-    restart: bool,
+    reinit: bool,
     pulse_changed: bool,
     pushed: u32,
     feed_ring: [f32; FEED_RING],
@@ -349,7 +353,7 @@ impl<'a, const N: usize> Controller<'a, N> {
             addr_of_mut!((*p).enabled_at).write(None);
             addr_of_mut!((*p).idle_since).write(None);
             addr_of_mut!((*p).save).write(false);
-            addr_of_mut!((*p).restart).write(false);
+            addr_of_mut!((*p).reinit).write(false);
             addr_of_mut!((*p).pulse_changed).write(true);
             addr_of_mut!((*p).pushed).write(shared.moves_done());
             addr_of_mut!((*p).feed_ring).write([0.0; FEED_RING]);
@@ -389,7 +393,7 @@ impl<'a, const N: usize> Controller<'a, N> {
             feeder: _, shared: _, slot: _, settings: _, stored: _, axes: _, ramped: _, limits: _,
             profile_dirty: _, lines: _, modal: _, offsets: _, planner: _, job: _, alarm: _,
             check: _, sleep: _, jog: _, status_wanted: _, now: _, drivers_on: _, m17: _,
-            enabled_at: _, idle_since: _, save: _, restart: _, pulse_changed: _, pushed: _,
+            enabled_at: _, idle_since: _, save: _, reinit: _, pulse_changed: _, pushed: _,
             feed_ring: _, startup_next: _, wco_count: _, ovr_count: _, ov_seen: _, rx_free: _,
             power_ring: _, tool: _, pwm_hz: _, reset_after: _, resync: _, soft_limit: _,
             watchdog_note: _, limit_pins: _, enc: _, probe_pin: _, homing: _, door: _,

@@ -1,5 +1,6 @@
 //! What the firmware shell runs around the controller, kept here so the host rigs run the same
-//! code: the RX interrupt's realtime-byte dispatch, the idle loop's sampled inputs and one pass of it.
+//! code: the RX interrupt's realtime-byte dispatch, the idle loop's sampled inputs and one pass of it,
+//! and how the step output is built from the settings (at boot and when it is rebuilt at rest).
 //!
 //! Who uses it: `src/firmware` (USART1 interrupt and `idle`) and `tests/protocol_rig`.
 
@@ -7,7 +8,11 @@ use core::sync::atomic::{AtomicBool, Ordering::Relaxed};
 
 use heapless::spsc::Consumer;
 
+use crate::board::PinMap;
 use crate::grbl::controller::{Actions, Controller};
+use crate::grbl::settings::Settings;
+use crate::motion::burst::Layout;
+use crate::motion::timing::DMA_MARGIN_TICKS;
 use crate::grbl::overrides;
 use crate::grbl::protocol::{realtime, Realtime};
 use crate::grbl::reply::Out;
@@ -44,10 +49,6 @@ impl Requests {
         }
     }
 
-    /// A Ctrl-X is waiting for the idle loop (the firmware restarts after a hard limit on it).
-    pub fn reset_pending(&self) -> bool {
-        self.reset.load(Relaxed)
-    }
 }
 
 /// One received byte in the RX interrupt: realtime bytes act at once (feed hold, resume,
@@ -71,7 +72,8 @@ pub fn dispatch<const N: usize>(b: u8, shared: &Shared<N>, req: &Requests) -> Op
     None
 }
 
-/// One pass of the idle loop: a pending soft reset (dropping the RX bytes before it), a status
+/// One pass of the idle loop: a pending soft reset (dropping the RX bytes before it; the
+/// returned `Actions::reset` says it ran), a status
 /// request, a jog cancel, line bytes into the controller while it takes them (and the RX
 /// ring's free room for `Bf:`), then its poll.
 pub fn idle_step<const N: usize>(
@@ -81,7 +83,8 @@ pub fn idle_step<const N: usize>(
     now_ms: u32,
     req: &Requests,
 ) -> Actions {
-    if req.reset.swap(false, Relaxed) {
+    let reset = req.reset.swap(false, Relaxed);
+    if reset {
         // Bytes before the Ctrl-X belong to the old stream.
         while rx.dequeue().is_some() {}
         ctl.soft_reset(out);
@@ -107,7 +110,27 @@ pub fn idle_step<const N: usize>(
     ctl.set_rx_free(rx.capacity() - rx.len());
     let act = ctl.poll(now_ms, out);
     req.door_lock.store(ctl.door_active(), Relaxed);
-    act
+    Actions { reset, ..act }
+}
+
+/// How the step output is built: the pin map, and in DMA burst mode (`$581`) the buffers'
+/// layout and the falling edge's compare value (0 in dual-edge mode).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StepOutput<const N: usize> {
+    pub pins: PinMap<N>,
+    pub burst: Option<(Layout, u32)>,
+}
+
+impl<const N: usize> StepOutput<N> {
+    /// The output `$0`, `$2`, `$3`, `$580` and `$581` ask for.
+    pub fn of(s: &Settings) -> Self {
+        let pins = s.pins::<N>();
+        let burst = s.dma_burst.then(|| {
+            let fall = if pins.dual { 0 } else { s.timing().pulse_ticks + DMA_MARGIN_TICKS };
+            (Layout::for_pulse(fall), fall)
+        });
+        StepOutput { pins, burst }
+    }
 }
 
 /// What the shell samples for one idle pass.

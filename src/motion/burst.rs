@@ -99,6 +99,11 @@ impl<'a, const N: usize, const L: usize> Burst<'a, N, L> {
         Burst { step, ramp, shared, seen: (shared.record_seq(), 0), quick: true }
     }
 
+    /// The engine back (to be rebuilt, see [`Engine::rebuild`]).
+    pub fn into_engine(self) -> Engine<'a, N, L> {
+        Engine::join(self.step, self.ramp)
+    }
+
     /// Whether the next entry is a filler piece of a longer period (for tests, as
     /// [`Engine::filler_next`]).
     pub fn filler_next(&self) -> bool {

@@ -86,6 +86,23 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
         (self.step, self.ramp)
     }
 
+    /// The two halves back in one (taken from their interrupts, to be rebuilt).
+    pub fn join(step: Stepper<'a, N, L>, ramp: Ramper<'a, N, L>) -> Self {
+        Engine { step, ramp, lag: 0, since: 0, quick: true }
+    }
+
+    /// Takes a new pin map with the step pins at their idle level ([`PinMap::idle_word`]; `high`:
+    /// the port's pins that are high, which dual-edge mode toggles from), for either output
+    /// (the ramp interrupt unset, periods up to [`MAX_TICK`]), keeping the position and the
+    /// queue. Only with the output stopped: at rest, or cut by a hard limit
+    /// with a stop pending (the edge computed for the next event was never stored: it is
+    /// dropped, and the next tick takes the stop). The ramp half catches up with what the
+    /// step half asked of it.
+    pub fn rebuild(&mut self, pins: PinMap<N>, high: u32) {
+        self.step.rebuild(pins, high);
+        self.ramp.run();
+    }
+
     /// The BSRR word to store at this update event (precomputed by the previous tick).
     #[inline(always)]
     pub fn word(&self) -> u32 {

@@ -146,6 +146,12 @@ impl<'a, const N: usize> Feeder<'a, N> {
         self.accepted = self.shared.moves_done();
     }
 
+    /// A new pin map (at rest: `$2`, `$3`, `$580`): the next move writes every direction pin.
+    pub fn set_pins(&mut self, pins: PinMap<N>) {
+        self.pins = pins;
+        self.dir = DirState::UNKNOWN;
+    }
+
     /// Sets positions while idle (G92): the engine's record and the next move's start.
     pub fn set_positions(&mut self, p: [i32; N]) {
         self.shared.set_positions(p);

@@ -111,10 +111,12 @@ impl<const N: usize> Rig<N> {
             let stepped = if self.pins.dual { (after ^ self.odr) as u32 & self.pins.step_on[a] != 0 } else { e.word & self.pins.step_on[a] != 0 };
             if stepped {
                 let dbit = 1u16 << ddastep::board::DIR_PINS[a];
+                // (`$3`: positive is the level `dir_pos` sets.)
+                let pos_high = self.pins.dir_pos[a] & 0xFFFF != 0;
                 self.steps.push(StepEdge {
                     t: e.t,
                     axis: a,
-                    positive: after & dbit == 0,
+                    positive: (after & dbit != 0) == pos_high,
                     dir_changed_at: self.dir_change[a],
                 });
             }
@@ -123,6 +125,15 @@ impl<const N: usize> Rig<N> {
         self.odr = apply_bsrr(after, self.pins.step_off);
         self.last_edge = Some(e);
         e
+    }
+
+    /// Rebuilds the output at rest with `pins`, as the firmware's `output::rebuild`: the step
+    /// pins to their idle level, the engine and the feeder take the map.
+    pub fn rebuild(&mut self, pins: PinMap<N>) {
+        self.odr = apply_bsrr(self.odr, pins.idle_word());
+        self.engine.rebuild(pins, self.odr as u32);
+        self.feeder.set_pins(pins);
+        self.pins = pins;
     }
 
     /// Runs until the engine is idle with nothing queued (or `max_updates` pass).

@@ -228,6 +228,11 @@ impl<const N: usize> Bench<N> {
             self.ctl.encoder(e.last.0, e.last.1, &mut self.tx);
         }
         let a = idle_step(&mut self.ctl, &mut self.rx_out, &mut self.tx, self.now_ms, self.req);
+        if a.reinit {
+            // As the firmware's `output::rebuild` (at rest): the engine takes the new pin map
+            // (the rig models no pin levels).
+            self.engine.rebuild(self.ctl.settings().pins(), 0);
+        }
         self.enabled = a.enable;
         self.actions.push(a);
         self.drain();

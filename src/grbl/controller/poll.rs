@@ -50,7 +50,8 @@ impl<const N: usize> Controller<'_, N> {
             enable_pin_high: self.drivers_on == self.settings.enable_invert,
             pulse_ticks: pulse,
             save: core::mem::take(&mut self.save),
-            restart: core::mem::take(&mut self.restart),
+            reinit: core::mem::take(&mut self.reinit),
+            reset: false,
         }
     }
 

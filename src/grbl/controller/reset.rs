@@ -42,8 +42,8 @@ impl<const N: usize> Controller<'_, N> {
 
     /// Ctrl-X: stop at once, drop queued moves and any partial or held line, reset the modal
     /// state, G92 and the tool length offset, take the engine's position, print the banner.
-    /// During motion this is ALARM:3 (positions stay exact, but Grbl asks for `$X`); from idle
-    /// or a completed feed hold (`Hold:0`) it is not. Startup lines run again (not in alarm).
+    /// During motion this is ALARM:3 (positions stay exact, but Grbl asks for `$X`); from idle,
+    /// a completed feed hold (`Hold:0`) or the alarm state (a hard limit) it is not. Startup lines run again (not in alarm).
     pub fn soft_reset(&mut self, out: &mut impl Out) {
         let state = self.shared.state();
         let moving = state != State::Held && (self.feeder.pending() > 0 || state != State::Idle);
@@ -74,7 +74,8 @@ impl<const N: usize> Controller<'_, N> {
             // Grbl's ALARM:6: reset during the homing cycle.
             self.alarm = true;
             report::alarm(out, report::ALARM_HOMING_RESET);
-        } else if moving {
+        } else if moving && !self.alarm {
+            // (Already in alarm, as after a hard limit cut the move: no ALARM:3, as Grbl.)
             self.alarm = true;
             report::alarm(out, report::ALARM_RESET);
         }

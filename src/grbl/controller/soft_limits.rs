@@ -7,8 +7,8 @@
 //!
 //! A hard limit (`$21`, [`Controller::hard_limit`]) takes the same locked state at once: the
 //! firmware's limit interrupt has already stopped the step timer, so the queue is dropped
-//! without a hold, ALARM:1 is reported, and the position is lost (the shell restarts the MCU
-//! at the Ctrl-X, which boots in the alarm state).
+//! without a hold, ALARM:1 is reported, and the position is lost (the Ctrl-X that follows
+//! leaves the alarm state on; the shell rebuilds the step output at it, no MCU reset).
 
 use super::{Controller, SoftLimit};
 use crate::grbl::limits;

@@ -89,16 +89,16 @@ impl<const N: usize> Controller<'_, N> {
                     self.stored.build_info = Text::EMPTY;
                 }
                 if what != b'#' {
-                    let pins = (self.settings.step_invert, self.settings.dir_invert);
+                    let old = self.settings;
                     self.settings = Settings::DEFAULT;
-                    if pins != (self.settings.step_invert, self.settings.dir_invert) {
-                        self.restart = true;
+                    if old.pins::<N>() != self.settings.pins::<N>() || old.dma_burst != self.settings.dma_burst {
+                        self.settings_changed(Change::Pins, out);
                     }
                     self.settings_changed(Change::Profile, out);
                 }
                 self.save_later(out);
-                // A pin map change restarts the MCU after the save (its own banner).
-                self.reset_after = !self.restart;
+                // Grbl resets after a restore (the banner follows the `ok`).
+                self.reset_after = true;
             }
             [b'J', b'=', text @ ..] => self.jog_line(text, out)?,
             [b'0'..=b'9', ..] => {
@@ -158,10 +158,14 @@ impl<const N: usize> Controller<'_, N> {
         if change != Change::None {
             self.save_later(out);
         }
+        if change == Change::Pins {
+            // (The mode sets the timing too: the profile follows.)
+            self.feeder.set_pins(self.settings.pins());
+            self.reinit = true;
+        }
         match change {
             Change::None | Change::Shell => {}
-            Change::Pins => self.restart = true,
-            Change::Profile => {
+            Change::Pins | Change::Profile => {
                 self.axes = self.settings.axis_count(N);
                 self.limits = self.settings.planner_limits(self.ramped.cfg.vmax);
                 self.apply_profile();

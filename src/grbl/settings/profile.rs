@@ -4,6 +4,7 @@
 //! Who uses it: the controller (at start-up and after a `$N=` that changes the profile), `$I`.
 
 use super::values::Settings;
+use crate::board::PinMap;
 use crate::motion::ramp::{Profile, RampConfig, RampError, RampTable, MAX_RATE_HZ};
 use crate::motion::timing::{ns_to_ticks, Timing};
 use crate::num::{round_u32, sqrt, u32_of};
@@ -47,6 +48,16 @@ impl Ramped {
 }
 
 impl Settings {
+    /// The pin map `$2`, `$3` and `$580` ask for (the feeder's and the engine's).
+    pub fn pins<const N: usize>(&self) -> PinMap<N> {
+        let pins = crate::board::pin_map::<N>(self.step_invert, self.dir_invert);
+        if self.dual_edge {
+            pins.dual_edge()
+        } else {
+            pins
+        }
+    }
+
     /// Step timing in timer ticks.
     pub fn timing(&self) -> Timing {
         // f32 like the rest of the settings math.

@@ -92,7 +92,7 @@ pub struct Settings {
     /// TMC22xx `dedge`); `$2` does not apply then.
     pub dual_edge: bool,
     /// `$581` DMA burst step output: TIM2's events have DMA store the step words and periods
-    /// the engine buffered (`crate::motion::burst`); a change restarts the MCU.
+    /// the engine buffered (`crate::motion::burst`); a change rebuilds the step output at rest.
     pub dma_burst: bool,
 }
 
@@ -111,7 +111,8 @@ pub enum Change {
     Shell,
     /// Timing or ramp: the profile must be rebuilt.
     Profile,
-    /// `$2`/`$3`: the engine's pin map, fixed when the engine is built.
+    /// `$2`/`$3`/`$580`/`$581`: the pin map or the step output's mode, which the firmware
+    /// shell rebuilds at rest.
     Pins,
 }
 

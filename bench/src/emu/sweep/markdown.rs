@@ -150,7 +150,7 @@ pub fn results_markdown(s: &Sweep, others: &[Sweep], command: &str, firmware: &s
     writeln!(m, "BSRR offset: update event to the handler's first GPIOB store, over the points the ISR sustained.\n")?;
     if let Some(d) = dual {
         writeln!(m, "## Dual-edge mode (`$580=1`)\n")?;
-        writeln!(m, "The same sweep with `$580=1` first (the MCU restarts): every step toggles its pin, one update")?;
+        writeln!(m, "The same sweep with `$580=1` first (applied in place): every step toggles its pin, one update")?;
         writeln!(m, "event per step and no compare event. Steps are counted on both edges; the X high time column")?;
         writeln!(m, "is then the shortest time between two toggles of X. `$I` reports {} Hz with these settings", d.cap_hz)?;
         writeln!(m, "(`Timing::min_period_for`, dual-edge rule: the handler's measured cost per step, two toggles a")?;
@@ -166,7 +166,7 @@ pub fn results_markdown(s: &Sweep, others: &[Sweep], command: &str, firmware: &s
     }
     if let Some(d) = dma {
         writeln!(m, "## DMA burst mode (`$581=1`)\n")?;
-        writeln!(m, "The same sweep with `$581=1` first (the MCU restarts): TIM2 paces every edge, DMA1 stores the")?;
+        writeln!(m, "The same sweep with `$581=1` first (applied in place): TIM2 paces every edge, DMA1 stores the")?;
         writeln!(m, "words the engine buffered (update event: the step word into GPIOB's BSRR; compare 3: the next")?;
         writeln!(m, "period into ARR; compare 1: the falling-edge word), and the step path is the buffer fill in")?;
         writeln!(m, "DMA1 channel 1's half/complete interrupt (`src/firmware/burst.rs`, `ddastep::motion::burst`). The")?;

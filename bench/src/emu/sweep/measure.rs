@@ -20,15 +20,14 @@ pub(super) struct Prepared {
     accel_hz_s: u32,
 }
 
-/// A booted board in `mode` (each mode setting restarts the MCU: one more banner each).
+/// A booted board in `mode` (each mode setting applies in place: its `ok` only).
 pub fn boot(elf: &Path, mode: Mode) -> Result<Board> {
     let mut board = Board::load(elf)?;
-    board.run_until(HZ / 2, |b| b.serial_output().contains("Grbl"))?;
-    for (i, line) in mode.lines().into_iter().enumerate() {
-        board.send_line_wait_ok(line)?;
-        let up = board.run_until(HZ / 2, |b| b.serial_output().matches("Grbl").count() >= i + 2)?;
-        if !up {
-            bail!("no banner after {line}");
+    board.run_until(HZ / 2, |b| b.serial_output().ends_with("help]\r\n"))?;
+    for line in mode.lines() {
+        let r = board.send_line_wait_ok(line)?;
+        if r.trim_end() != "ok" {
+            bail!("{line}: {r:?}");
         }
     }
     board.dual_edge = mode.dual_edge;

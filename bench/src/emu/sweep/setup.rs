@@ -28,7 +28,7 @@ pub struct Mode {
 }
 
 impl Mode {
-    /// The settings that select it (each restarts the MCU).
+    /// The settings that select it (each applies in place).
     pub(super) fn lines(self) -> Vec<&'static str> {
         let mut v = Vec::new();
         if self.dual_edge {

@@ -43,7 +43,8 @@ pub struct Stepper<'a, const N: usize, const L: usize = RAMP_LEN> {
     pub(super) ramp: &'a RampSlot<L>,
     pub(super) step_off: u32,
     /// Dual-edge mode: each step toggles its pin; `level` shadows the step pins' level (the
-    /// pins are low when the engine is built: boot drives them low, a mode change restarts).
+    /// pins are low when the engine is built: boot drives them low; `Engine::rebuild` takes
+    /// their levels).
     pub(super) dual: bool,
     pub(super) level: u32,
     // The edge about to happen.
@@ -111,6 +112,19 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
             quick: false,
             slave_major: false,
         }
+    }
+
+    /// See `Engine::rebuild`: the pin map's words, no pending edge or filler, no ramp register.
+    pub(in crate::motion::engine) fn rebuild(&mut self, pins: PinMap<N>, high: u32) {
+        self.step_off = pins.step_off;
+        self.dual = pins.dual;
+        self.level = high & pins.step_on.iter().fold(0, |m, s| m | s);
+        self.word = 0;
+        self.extend = 0;
+        self.pend = (core::ptr::null_mut(), 0);
+        self.max_tick = MAX_TICK;
+        self.quick = false;
+        self.slave_major = false;
     }
 
     /// Whether the next tick is a filler piece of an extended period (it reads nothing shared).
