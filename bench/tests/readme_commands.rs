@@ -1,7 +1,10 @@
-//! Every command README.md shows, run exactly as written (from a scratch directory inside the
-//! workspace, with `bench` and `.ci` linked in and the files the commands name put there), or skipped
-//! with the reason written here. A command added to the README fails this test until it is
-//! listed below, so the README's commands cannot rot unnoticed.
+//! Every command README.md and `docs/*.md` show, run exactly as written (from a scratch directory
+//! inside the workspace, with `bench` and `.ci` linked in and the files the commands name put
+//! there), or skipped with the reason written here. A command that flashes a board is checked as
+//! far as this machine allows: after `cargo xtask dist` the files it names exist (VERSION
+//! substituted), and its subcommand and flags are in the tool's own help text when the tool is
+//! installed. A command added to the README or the docs fails this test until it is listed below,
+//! so the commands cannot rot unnoticed.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -58,6 +61,8 @@ enum Plan {
     Run(&'static [&'static str]),
     /// Not run, for this reason.
     Skip(&'static str),
+    /// Flashes a board, so not run: its files and its syntax are checked (`check_flash_command`).
+    Board,
 }
 
 // every README command and what to do with it
@@ -72,6 +77,15 @@ fn plan(cmd: &str) -> Option<Plan> {
         "cargo test -p ddastep --target host-tuple" => Skip("the library's tests: part of cargo test-host, which CI runs"),
         "cargo xtask cycles" => Run(&[]),
         "cargo run --release" => Skip("flashes a board: needs a debug probe and probe-rs"),
+        "cargo xtask dist" => Run(&[]),
+        "cargo run --example step_move --target host-tuple" => Run(&[]),
+        "bash .ci/setup" => Run(&[]),
+        "cargo install probe-rs-tools --locked" => {
+            Skip("installs probe-rs from crates.io (minutes of compiling); its download command is checked")
+        }
+        "probe-rs download --chip STM32F103C8 target/dist/ddastep-VERSION.elf" => Board,
+        "st-flash write target/dist/ddastep-VERSION.bin 0x8000000" => Board,
+        "stm32flash -w target/dist/ddastep-VERSION.bin -v -g 0x0 /dev/ttyUSB0" => Board,
         "cargo sim -- --help" => Run(&[]),
         "cargo sim -- --serve" => Skip("serves until Ctrl-C; the --max-seconds form below runs"),
         "cargo la -- CAPTURE" => Skip("placeholder for a file; the concrete `cargo la` commands run"),
@@ -129,26 +143,32 @@ fn prepare(dir: &Path, cmd: &str) {
     }
 }
 
-#[test]
-fn every_readme_command_runs_as_written() {
-    let readme = std::fs::read_to_string(root().join("README.md")).unwrap();
-    let commands = readme_commands(&readme);
-    assert!(commands.len() >= 15, "{commands:?}");
+// the target directory the commands build into
+fn target_dir() -> PathBuf {
+    std::env::var_os("CARGO_TARGET_DIR").map(PathBuf::from).unwrap_or_else(|| root().join("target"))
+}
+
+/// Runs (or skips, or checks) every command in a scratch directory `target/<scratch>`; returns
+/// the report lines and each run command's output (stdout then stderr).
+fn run_all(commands: &[String], scratch: &str) -> (Vec<String>, std::collections::HashMap<String, String>) {
     let unknown: Vec<_> = commands.iter().filter(|c| plan(c).is_none()).collect();
-    assert!(unknown.is_empty(), "README commands this test does not know (add them to `plan`): {unknown:?}");
+    assert!(unknown.is_empty(), "commands this test does not know (add them to `plan`): {unknown:?}");
 
     // A scratch directory inside the workspace: cargo finds the workspace from there, and the
     // relative paths the README uses (bench/demo/..., .ci/setup) resolve through links.
-    let dir = root().join("target/readme-commands");
+    let dir = root().join("target").join(scratch);
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     for linked in ["bench", ".ci"] {
         std::os::unix::fs::symlink(root().join(linked), dir.join(linked)).unwrap();
     }
     let mut report = Vec::new();
-    for cmd in &commands {
+    let mut outputs = std::collections::HashMap::new();
+    let mut boards = Vec::new();
+    for cmd in commands {
         match plan(cmd).unwrap() {
             Plan::Skip(why) => report.push(format!("skipped  {cmd}  ({why})")),
+            Plan::Board => boards.push(cmd.clone()),
             Plan::Run(files) => {
                 prepare(&dir, cmd);
                 let out = Command::new("bash")
@@ -158,7 +178,7 @@ fn every_readme_command_runs_as_written() {
                     .env_remove("CARGO_ENCODED_RUSTFLAGS")
                     .env_remove("RUSTFLAGS")
                     .env_remove("CARGO_TARGET_DIR")
-                    .env("CARGO_TARGET_DIR", std::env::var_os("CARGO_TARGET_DIR").unwrap_or_else(|| root().join("target").into()))
+                    .env("CARGO_TARGET_DIR", target_dir())
                     .output()
                     .unwrap();
                 let text = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
@@ -167,10 +187,112 @@ fn every_readme_command_runs_as_written() {
                     assert!(dir.join(f).exists(), "`{cmd}` did not write {f}");
                 }
                 report.push(format!("ran      {cmd}"));
+                outputs.insert(cmd.clone(), text);
             }
         }
     }
+    // The flashing commands, after `cargo xtask dist` wrote the files they name.
+    if !boards.is_empty() {
+        let dist = outputs.get("cargo xtask dist").expect("a page that flashes shows `cargo xtask dist` first");
+        let version = dist_version(dist);
+        for cmd in &boards {
+            let note = check_flash_command(cmd, &version);
+            report.push(format!("checked  {cmd}  (needs a board; {note})"));
+        }
+    }
+    (report, outputs)
+}
+
+// VERSION from `cargo xtask dist`'s output (its `.../ddastep-VERSION.elf  N bytes  sha256 ...` line)
+fn dist_version(out: &str) -> String {
+    let elf = out
+        .lines()
+        .filter_map(|l| l.split_whitespace().next())
+        .find(|p| p.ends_with(".elf"))
+        .unwrap_or_else(|| panic!("no .elf line in `cargo xtask dist` output:\n{out}"));
+    let name = Path::new(elf).file_name().unwrap().to_string_lossy().into_owned();
+    name.strip_prefix("ddastep-").and_then(|n| n.strip_suffix(".elf")).expect("ddastep-VERSION.elf").to_owned()
+}
+
+// the tool's help text, or None when the tool is not installed
+fn help_text(tool: &str, args: &[&str]) -> Option<String> {
+    match Command::new(tool).args(args).output() {
+        Ok(out) => Some(format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr))),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
+        Err(e) => panic!("running {tool}: {e}"),
+    }
+}
+
+// whether `word` (a flag or subcommand) appears in `help` on its own (not inside a longer word)
+fn in_help(help: &str, word: &str) -> bool {
+    let part = |c: Option<char>| c.is_some_and(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_');
+    help.match_indices(word).any(|(i, _)| !part(help[..i].chars().next_back()) && !part(help[i + word.len()..].chars().next()))
+}
+
+/// Checks a flashing command without a board: every `target/dist/ddastep-VERSION.*` it names
+/// exists (VERSION as `cargo xtask dist` printed it), and where the tool is installed, its
+/// subcommand and flags appear in the tool's help and the arguments are where the usage puts
+/// them. Returns what was checked.
+fn check_flash_command(cmd: &str, version: &str) -> String {
+    let words: Vec<&str> = cmd.split_whitespace().collect();
+    let mut files = 0;
+    for w in &words {
+        if let Some(rest) = w.strip_prefix("target/") {
+            assert!(w.contains("ddastep-VERSION."), "`{cmd}`: a target/ path that is not a dist file: {w}");
+            let path = target_dir().join(rest.replace("VERSION", version));
+            assert!(path.is_file(), "`{cmd}`: {} does not exist after cargo xtask dist", path.display());
+            files += 1;
+        }
+    }
+    assert_eq!(files, 1, "`{cmd}` names one firmware file");
+    let flags: Vec<&str> = words.iter().filter(|w| w.starts_with('-')).map(|w| w.split('=').next().unwrap()).collect();
+    let (tool, help) = match words[0] {
+        "st-flash" => {
+            // st-flash [options] {read|write} [path] [addr] [size]: write, the .bin, the flash start
+            let sub = words.iter().position(|w| !w.starts_with('-') && *w != "st-flash").unwrap();
+            assert_eq!(words[sub], "write", "`{cmd}`");
+            assert!(words[sub + 1].ends_with(".bin"), "`{cmd}`: st-flash writes the .bin");
+            assert_eq!(u32::from_str_radix(words[sub + 2].trim_start_matches("0x"), 16), Ok(0x0800_0000), "`{cmd}`: flash start");
+            ("st-flash", help_text("st-flash", &["--help"]).map(|h| (h, vec!["write"])))
+        }
+        "stm32flash" => {
+            // stm32flash [-bvngfhc] [-[rw] filename] [tty_device]: -w FILE, -g ADDRESS, the port last
+            let at = |f: &str| words.iter().position(|w| *w == f).unwrap_or_else(|| panic!("`{cmd}` has no {f}"));
+            assert!(words[at("-w") + 1].ends_with(".bin"), "`{cmd}`: stm32flash writes the .bin");
+            assert_eq!(words[at("-g") + 1], "0x0", "`{cmd}`: start at the beginning of flash");
+            assert!(words.last().unwrap().starts_with("/dev/tty"), "`{cmd}`: the serial port comes last");
+            ("stm32flash", help_text("stm32flash", &["-h"]).map(|h| (h, vec![])))
+        }
+        "probe-rs" => {
+            // probe-rs download --chip CHIP FILE
+            assert_eq!(words[1], "download", "`{cmd}`");
+            assert_eq!(words[words.iter().position(|w| *w == "--chip").unwrap() + 1], "STM32F103C8", "`{cmd}`: the runner's chip");
+            assert!(words.last().unwrap().ends_with(".elf"), "`{cmd}`: probe-rs takes the ELF");
+            ("probe-rs", help_text("probe-rs", &["download", "--help"]).map(|h| (h, vec![])))
+        }
+        other => panic!("`{cmd}`: no check for {other}"),
+    };
+    let Some((help, subcommands)) = help else {
+        return format!("file exists; {tool} not installed, flags not checked");
+    };
+    for word in subcommands.iter().chain(&flags) {
+        assert!(in_help(&help, word), "`{cmd}`: {tool}'s help does not mention {word}:\n{help}");
+    }
+    format!("file exists; {} in {tool}'s help", subcommands.iter().chain(&flags).copied().collect::<Vec<_>>().join(" "))
+}
+
+#[test]
+fn every_readme_command_runs_as_written() {
+    let readme = std::fs::read_to_string(root().join("README.md")).unwrap();
+    let commands = readme_commands(&readme);
+    assert!(commands.len() >= 15, "{commands:?}");
+    let (report, outputs) = run_all(&commands, "readme-commands");
     println!("{}", report.join("\n"));
+    let dir = root().join("target/readme-commands");
+    // The library driven from code: the 5:3:2 move ends on its exact counts.
+    let example = &outputs["cargo run --example step_move --target host-tuple"];
+    assert!(example.contains("5:3:2: counts X 5000 Y 3000 Z 2000 "), "{example}");
+    assert!(example.contains("BSRR 0x00000600  step X+, Y+"), "{example}");
     // The pair: a 7-axis bench VCD of a 3-axis move (there and back) checks against a
     // 3-term ratio.
     let out = Command::new("bash")
@@ -182,4 +304,27 @@ fn every_readme_command_runs_as_written() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{stdout}");
     assert!(stdout.contains("X:Y:Z = 10000:6000:4000 = 5:3:2 exact") && stdout.contains("no steps on A, B, C, U"), "{stdout}");
+}
+
+#[test]
+fn every_docs_command_runs_or_is_checked() {
+    let mut pages: Vec<PathBuf> = std::fs::read_dir(root().join("docs"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "md"))
+        .collect();
+    pages.sort();
+    assert!(pages.iter().any(|p| p.ends_with("install.md")), "{pages:?}");
+    for page in pages {
+        let commands = readme_commands(&std::fs::read_to_string(&page).unwrap());
+        let name = page.file_stem().unwrap().to_string_lossy().into_owned();
+        let (report, _) = run_all(&commands, &format!("docs-commands-{name}"));
+        println!("docs/{name}.md:\n{}", report.join("\n"));
+        if name == "install" {
+            // the three ways to flash are all there and checked
+            for tool in ["probe-rs download", "st-flash write", "stm32flash -w"] {
+                assert!(report.iter().any(|r| r.starts_with(&format!("checked  {tool}"))), "{report:?}");
+            }
+        }
+    }
 }

@@ -4,7 +4,8 @@
 //! Unlike a plain queue, the consumer runs a move *in its slot* (its DDA accumulators live
 //! there) and releases the slot only when the move ends, so a move change costs the interrupt
 //! a pointer, not a copy. The producer may still raise the exit speed of the last move it
-//! pushed ([`Prepared::exit_q`], an atomic) before it publishes the next one.
+//! pushed (its atomic `exit_q`, through [`RingProducer::set_last_exit`]) before it publishes
+//! the next one.
 //!
 //! Invariant: slots `head..tail` (mod [`RING`]) hold published moves; the producer writes only
 //! slot `tail` and publishes it with a release store of `tail`; the consumer reads only
