@@ -178,11 +178,13 @@ impl<const N: usize> Shared<N> {
         self.starved.load(Relaxed)
     }
 
-    /// Current master step rate in steps/s (0 when idle).
+    /// Current master step rate in steps/s: 0 whenever no step is coming (idle, or a feed
+    /// hold at rest, where the engine keeps the period it stopped at for the resume), as
+    /// Grbl's `st_get_realtime_rate`.
     pub fn rate_hz(&self) -> u32 {
-        match self.period_bits.load(Relaxed) {
-            0 => 0,
-            b => ((crate::TIMER_HZ as u64 * 16) / b as u64) as u32,
+        match (self.state(), self.period_bits.load(Relaxed)) {
+            (State::Idle | State::Held, _) | (_, 0) => 0,
+            (_, b) => ((crate::TIMER_HZ as u64 * 16) / b as u64) as u32,
         }
     }
 
