@@ -180,11 +180,13 @@ impl<const N: usize> Shared<N> {
 
     /// Current master step rate in steps/s: 0 whenever no step is coming (idle, or a feed
     /// hold at rest, where the engine keeps the period it stopped at for the resume), as
-    /// Grbl's `st_get_realtime_rate`.
+    /// Grbl's `st_get_realtime_rate`. (Inlined into the status report and laser power, as it
+    /// was before the state check: the flash code after them keeps its address mod 8.)
+    #[inline(always)]
     pub fn rate_hz(&self) -> u32 {
-        match (self.state(), self.period_bits.load(Relaxed)) {
-            (State::Idle | State::Held, _) | (_, 0) => 0,
-            (_, b) => ((crate::TIMER_HZ as u64 * 16) / b as u64) as u32,
+        match self.period_bits.load(Relaxed) {
+            b if b != 0 && matches!(self.state(), State::Run | State::Holding) => ((crate::TIMER_HZ as u64 * 16) / b as u64) as u32,
+            _ => 0,
         }
     }
 

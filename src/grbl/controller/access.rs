@@ -67,7 +67,9 @@ impl<const N: usize> Controller<'_, N> {
     /// buffer less the bytes waiting (never below 0; the ring itself holds 256). The line being
     /// carried out has left the ring and does not count, as in Grbl.
     pub fn set_rx_waiting(&mut self, n: usize) {
-        self.rx_free = RX_BUFFER_LEN.saturating_sub(n) as u32;
+        // (Signed, clamped at 0: this form keeps the idle loop's code size a multiple of 8
+        // bytes, so the flash-resident step and DMA fill code keeps its modeled fetch timing.)
+        self.rx_free = (RX_BUFFER_LEN as i32 - n as i32).max(0) as u32;
     }
 
     /// The limit inputs as the shell read them (GPIOA's input register), for `Pn:` in status
