@@ -16,6 +16,13 @@ fn state(b: &mut Bench<3>) -> String {
     s.trim_start_matches('<').split(['|', '>']).next().unwrap_or("").to_string()
 }
 
+/// The state word and the `FS:` feed of a status report.
+fn state_feed(b: &mut Bench<3>) -> (String, f64) {
+    let s = b.status();
+    let feed = s.split(['|', '>']).find_map(|f| f.strip_prefix("FS:")).and_then(|f| f.split(',').next()?.parse().ok());
+    (s.trim_start_matches('<').split(['|', '>']).next().unwrap_or("").to_string(), feed.unwrap_or_else(|| panic!("{s}")))
+}
+
 /// The spindle's enable pin in the last poll's actions.
 fn spindle_on(b: &Bench<3>) -> bool {
     b.actions.last().is_some_and(|a| a.spindle.enable)
@@ -34,10 +41,11 @@ fn door_stops_the_move_and_the_spindle_and_resumes_only_when_closed() {
 
     b.door_open = true;
     b.run_ms(1);
-    assert_eq!(state(&mut b), "Door:2", "decelerating");
+    let (st, feed) = state_feed(&mut b);
+    assert!(st == "Door:2" && feed > 0.0, "decelerating: {st} FS:{feed}");
     assert!(spindle_on(&b), "the spindle runs until the motion has stopped");
     b.run_ms(1000);
-    assert_eq!(state(&mut b), "Door:1");
+    assert_eq!(state_feed(&mut b), ("Door:1".into(), 0.0), "stopped: the feed is 0 (Grbl)");
     assert!(!spindle_on(&b), "spindle off while the door is open");
     assert!(b.status().contains("|Pn:D"), "the door input shows in Pn:");
     let stopped = b.shared.positions();
@@ -52,7 +60,7 @@ fn door_stops_the_move_and_the_spindle_and_resumes_only_when_closed() {
 
     b.door_open = false;
     b.run_ms(2);
-    assert_eq!(state(&mut b), "Door:0", "closed, ready to resume");
+    assert_eq!(state_feed(&mut b), ("Door:0".into(), 0.0), "closed, ready to resume");
     assert!(!b.status().contains("Pn:"));
     assert!(!spindle_on(&b));
 
@@ -62,6 +70,7 @@ fn door_stops_the_move_and_the_spindle_and_resumes_only_when_closed() {
     assert!(spindle_on(&b));
     b.run_ms(3900);
     assert_eq!(b.shared.positions(), stopped, "motion waits for the spindle's 4 s");
+    assert_eq!(state_feed(&mut b), ("Door:3".into(), 0.0));
     b.run_ms(200);
     assert_eq!(state(&mut b), "Run");
     b.run_to_idle(10_000);

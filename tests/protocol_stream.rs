@@ -107,3 +107,145 @@ fn listings_wait_for_tx_room_instead_of_being_cut() {
     b.tx.buf = vec![b' '; 100];
     assert!(!b.ctl.byte(b'\n', &mut b.tx));
 }
+
+/// `Bf:blocks,rx` and `FS:feed,speed` of a status line.
+fn bf_fs(status: &str) -> ((u32, u32), (f64, f64)) {
+    let field = |name: &str| -> (String, String) {
+        let f = status.split(['|', '>']).find_map(|f| f.strip_prefix(name)).unwrap_or_else(|| panic!("no {name} in {status:?}"));
+        let (a, b) = f.split_once(',').unwrap();
+        (a.to_string(), b.to_string())
+    };
+    let (b0, b1) = field("Bf:");
+    let (f0, f1) = field("FS:");
+    ((b0.parse().unwrap(), b1.parse().unwrap()), (f0.parse().unwrap(), f1.parse().unwrap()))
+}
+
+/// A character-counting sender (grbl-streamer, bCNC): whole lines while the unacknowledged
+/// bytes, newlines included, stay within Grbl's 128-byte RX buffer.
+struct Counting {
+    lines: Vec<String>,
+    next: usize,
+    in_flight: VecDeque<usize>,
+}
+
+impl Counting {
+    fn unacked(&self) -> usize {
+        self.in_flight.iter().sum()
+    }
+
+    /// The lines that fit now.
+    fn due(&mut self) -> Vec<String> {
+        let mut v = Vec::new();
+        while self.next < self.lines.len() && self.unacked() + self.lines[self.next].len() + 1 <= RX_BUFFER_LEN {
+            self.in_flight.push_back(self.lines[self.next].len() + 1);
+            v.push(format!("{}\n", self.lines[self.next]));
+            self.next += 1;
+        }
+        v
+    }
+
+    /// Takes the replies in `text` up to (not including) the first status line; returns it.
+    fn read<'t>(&mut self, text: &'t str) -> Option<&'t str> {
+        let mut status = None;
+        for l in text.lines() {
+            if l.starts_with('<') {
+                status = status.or(Some(l));
+            } else if l == "ok" && status.is_none() {
+                self.in_flight.pop_front().expect("an ok for a line never sent");
+            } else {
+                assert!(l == "ok" || l.is_empty(), "{l:?}");
+            }
+        }
+        status
+    }
+
+    /// Takes the replies after the status line.
+    fn read_after_status(&mut self, text: &str) {
+        for l in text.lines().skip_while(|l| !l.starts_with('<')).skip(1) {
+            if l == "ok" {
+                self.in_flight.pop_front().expect("an ok for a line never sent");
+            }
+        }
+    }
+
+    fn longest(&self) -> usize {
+        self.lines.iter().map(|l| l.len() + 1).max().unwrap()
+    }
+}
+
+/// Checks a report's `Bf:` RX field against what the sender knows: at the report, the line
+/// bytes it had not seen acknowledged (`unacked`) are in the RX ring, but for at most the one
+/// line the controller is carrying out, so 128 - unacked <= rx <= 128 - unacked + longest line.
+fn check_rx(status: &str, unacked: usize, longest: usize) -> u32 {
+    let ((_, rx), _) = bf_fs(status);
+    let lo = RX_BUFFER_LEN.saturating_sub(unacked);
+    let hi = (RX_BUFFER_LEN + longest).saturating_sub(unacked).min(RX_BUFFER_LEN);
+    assert!((lo..=hi).contains(&(rx as usize)), "{status}: {unacked} bytes unacknowledged, want {lo}..={hi}");
+    rx
+}
+
+#[test]
+fn bf_counts_the_bytes_waiting_and_fs_is_zero_once_held() {
+    // 200 mm/s² on every axis: a hold from 20 mm/s decelerates for 100 ms.
+    let mut b = Bench::<3>::new(Settings { accel: [200.0; 7], ..Settings::BENCH });
+    b.take();
+    // Bf: on.
+    for l in ["$10=3", "G91 G1 F1200"] {
+        assert_eq!(b.line(l), "ok\r\n");
+    }
+    let mut c = Counting { lines: (0..70).map(|i| format!("X1 (move {i}{})", "#".repeat(i % 9))).collect(), next: 0, in_flight: VecDeque::new() };
+    let longest = c.longest();
+    let (mut waiting, mut hold1, mut hold0) = (0, 0, 0);
+    let mut held_since = None;
+    let mut ms = 0;
+    while c.in_flight.len() + c.lines.len() - c.next > 0 {
+        for l in c.due() {
+            b.send(&l);
+        }
+        b.tick_ms();
+        ms += 1;
+        assert!(ms < 60_000, "stalled");
+        let text = b.take();
+        assert!(c.read(&text).is_none());
+        // Feed hold in the middle of the stream, resumed 300 ms after it came to rest.
+        if c.next == 50 && held_since.is_none() && !b.shared.hold_requested() {
+            b.byte(b'!');
+        }
+        if ms % 5 != 0 {
+            continue;
+        }
+        b.byte(b'?');
+        let text = b.take();
+        let s = c.read(&text).expect("a status report").to_string();
+        let rx = check_rx(&s, c.unacked(), longest);
+        assert_eq!(rx as usize, RX_BUFFER_LEN - b.rx_waiting(), "{s}");
+        c.read_after_status(&text);
+        if b.rx_waiting() > longest {
+            waiting += 1;
+        }
+        let (_, (feed, _)) = bf_fs(&s);
+        if s.starts_with("<Hold:1") {
+            assert!(feed > 0.0, "decelerating: {s}");
+            hold1 += 1;
+        } else if s.starts_with("<Hold:0") {
+            assert_eq!(feed, 0.0, "held: {s}");
+            hold0 += 1;
+            let t = *held_since.get_or_insert(ms);
+            if ms - t >= 300 {
+                b.byte(b'~');
+            }
+        } else if s.starts_with("<Idle") {
+            assert_eq!(feed, 0.0, "{s}");
+        } else {
+            assert!(s.starts_with("<Run"), "{s}");
+            assert!(held_since.is_none() || hold0 > 0, "{s}");
+        }
+    }
+    assert!(waiting >= 20, "{waiting} reports with more than a line waiting");
+    assert!(hold1 >= 5 && hold0 >= 50, "{hold1} Hold:1, {hold0} Hold:0 reports");
+    b.run_to_idle(10_000);
+    let s = b.status();
+    assert!(s.starts_with("<Idle|"), "{s}");
+    assert_eq!(bf_fs(&s), ((protocol_rig::BLOCKS as u32, RX_BUFFER_LEN as u32), (0.0, 0.0)), "{s}");
+    assert_eq!(b.shared.positions(), [7000, 0, 0]);
+}

@@ -3,7 +3,7 @@
 
 mod firmware_rig;
 
-use ddastep_bench::emu::Board;
+use ddastep_bench::emu::{Board, HZ};
 use firmware_rig::*;
 
 /// MPos (or WPos) from a status line.
@@ -198,4 +198,90 @@ fn power_cut_during_a_coordinate_save_keeps_the_old_or_the_new_image() {
         assert!(reply(&mut c, "$$").contains("$110=1234.000"), "settings kept");
     }
     assert_eq!(seen, [true, true]);
+}
+
+/// `Bf:blocks,rx` and the feed of `FS:` in a status line.
+fn bf_feed(status: &str) -> (u32, u32, f64) {
+    let field = |name: &str| status.split(['|', '>']).find_map(|f| f.strip_prefix(name)).unwrap_or_else(|| panic!("no {name} in {status:?}"));
+    let (blocks, rx) = field("Bf:").split_once(',').unwrap();
+    (blocks.parse().unwrap(), rx.parse().unwrap(), field("FS:").split(',').next().unwrap().parse().unwrap())
+}
+
+#[test]
+fn character_counting_sender_sees_bf_fill_and_fs_zero_while_held() {
+    use std::collections::VecDeque;
+    // 200 mm/s² on every axis: a hold from 20 mm/s decelerates for 100 ms.
+    let mut b = boot_with(Some(ddastep::grbl::store::Stored::from(ddastep::grbl::settings::Settings {
+        accel: [200.0; 7],
+        ..ddastep::grbl::settings::Settings::BENCH
+    })));
+    b.run_seconds(0.02).unwrap();
+    ok(&mut b, "$10=3");
+    ok(&mut b, "G91 G1 F1200");
+    // grbl-streamer's / bCNC's rule: whole lines while at most 128 bytes are unacknowledged.
+    let lines: Vec<String> = (0..60).map(|i| format!("X1 (move {i}{})\n", "#".repeat(i % 9))).collect();
+    let longest = lines.iter().map(|l| l.len()).max().unwrap();
+    let mut next = 0;
+    let mut in_flight: VecDeque<usize> = VecDeque::new();
+    let mut seen = b.serial_output().len();
+    let (mut waiting, mut hold1, mut hold0, mut held_at) = (0, 0, 0, None);
+    while next < lines.len() || !in_flight.is_empty() {
+        while next < lines.len() && in_flight.iter().sum::<usize>() + lines[next].len() <= 128 {
+            b.serial_send(lines[next].as_bytes());
+            in_flight.push_back(lines[next].len());
+            next += 1;
+        }
+        // Feed hold in the middle of the stream, resumed 300 ms after it came to rest.
+        if next == 45 && held_at.is_none() && hold1 == 0 {
+            b.serial_send(b"!");
+        }
+        if held_at.is_some_and(|t| b.seconds() - t >= 0.3) {
+            b.serial_send(b"~");
+            held_at = Some(f64::INFINITY);
+        }
+        // `?` after what was sent (every line byte before it has reached the firmware).
+        b.serial_send(b"?");
+        let mark = b.serial_output().len();
+        b.run_until(HZ / 10, |b| b.serial_output()[mark..].contains(">\r\n")).unwrap();
+        b.run_seconds(0.005).unwrap();
+        let out = b.serial_output();
+        let end = out.rfind('\n').map_or(seen, |i| i + 1).max(seen);
+        for l in out[seen..end].lines() {
+            if l == "ok" {
+                in_flight.pop_front().expect("an ok for a line never sent");
+                continue;
+            }
+            assert!(l.starts_with('<'), "{l:?}");
+            // The line bytes not acknowledged yet are in the RX ring, but for the one line the
+            // controller is carrying out: 128 - unacked <= rx <= 128 - unacked + longest line.
+            let unacked: usize = in_flight.iter().sum();
+            let (_, rx, feed) = bf_feed(l);
+            let (lo, hi) = (128usize.saturating_sub(unacked), (128 + longest).saturating_sub(unacked).min(128));
+            assert!((lo..=hi).contains(&(rx as usize)), "{l}: {unacked} bytes unacknowledged, want {lo}..={hi}");
+            if unacked > 2 * longest {
+                assert!(rx < 128, "{l}: {unacked} bytes unacknowledged");
+                waiting += 1;
+            }
+            if l.starts_with("<Hold:1") {
+                assert!(feed > 0.0, "decelerating: {l}");
+                hold1 += 1;
+            } else if l.starts_with("<Hold:0") {
+                assert_eq!(feed, 0.0, "held: {l}");
+                hold0 += 1;
+                held_at.get_or_insert(b.seconds());
+            } else {
+                assert!(l.starts_with("<Run") || (l.starts_with("<Idle") && feed == 0.0), "{l}");
+            }
+        }
+        seen = end;
+        assert!(b.seconds() < 20.0, "stalled: {} lines sent, {} unacknowledged", next, in_flight.len());
+    }
+    assert!(waiting >= 20, "{waiting} reports with more than two lines waiting");
+    assert!(hold1 >= 3 && hold0 >= 15, "{hold1} Hold:1, {hold0} Hold:0 reports");
+    wait_idle(&mut b, 5.0);
+    let s = status(&mut b);
+    let (_, rx, feed) = bf_feed(&s);
+    assert_eq!((rx, feed), (128, 0.0), "{s}");
+    assert_eq!(net(&steps(&b))[0], 6000);
+    assert!(b.fault().is_none());
 }

@@ -73,9 +73,9 @@ pub fn dispatch<const N: usize>(b: u8, shared: &Shared<N>, req: &Requests) -> Op
 }
 
 /// One pass of the idle loop: a pending soft reset (dropping the RX bytes before it; the
-/// returned `Actions::reset` says it ran), a status
-/// request, a jog cancel, line bytes into the controller while it takes them (and the RX
-/// ring's free room for `Bf:`), then its poll.
+/// returned `Actions::reset` says it ran), a status request, a jog cancel, line bytes into the
+/// controller while it takes them (and the bytes left waiting in the RX ring, for `Bf:`), then
+/// its poll.
 pub fn idle_step<const N: usize>(
     ctl: &mut Controller<'_, N>,
     rx: &mut Consumer<'_, u8>,
@@ -107,7 +107,7 @@ pub fn idle_step<const N: usize>(
         }
         rx.dequeue();
     }
-    ctl.set_rx_free(rx.capacity() - rx.len());
+    ctl.set_rx_waiting(rx.len());
     let act = ctl.poll(now_ms, out);
     req.door_lock.store(ctl.door_active(), Relaxed);
     Actions { reset, ..act }

@@ -178,11 +178,15 @@ impl<const N: usize> Shared<N> {
         self.starved.load(Relaxed)
     }
 
-    /// Current master step rate in steps/s (0 when idle).
+    /// Current master step rate in steps/s: 0 whenever no step is coming (idle, or a feed
+    /// hold at rest, where the engine keeps the period it stopped at for the resume), as
+    /// Grbl's `st_get_realtime_rate`. (Inlined into the status report and laser power, as it
+    /// was before the state check: the flash code after them keeps its address mod 8.)
+    #[inline(always)]
     pub fn rate_hz(&self) -> u32 {
         match self.period_bits.load(Relaxed) {
-            0 => 0,
-            b => ((crate::TIMER_HZ as u64 * 16) / b as u64) as u32,
+            b if b != 0 && matches!(self.state(), State::Run | State::Holding) => ((crate::TIMER_HZ as u64 * 16) / b as u64) as u32,
+            _ => 0,
         }
     }
 

@@ -279,6 +279,11 @@ impl<const N: usize> Bench<N> {
         self.take()
     }
 
+    /// Line bytes in the RX ring that the controller has not taken yet.
+    pub fn rx_waiting(&self) -> usize {
+        self.rx_out.len()
+    }
+
     /// Runs until the held line, if any, is accepted.
     pub fn finish(&mut self) {
         let mut waited = 0;

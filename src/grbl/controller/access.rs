@@ -62,10 +62,14 @@ impl<const N: usize> Controller<'_, N> {
         self.job.is_some() || self.startup_next < STARTUP_LINES || self.tripped()
     }
 
-    /// Free bytes in the shell's RX ring, for `Bf:` in status reports (at most the announced
-    /// RX buffer size).
-    pub fn set_rx_free(&mut self, n: usize) {
-        self.rx_free = n.min(RX_BUFFER_LEN) as u32;
+    /// Line bytes waiting in the shell's RX ring (not yet taken by [`Self::byte`]), for `Bf:`
+    /// in status reports: as Grbl's `serial_get_rx_buffer_available`, the announced 128-byte
+    /// buffer less the bytes waiting (never below 0; the ring itself holds 256). The line being
+    /// carried out has left the ring and does not count, as in Grbl.
+    pub fn set_rx_waiting(&mut self, n: usize) {
+        // (Signed, clamped at 0: this form keeps the idle loop's code size a multiple of 8
+        // bytes, so the flash-resident step and DMA fill code keeps its modeled fetch timing.)
+        self.rx_free = (RX_BUFFER_LEN as i32 - n as i32).max(0) as u32;
     }
 
     /// The limit inputs as the shell read them (GPIOA's input register), for `Pn:` in status
