@@ -388,6 +388,11 @@ impl Board {
         windows.map(|w| self.stats.window_load(w as usize)).collect()
     }
 
+    // fraction of each 1 ms window spent in handler mode (every exception, entry to return)
+    pub fn window_interrupt_loads(&self, windows: std::ops::Range<u64>) -> Vec<f64> {
+        windows.map(|w| self.stats.window_interrupt_load(w as usize)).collect()
+    }
+
     // fraction of each 1 ms window spent in the step interrupt (TIM2), entry and return included
     pub fn window_isr_loads(&self, windows: std::ops::Range<u64>) -> Vec<f64> {
         windows.map(|w| self.stats.window_isr_load(w as usize)).collect()

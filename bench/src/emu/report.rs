@@ -82,9 +82,18 @@ pub struct Report {
     pub axes: Axes,
     pub max_slave_deviation_steps: f64,
     pub step_isr: StepIsr,
-    /// Busiest 1 ms window after boot (from the first WFI sleep on).
+    /// Interrupt load: handler-mode share (every exception, entry to return) of the busiest
+    /// 1 ms window after boot (from the first WFI sleep on). The summary's headline load.
+    pub interrupt_load_peak: f64,
+    /// The step path's interrupt (TIM2, or DMA1 channel 1's fill: `Board::step_irq`) alone,
+    /// entry to return, busiest 1 ms window after boot. `$I`'s peak times the same handler's
+    /// body only (without exception entry, return and the code around its two DWT reads).
+    pub step_isr_load_peak: f64,
+    /// Not asleep (everything but WFI: interrupts and idle's thread-mode work, such as parsing,
+    /// planning and saving `$` settings to flash), busiest 1 ms window after boot. Streaming
+    /// settings keeps idle busy for whole milliseconds, so this reads 100 % on most jobs.
     pub cpu_load_peak: f64,
-    /// Busiest 1 ms window including boot (init runs with interrupts off: 100 %).
+    /// Not asleep, busiest 1 ms window including boot (init runs with interrupts off: 100 %).
     pub cpu_load_peak_with_boot: f64,
     /// Modeled cycle of the first WFI sleep after reset (end of boot).
     pub boot_cycles: Option<u64>,
@@ -173,6 +182,8 @@ impl Board {
             axes: Axes(axes),
             max_slave_deviation_steps: dev,
             step_isr: self.step_isr(),
+            interrupt_load_peak: self.stats().interrupt_load_peak(self.cycles()),
+            step_isr_load_peak: self.stats().step_isr_load_peak(self.cycles()),
             cpu_load_peak: self.stats().cpu_load_peak(self.cycles()),
             cpu_load_peak_with_boot: self.stats().cpu_load_peak_with_boot(self.cycles()),
             boot_cycles: self.stats().first_sleep,
@@ -295,7 +306,13 @@ impl std::fmt::Display for Report {
         if let (Some(a), Some(b)) = (s.bsrr_offset_min_cycles, s.bsrr_offset_max_cycles) {
             writeln!(f, "update event -> first BSRR store: {a}..{b} modeled cycles")?;
         }
-        writeln!(f, "peak CPU load (1 ms windows after boot, modeled): {:.1} % ({:.1} % with boot)", self.cpu_load_peak * 100.0, self.cpu_load_peak_with_boot * 100.0)?;
+        writeln!(
+            f,
+            "peak interrupt load (busiest 1 ms after boot, modeled, handlers from entry to return): {:.1} %; step interrupt alone {:.1} % (`$I` times its body only)",
+            self.interrupt_load_peak * 100.0,
+            self.step_isr_load_peak * 100.0
+        )?;
+        writeln!(f, "peak not-asleep time (same windows; idle's work too, e.g. saving `$` settings): {:.1} % ({:.1} % with boot)", self.cpu_load_peak * 100.0, self.cpu_load_peak_with_boot * 100.0)?;
         writeln!(f, "timer overruns: {}", self.overruns)?;
         let sp = &self.spindle;
         if sp.pwm_changes > 0 || sp.pin_rises.iter().any(|&n| n > 0) {
