@@ -109,7 +109,7 @@ impl Console {
 /// Serve the board until Ctrl-C or `max_seconds`.
 pub fn run(opts: &Options) -> Result<Summary> {
     // The endpoints first: bad use fails before anything runs.
-    let pty = Pty::open(opts.pty_link.as_deref())?;
+    let mut pty = Pty::open(opts.pty_link.as_deref())?;
     let mut tcp = opts.tcp.as_deref().map(Tcp::bind).transpose()?;
     let mut board = Board::load(&opts.elf)?;
     if let Some(m) = &opts.machine {
@@ -147,14 +147,18 @@ pub fn run(opts: &Options) -> Result<Summary> {
     let mut buf = [0u8; 4096];
 
     while !STOP.load(Ordering::SeqCst) && limit.is_none_or(|l| board.cycles() < l) {
-        // clients -> board
+        // clients -> board (a pty client that came or left since the bytes before these: the
+        // output queued for the port is flushed first, see `pty.rs`)
+        let mut got = Vec::new();
         loop {
             let n = pty.read(&mut buf)?;
             if n == 0 {
                 break;
             }
-            feed(&mut board, &buf[..n]);
+            got.extend_from_slice(&buf[..n]);
         }
+        pty.clients();
+        feed(&mut board, &got);
         if let Some(t) = tcp.as_mut() {
             if let Some(peer) = t.accept() {
                 console.note(&format!("tcp: {peer} connected"));
