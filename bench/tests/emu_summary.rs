@@ -2,7 +2,22 @@
 //! DWT self-report of the step interrupt) on the paper demo, and its slave deviation on a job
 //! of many moves.
 
-use ddastep_bench::emu::{firmware_elf, gcode_lines, repo_root, Board, Report, HZ};
+use ddastep_bench::emu::{firmware_elf, gcode_lines, repo_root, Board, Report, DIR_PINS, HZ, STEP_PINS};
+use ddastep_bench::la::{Analyzer, AxisChannels, Config};
+
+// the largest slave deviation of the whole run taken as one straight line (the summary's
+// figure before it went per move)
+fn one_line_deviation(b: &Board) -> f64 {
+    let channels = (0..7).map(|i| AxisChannels::new(&i.to_string(), 2 * i, Some(2 * i + 1))).collect();
+    let mut la = Analyzer::new(Config::new(channels)).unwrap();
+    for e in b.edges().iter().filter(|e| e.port == 1) {
+        let ch = STEP_PINS.iter().position(|&p| p == e.pin).map(|a| 2 * a).or_else(|| DIR_PINS.iter().position(|&p| p == e.pin).map(|a| 2 * a + 1));
+        if let Some(ch) = ch {
+            la.edge(e.cycle * 1_000_000 / 72, ch, e.level);
+        }
+    }
+    la.finish().axes.iter().filter_map(|a| a.max_deviation_steps).fold(0.0, f64::max)
+}
 
 // boot, stream a demo job like `cargo sim` does, run until the pins are quiet for 50 ms
 fn run_job(path: &str) -> Board {
@@ -51,4 +66,23 @@ fn headline_load_agrees_with_the_firmware_self_report() {
     // The step interrupt alone, within 5 % of `$I`'s peak scaled the same way.
     assert!((r.step_isr_load_peak - scaled).abs() <= 0.05 * scaled, "step ISR peak {} vs {scaled}", r.step_isr_load_peak);
     assert!(r.interrupt_load_peak >= r.step_isr_load_peak && r.cpu_load_peak >= r.interrupt_load_peak);
+}
+
+#[test]
+fn slave_deviation_is_per_move() {
+    // 361 moves round a circle: as one straight line the slaves would be thousands of steps
+    // off it; each move against its own line is within one step.
+    let b = run_job("bench/demo/circle360.gcode");
+    let r = b.report();
+    let dev = r.max_slave_deviation_steps.expect("computed in interrupt mode");
+    assert!(dev <= 1.0, "max slave deviation {dev} steps over {} moves\n{r}", r.moves);
+    assert!(r.moves >= 361, "{} moves", r.moves);
+    // The figure before: the whole run against one line (the `la` checker over every edge).
+    let whole = one_line_deviation(&b);
+    assert!(whole > 100.0, "as one line: {whole} steps");
+    eprintln!("circle360: per move {dev:.3} steps over {} moves; as one line {whole:.1} steps", r.moves);
+    // The paper demo (two moves, 5:3:2) keeps its figure.
+    let r = run_job("bench/demo/paper_532.gcode").report();
+    assert_eq!(r.max_slave_deviation_steps.map(|d| (d * 1000.0).round() / 1000.0), Some(0.4), "{r}");
+    assert!(r.to_string().contains("max slave deviation (each move against its own line, 2 moves): 0.400 steps"), "{r}");
 }

@@ -53,6 +53,7 @@ impl Board {
     pub fn from_elf_bytes(elf: &[u8]) -> Result<Self> {
         let (mut cpu, image) = cpu::build(elf)?;
         cpu.reg_write(RegisterARM::PC, (image.reset & !1) as u64).map_err(|e| anyhow::anyhow!("{e:?}"))?;
+        cpu.get_data_mut().move_marks.targets = image.symbols.addresses_ending("::stepper::state::Stepper<_,_>>::finish");
         Ok(Self {
             cpu,
             image,
@@ -289,6 +290,18 @@ impl Board {
     // hand over the pin edges recorded so far and forget them (long runs that only count)
     pub fn take_edges(&mut self) -> Vec<PinEdge> {
         std::mem::take(&mut self.cpu.get_data_mut().edges)
+    }
+
+    // where the engine's moves ended so far: the cycle its step half's `finish` ran (a move's
+    // last step), and whether the step interrupt ran it (not DMA's fill, which runs ahead of
+    // the pins); recorded while edges are
+    pub fn move_ends(&self) -> &[(u64, bool)] {
+        &self.cpu.get_data().move_marks.hits
+    }
+
+    // hand over the move ends recorded so far and forget them (with `take_edges`)
+    pub fn take_move_ends(&mut self) -> Vec<(u64, bool)> {
+        std::mem::take(&mut self.cpu.get_data_mut().move_marks.hits)
     }
 
     // keep (default) or drop the pin edge history (long sweeps)

@@ -39,11 +39,13 @@ pub mod pwm;
 pub mod qenc;
 mod report;
 mod stats;
+pub mod summary;
 pub mod stream;
 pub mod sweep;
 mod systick;
 mod timer;
 mod usart;
+pub mod vcd_out;
 
 pub use board::Board;
 pub use clock::HZ;
