@@ -47,6 +47,19 @@ fn paper_532_is_exact_with_the_papers_pattern() {
 }
 
 #[test]
+fn slave_deviation_is_left_out_with_several_moves() {
+    // The fill runs the engine ahead of the pins: its move ends cannot split the pin edges.
+    let mut b = boot_dma(Settings::BENCH, false);
+    ok(&mut b, "G91");
+    ok(&mut b, "G1 X5 Y3 Z2 F6000");
+    ok(&mut b, "G1 X-3 Y5 Z1");
+    wait_idle(&mut b, 2.0);
+    let r = b.report();
+    assert_eq!(r.max_slave_deviation_steps, None, "{r}");
+    assert!(r.to_string().contains("max slave deviation: not computed (DMA burst mode"), "{r}");
+}
+
+#[test]
 fn fast_532_is_exact_at_200_khz_in_both_edge_modes() {
     let g = std::fs::read_to_string(ddastep_bench::emu::repo_root().join("bench/demo/fast_532.gcode")).unwrap();
     for dual in [false, true] {

@@ -32,6 +32,7 @@ mod input;
 pub mod iwdg;
 mod mcu;
 pub mod memory;
+mod pinmap;
 pub mod plant;
 pub mod nvic;
 pub mod profile;

@@ -1,14 +1,10 @@
 //! Run outputs: the JSON/human report (per-axis numbers come from the `la` checker fed with
-//! the bench's pin edges) and a VCD of the step, dir and enable pins. For the CLI and tests.
-//!
-//! Pin map (the firmware's, `ddastep::board`): step X..U = PB9..PB15, dir X..U = PB0, PB1, PB3, PB4, PB5,
-//! PB6, PB7, enable = PB8; spindle PWM = PA8 (TIM1 CH1, recorded as a duty cycle), spindle
-//! enable = PA15, spindle direction = PA5, flood = PA4, mist = PA3. VCD time is modeled cycles × 1000/72 ns, rounded to 1 ns.
+//! the bench's pin edges, `summary.rs`) and a VCD of the step, dir and enable pins
+//! (`vcd_out.rs`; the pin map is `pinmap.rs`). For the CLI and tests.
 
 use std::path::Path;
 
 use anyhow::Result;
-use ddastep::board as pins;
 use serde::ser::SerializeMap;
 use serde::{Serialize, Serializer};
 
@@ -18,22 +14,7 @@ use super::nvic::IRQ0;
 use super::summary::EdgeSummary;
 use super::vcd_out::VcdStream;
 
-/// Axis names in channel order.
-pub const AXES: [&str; 7] = ["X", "Y", "Z", "A", "B", "C", "U"];
-/// GPIOB step and dir pins per axis: the firmware's pin map.
-pub use ddastep::board::{DIR_PINS, STEP_PINS};
-/// GPIOB shared enable pin.
-pub const EN_PIN: u8 = pins::ENABLE_PIN;
-/// GPIOA pins of the spindle and coolant outputs, with their VCD names.
-pub const TOOL_PINS: [(u8, &str); 4] = [
-    (pins::SPINDLE_ENABLE_PIN, "SPINDLE_EN"),
-    (pins::SPINDLE_DIR_PIN, "SPINDLE_DIR"),
-    (pins::COOLANT_FLOOD_PIN, "FLOOD"),
-    (pins::COOLANT_MIST_PIN, "MIST"),
-];
-/// Dir pin low = positive motion (Grbl's convention with `$3=0`; a `$3` mask would flip axes,
-/// which the report does not follow).
-pub const DIR_LOW_IS_POSITIVE: bool = true;
+pub use super::pinmap::{AXES, DIR_LOW_IS_POSITIVE, DIR_PINS, EN_PIN, STEP_PINS, TOOL_PINS};
 
 /// Per-axis numbers.
 #[derive(Clone, Debug, Serialize)]

@@ -13,7 +13,7 @@
 
 use super::clock::HZ;
 use super::gpio::PinEdge;
-use super::report::{AXES, DIR_LOW_IS_POSITIVE, DIR_PINS, STEP_PINS, TOOL_PINS};
+use super::pinmap::{AXES, DIR_LOW_IS_POSITIVE, DIR_PINS, STEP_PINS, TOOL_PINS};
 use crate::la::{Analyzer, AxisChannels, Config, DeviationTracker, Report as LaReport};
 
 // picoseconds of a modeled cycle count

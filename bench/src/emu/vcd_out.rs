@@ -12,7 +12,7 @@ use anyhow::Result;
 use super::clock::HZ;
 use super::gpio::PinEdge;
 use super::pwm::PwmChange;
-use super::report::{AXES, DIR_PINS, EN_PIN, STEP_PINS, TOOL_PINS};
+use super::pinmap::{AXES, DIR_PINS, EN_PIN, STEP_PINS, TOOL_PINS};
 
 /// A VCD file being written.
 pub struct VcdStream {
