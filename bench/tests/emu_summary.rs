@@ -86,3 +86,22 @@ fn slave_deviation_is_per_move() {
     assert_eq!(r.max_slave_deviation_steps.map(|d| (d * 1000.0).round() / 1000.0), Some(0.4), "{r}");
     assert!(r.to_string().contains("max slave deviation (each move against its own line, 2 moves): 0.400 steps"), "{r}");
 }
+
+#[test]
+fn a_move_a_jog_cancel_dropped_does_not_join_the_next() {
+    let mut b = Board::load(firmware_elf().expect("firmware builds")).expect("ELF loads");
+    b.run_seconds(0.05).unwrap();
+    // A diagonal jog cancelled halfway (its move never finishes), then an X-only move.
+    b.send_line_wait_ok("$J=G91 X20 Y20 F600").unwrap();
+    b.run_seconds(0.5).unwrap();
+    b.serial_send_urgent(&[0x85]);
+    assert!(b.run_until_quiet(HZ / 20, 2 * HZ).unwrap());
+    b.run_seconds(0.1).unwrap();
+    b.send_line_wait_ok("G91 G1 X2 F600").unwrap();
+    assert!(b.run_until_quiet(HZ / 20, 5 * HZ).unwrap());
+    let r = b.report();
+    let y = r.axes.0[1].1.rising_edges;
+    assert!(y > 100 && y < 5000, "the jog was cut: Y {y}\n{r}");
+    let dev = r.max_slave_deviation_steps.unwrap();
+    assert!(dev <= 1.0, "{dev} steps: the dropped move joined the next\n{r}");
+}

@@ -64,7 +64,7 @@ pub struct Report {
     /// engine's moves, placed on the pins where its step half finishes each: `summary.rs`).
     /// `null` where it cannot be computed: DMA burst mode with more than one move.
     pub max_slave_deviation_steps: Option<f64>,
-    /// Moves seen on the pins (runs of steps between two move ends).
+    /// Moves seen on the pins (runs of steps between two move ends or 50 ms pauses).
     pub moves: u64,
     pub step_isr: StepIsr,
     /// Interrupt load: handler-mode share (every exception, entry to return) of the busiest

@@ -8,7 +8,8 @@
 //! line). The bench learns where a move ends from the firmware itself: the step half's
 //! `finish` runs in the tick that prepares a move's last step (`Board::move_ends`), and that
 //! step's edges go out at the next update event, so a move ends with the first step edges
-//! after its `finish`. In DMA burst mode the fill runs the engine ahead of the pins, so this
+//! after its `finish`; a pause of 50 ms without steps ends one too (a move a stop dropped never
+//! finishes). In DMA burst mode the fill runs the engine ahead of the pins, so this
 //! does not hold: there the figure is left out when the run has more than one move.
 
 use super::clock::HZ;
@@ -31,13 +32,18 @@ struct MoveDeviation {
     ends: std::collections::VecDeque<u64>,
     all_ends: u64,
     ahead: u64,
+    /// Cycle of the last steps.
+    last: u64,
     moves: u64,
     max: f64,
 }
 
+/// No step for this long (50 ms) ends a run of steps.
+const PAUSE: u64 = HZ / 20;
+
 impl MoveDeviation {
     fn new() -> Self {
-        Self { counts: [0; 7], tracker: DeviationTracker::new(7), ends: Default::default(), all_ends: 0, ahead: 0, moves: 0, max: 0.0 }
+        Self { counts: [0; 7], tracker: DeviationTracker::new(7), ends: Default::default(), all_ends: 0, ahead: 0, last: 0, moves: 0, max: 0.0 }
     }
 
     // one timestamp's steps (`stepped`: axes with a step at `cycle`)
@@ -47,6 +53,13 @@ impl MoveDeviation {
             self.ends.pop_front();
             ended = true;
         }
+        // A pause also ends a run of steps: a move dropped by a stop (Ctrl-X, a jog cancel)
+        // never finishes, and must not join the next one. (A feed hold splits a move in two,
+        // each part within a step of its own line.)
+        if !ended && cycle.saturating_sub(self.last) > PAUSE {
+            self.close();
+        }
+        self.last = cycle;
         for (c, s) in self.counts.iter_mut().zip(stepped) {
             *c += s as u64;
         }
