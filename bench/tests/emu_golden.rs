@@ -72,7 +72,7 @@ fn golden_of(r: &Report, replies: &[String]) -> Value {
         "gcode": DEMO,
         "replies": replies,
         "axes": axes,
-        "max_slave_deviation_steps": round(Some(r.max_slave_deviation_steps), 0.001),
+        "max_slave_deviation_steps": round(r.max_slave_deviation_steps, 0.001),
         "overruns": r.overruns,
         "step_isr": {
             "entries": r.step_isr.entries,

@@ -70,6 +70,7 @@ pub mod synth;
 mod vcd;
 
 pub use analysis::{Analyzer, AxisChannels, Config, CRUISE_FRACTION};
+pub use deviation::DeviationTracker;
 pub use capture::{open, Capture, CaptureInfo, Format};
 pub use ratio::reduce;
 pub use report::{AxisReport, Cruise, Expectation, Report, Series};

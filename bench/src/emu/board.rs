@@ -53,6 +53,7 @@ impl Board {
     pub fn from_elf_bytes(elf: &[u8]) -> Result<Self> {
         let (mut cpu, image) = cpu::build(elf)?;
         cpu.reg_write(RegisterARM::PC, (image.reset & !1) as u64).map_err(|e| anyhow::anyhow!("{e:?}"))?;
+        cpu.get_data_mut().move_marks.targets = image.symbols.addresses_ending("::stepper::state::Stepper<_,_>>::finish");
         Ok(Self {
             cpu,
             image,
@@ -291,6 +292,18 @@ impl Board {
         std::mem::take(&mut self.cpu.get_data_mut().edges)
     }
 
+    // where the engine's moves ended so far: the cycle its step half's `finish` ran (a move's
+    // last step), and whether the step interrupt ran it (not DMA's fill, which runs ahead of
+    // the pins); recorded while edges are
+    pub fn move_ends(&self) -> &[(u64, bool)] {
+        &self.cpu.get_data().move_marks.hits
+    }
+
+    // hand over the move ends recorded so far and forget them (with `take_edges`)
+    pub fn take_move_ends(&mut self) -> Vec<(u64, bool)> {
+        std::mem::take(&mut self.cpu.get_data_mut().move_marks.hits)
+    }
+
     // keep (default) or drop the pin edge history (long sweeps)
     pub fn record_edges(&mut self, on: bool) {
         self.cpu.get_data_mut().record_edges = on;
@@ -386,6 +399,11 @@ impl Board {
     // busy fraction of each 1 ms window [k·72 000, (k+1)·72 000) cycles for k in `windows`
     pub fn window_loads(&self, windows: std::ops::Range<u64>) -> Vec<f64> {
         windows.map(|w| self.stats.window_load(w as usize)).collect()
+    }
+
+    // fraction of each 1 ms window spent in handler mode (every exception, entry to return)
+    pub fn window_interrupt_loads(&self, windows: std::ops::Range<u64>) -> Vec<f64> {
+        windows.map(|w| self.stats.window_interrupt_load(w as usize)).collect()
     }
 
     // fraction of each 1 ms window spent in the step interrupt (TIM2), entry and return included

@@ -191,6 +191,14 @@ fn on_block(uc: &mut Unicorn<Mcu>, addr: u64, size: u32) {
     if m.fn_timer.is_some() && m.nvic.ipsr() == 0 {
         time_calls(uc, addr);
     }
+    let m = uc.get_data_mut();
+    if m.move_marks.targets.contains(&addr) {
+        let tim2 = m.nvic.ipsr() == super::nvic::IRQ0 + super::mcu::TIM2_IRQ;
+        let now = m.now;
+        if m.record_edges {
+            m.move_marks.hits.push((now, tim2));
+        }
+    }
     if !uc.get_data().blocks.contains(addr, size) {
         let mut code = vec![0u8; size as usize];
         let _ = uc.mem_read(addr as u64, &mut code);

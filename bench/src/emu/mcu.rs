@@ -88,6 +88,8 @@ pub struct Mcu {
     pub thread_cycles: u64,
     /// Inclusive timing of chosen functions, while on.
     pub fn_timer: Option<super::profile::FnTimer>,
+    /// Where the engine's moves end (entries of the step half's `finish`).
+    pub move_marks: super::profile::MoveMarks,
     /// Block starts of the running TIM2 handler, while the per-entry log is on.
     pub isr_blocks: Option<Vec<u32>>,
     /// Bridge stall cycles of the current block so far (added to the clock with the block).
@@ -143,6 +145,7 @@ impl Mcu {
             profile: None,
             thread_cycles: 0,
             fn_timer: None,
+            move_marks: Default::default(),
             isr_blocks: None,
             stall: 0,
             bridge_free: 0,
@@ -167,6 +170,7 @@ impl Mcu {
         self.flash_pending = Some(FlashConfig::RESET);
         self.edges = old.edges;
         self.record_edges = old.record_edges;
+        self.move_marks = old.move_marks;
         self.unmodeled = old.unmodeled;
         self.logged = old.logged;
         self.profile = old.profile;

@@ -62,6 +62,11 @@ impl Symbols {
         self.0.iter().filter(|s| s.2 == name).map(|s| s.0).collect()
     }
 
+    // start addresses of the functions whose demangled name ends with `suffix`
+    pub fn addresses_ending(&self, suffix: &str) -> Vec<u32> {
+        self.0.iter().filter(|s| s.2.ends_with(suffix)).map(|s| s.0).collect()
+    }
+
     // the function containing `addr` and the offset into it
     pub fn lookup(&self, addr: u32) -> Option<(&str, u32)> {
         match addr {
@@ -179,4 +184,15 @@ pub struct FnTimer {
     pub open: Vec<(u32, u32, usize, u64)>,
     /// Finished calls: (target index, inclusive thread-mode cycles, machine cycle at return).
     pub done: Vec<(usize, u64, u64)>,
+}
+
+/// Where the engine's moves end: every entry of the step half's `finish` (the running move
+/// made its last step), with the cycle and whether the step interrupt (TIM2) ran it. In DMA
+/// burst mode the fill interrupt runs it, ahead of the pins. For the slave deviation per move.
+#[derive(Clone, Debug, Default)]
+pub struct MoveMarks {
+    /// Entry addresses of `finish`.
+    pub targets: Vec<u32>,
+    /// (cycle of the entry, run by TIM2's handler), in order.
+    pub hits: Vec<(u64, bool)>,
 }

@@ -1,40 +1,20 @@
 //! Run outputs: the JSON/human report (per-axis numbers come from the `la` checker fed with
-//! the bench's pin edges) and a VCD of the step, dir and enable pins. For the CLI and tests.
-//!
-//! Pin map (the firmware's, `ddastep::board`): step X..U = PB9..PB15, dir X..U = PB0, PB1, PB3, PB4, PB5,
-//! PB6, PB7, enable = PB8; spindle PWM = PA8 (TIM1 CH1, recorded as a duty cycle), spindle
-//! enable = PA15, spindle direction = PA5, flood = PA4, mist = PA3. VCD time is modeled cycles × 1000/72 ns, rounded to 1 ns.
+//! the bench's pin edges, `summary.rs`) and a VCD of the step, dir and enable pins
+//! (`vcd_out.rs`; the pin map is `pinmap.rs`). For the CLI and tests.
 
-use std::io::Write;
 use std::path::Path;
 
 use anyhow::Result;
-use ddastep::board as pins;
 use serde::ser::SerializeMap;
 use serde::{Serialize, Serializer};
 
 use super::board::Board;
-use super::clock::HZ;
 use super::mcu::TIM2_IRQ;
 use super::nvic::IRQ0;
-use crate::la::{Analyzer, AxisChannels, Config};
+use super::summary::EdgeSummary;
+use super::vcd_out::VcdStream;
 
-/// Axis names in channel order.
-pub const AXES: [&str; 7] = ["X", "Y", "Z", "A", "B", "C", "U"];
-/// GPIOB step and dir pins per axis: the firmware's pin map.
-pub use ddastep::board::{DIR_PINS, STEP_PINS};
-/// GPIOB shared enable pin.
-pub const EN_PIN: u8 = pins::ENABLE_PIN;
-/// GPIOA pins of the spindle and coolant outputs, with their VCD names.
-pub const TOOL_PINS: [(u8, &str); 4] = [
-    (pins::SPINDLE_ENABLE_PIN, "SPINDLE_EN"),
-    (pins::SPINDLE_DIR_PIN, "SPINDLE_DIR"),
-    (pins::COOLANT_FLOOD_PIN, "FLOOD"),
-    (pins::COOLANT_MIST_PIN, "MIST"),
-];
-/// Dir pin low = positive motion (Grbl's convention with `$3=0`; a `$3` mask would flip axes,
-/// which the report does not follow).
-pub const DIR_LOW_IS_POSITIVE: bool = true;
+pub use super::pinmap::{AXES, DIR_LOW_IS_POSITIVE, DIR_PINS, EN_PIN, STEP_PINS, TOOL_PINS};
 
 /// Per-axis numbers.
 #[derive(Clone, Debug, Serialize)]
@@ -80,11 +60,25 @@ impl Serialize for Axes {
 #[derive(Clone, Debug, Serialize)]
 pub struct Report {
     pub axes: Axes,
-    pub max_slave_deviation_steps: f64,
+    /// Largest deviation of a slave from its move's straight line, over every move (the
+    /// engine's moves, placed on the pins where its step half finishes each: `summary.rs`).
+    /// `null` where it cannot be computed: DMA burst mode with more than one move.
+    pub max_slave_deviation_steps: Option<f64>,
+    /// Moves seen on the pins (runs of steps between two move ends or 50 ms pauses).
+    pub moves: u64,
     pub step_isr: StepIsr,
-    /// Busiest 1 ms window after boot (from the first WFI sleep on).
+    /// Interrupt load: handler-mode share (every exception, entry to return) of the busiest
+    /// 1 ms window after boot (from the first WFI sleep on). The summary's headline load.
+    pub interrupt_load_peak: f64,
+    /// The step path's interrupt (TIM2, or DMA1 channel 1's fill: `Board::step_irq`) alone,
+    /// entry to return, busiest 1 ms window after boot. `$I`'s peak times the same handler's
+    /// body only (without exception entry, return and the code around its two DWT reads).
+    pub step_isr_load_peak: f64,
+    /// Not asleep (everything but WFI: interrupts and idle's thread-mode work, such as parsing,
+    /// planning and saving `$` settings to flash), busiest 1 ms window after boot. Streaming
+    /// settings keeps idle busy for whole milliseconds, so this reads 100 % on most jobs.
     pub cpu_load_peak: f64,
-    /// Busiest 1 ms window including boot (init runs with interrupts off: 100 %).
+    /// Not asleep, busiest 1 ms window including boot (init runs with interrupts off: 100 %).
     pub cpu_load_peak_with_boot: f64,
     /// Modeled cycle of the first WFI sleep after reset (end of boot).
     pub boot_cycles: Option<u64>,
@@ -126,34 +120,21 @@ pub struct SpindleReport {
     pub pin_rises: [u64; 4],
 }
 
-// picoseconds of a modeled cycle count
-fn ps(cycles: u64) -> u64 {
-    (cycles as u128 * 1_000_000_000_000 / HZ as u128) as u64
-}
-
 impl Board {
     // the report of everything so far
     pub fn report(&self) -> Report {
-        let mut channels = Vec::new();
-        for (i, name) in AXES.iter().enumerate() {
-            channels.push(AxisChannels::new(name, 2 * i, Some(2 * i + 1)));
-        }
-        let mut config = Config::new(channels);
-        config.dir_invert = DIR_LOW_IS_POSITIVE;
-        config.dual_edge = self.dual_edge;
-        let mut la = Analyzer::new(config).expect("fixed channel map");
-        for ch in 0..14 {
-            la.edge(0, ch, false);
-        }
-        for e in self.edges().iter().filter(|e| e.port == 1) {
-            let ch = STEP_PINS.iter().position(|&p| p == e.pin).map(|a| 2 * a).or_else(|| DIR_PINS.iter().position(|&p| p == e.pin).map(|a| 2 * a + 1));
-            if let Some(ch) = ch {
-                la.edge(ps(e.cycle), ch, e.level);
-            }
-        }
-        la.advance(ps(self.cycles()));
-        let r = la.finish();
-        let axes = r
+        let mut sum = EdgeSummary::new(self.dual_edge);
+        sum.move_ends(self.move_ends());
+        sum.edges(self.edges());
+        self.report_from(sum)
+    }
+
+    // the report, with the edge figures from a summary fed with every edge and move end so
+    // far (`--serve`, which does not keep the edges)
+    pub fn report_from(&self, sum: EdgeSummary) -> Report {
+        let fig = sum.finish(self.cycles());
+        let axes = fig
+            .la
             .axes
             .iter()
             .map(|a| {
@@ -167,12 +148,14 @@ impl Board {
                 })
             })
             .collect();
-        let dev = r.axes.iter().filter_map(|a| a.max_deviation_steps).fold(0.0, f64::max);
         let u = self.serial_bytes().0;
         Report {
             axes: Axes(axes),
-            max_slave_deviation_steps: dev,
+            max_slave_deviation_steps: fig.max_slave_deviation_steps,
+            moves: fig.moves,
             step_isr: self.step_isr(),
+            interrupt_load_peak: self.stats().interrupt_load_peak(self.cycles()),
+            step_isr_load_peak: self.stats().step_isr_load_peak(self.cycles()),
             cpu_load_peak: self.stats().cpu_load_peak(self.cycles()),
             cpu_load_peak_with_boot: self.stats().cpu_load_peak_with_boot(self.cycles()),
             boot_cycles: self.stats().first_sleep,
@@ -183,7 +166,7 @@ impl Board {
             serial: String::from_utf8_lossy(u).into_owned(),
             usart_rx_overruns: self.usart_rx_overruns(),
             unmodeled_registers: self.unmodeled().iter().map(|(a, pc)| format!("{a:#010x} (pc {pc:#010x})")).collect(),
-            spindle: self.spindle_report(),
+            spindle: self.spindle_report(fig.tool_rises),
             dma: DmaReport {
                 transfers: self.dma_transfers(),
                 bus_cycles: self.dma_bus_cycles(),
@@ -194,10 +177,9 @@ impl Board {
         }
     }
 
-    // the spindle/laser PWM and tool pins so far
-    pub fn spindle_report(&self) -> SpindleReport {
+    // the spindle/laser PWM so far, with the tool pins' rises (`EdgeSummary::tool_rises`)
+    pub fn spindle_report(&self, rises: [u64; 4]) -> SpindleReport {
         let pwm = self.pwm_changes();
-        let rises = TOOL_PINS.map(|(pin, _)| self.edges().iter().filter(|e| e.port == 0 && e.pin == pin && e.level).count() as u64);
         SpindleReport {
             pwm_changes: pwm.len(),
             max_duty: pwm.iter().map(|c| c.duty).fold(0.0, f64::max),
@@ -226,55 +208,9 @@ impl Board {
 
     // write a VCD of the step/dir/enable pins, the tool pins and the spindle PWM duty
     pub fn write_vcd(&self, path: impl AsRef<Path>) -> Result<()> {
-        let file = std::io::BufWriter::new(std::fs::File::create(path)?);
-        let mut w = vcd::Writer::new(file);
-        w.timescale(1, vcd::TimescaleUnit::NS)?;
-        w.add_module("bluepill")?;
-        let mut ids = std::collections::HashMap::new();
-        for (i, name) in AXES.iter().enumerate() {
-            ids.insert(STEP_PINS[i], w.add_wire(1, &format!("{name}_STEP"))?);
-            ids.insert(DIR_PINS[i], w.add_wire(1, &format!("{name}_DIR"))?);
-        }
-        ids.insert(EN_PIN, w.add_wire(1, "EN")?);
-        let mut tool = std::collections::HashMap::new();
-        for (pin, name) in TOOL_PINS {
-            tool.insert(pin, w.add_wire(1, name)?);
-        }
-        let duty = w.add_var(vcd::VarType::Real, 64, "SPINDLE_PWM_DUTY", None)?;
-        w.upscope()?;
-        w.enddefinitions()?;
-        w.timestamp(0)?;
-        for id in ids.values().chain(tool.values()) {
-            w.change_scalar(*id, vcd::Value::V0)?;
-        }
-        w.change_real(duty, 0.0)?;
-        // Pin edges and duty changes in time order (both lists are sorted).
-        let pins = self.edges().iter().filter_map(|e| {
-            let id = match e.port {
-                1 => ids.get(&e.pin),
-                0 => tool.get(&e.pin),
-                _ => None,
-            }?;
-            Some((e.cycle, *id, Some(e.level), 0.0))
-        });
-        let pwm = self.pwm_changes().iter().map(|c| (c.cycle, duty, None, c.duty));
-        let mut events: Vec<_> = pins.chain(pwm).collect();
-        events.sort_by_key(|e| e.0);
-        let mut last = 0;
-        for (cycle, id, level, value) in events {
-            let t = (cycle * 1000 + HZ / 2_000_000) / (HZ / 1_000_000);
-            if t != last {
-                w.timestamp(t)?;
-                last = t;
-            }
-            match level {
-                Some(l) => w.change_scalar(id, if l { vcd::Value::V1 } else { vcd::Value::V0 })?,
-                None => w.change_real(id, value)?,
-            }
-        }
-        w.timestamp((self.cycles() * 1000) / (HZ / 1_000_000))?;
-        w.writer().flush()?;
-        Ok(())
+        let mut v = VcdStream::create(path)?;
+        v.feed(self.edges(), self.pwm_changes())?;
+        v.finish(self.cycles())
     }
 }
 
@@ -289,13 +225,22 @@ impl std::fmt::Display for Report {
             }
             writeln!(f, "{name:>4} {:>7} {:>4} {:>12.0} {:>12} {:>11} {:>17}", a.rising_edges, a.net_steps, a.max_rate_hz, o(a.min_high_ns), o(a.min_low_ns), o(a.min_dir_setup_ns))?;
         }
-        writeln!(f, "max slave deviation: {:.3} steps", self.max_slave_deviation_steps)?;
+        match self.max_slave_deviation_steps {
+            Some(d) => writeln!(f, "max slave deviation (each move against its own line, {} moves): {d:.3} steps", self.moves)?,
+            None => writeln!(f, "max slave deviation: not computed (DMA burst mode: the fill runs the engine ahead of the pins, so its {} moves cannot be told apart on them)", self.moves)?,
+        }
         let s = &self.step_isr;
         writeln!(f, "step ISR (TIM2): {} entries, {:.1} mean / {} max modeled cycles, {:.1} mean / {} max instructions", s.entries, s.mean_cycles, s.max_cycles, s.mean_instructions, s.max_instructions)?;
         if let (Some(a), Some(b)) = (s.bsrr_offset_min_cycles, s.bsrr_offset_max_cycles) {
             writeln!(f, "update event -> first BSRR store: {a}..{b} modeled cycles")?;
         }
-        writeln!(f, "peak CPU load (1 ms windows after boot, modeled): {:.1} % ({:.1} % with boot)", self.cpu_load_peak * 100.0, self.cpu_load_peak_with_boot * 100.0)?;
+        writeln!(
+            f,
+            "peak interrupt load (busiest 1 ms after boot, modeled, handlers from entry to return): {:.1} %; step interrupt alone {:.1} % (`$I` times its body only)",
+            self.interrupt_load_peak * 100.0,
+            self.step_isr_load_peak * 100.0
+        )?;
+        writeln!(f, "peak not-asleep time (same windows; idle's work too, e.g. saving `$` settings): {:.1} % ({:.1} % with boot)", self.cpu_load_peak * 100.0, self.cpu_load_peak_with_boot * 100.0)?;
         writeln!(f, "timer overruns: {}", self.overruns)?;
         let sp = &self.spindle;
         if sp.pwm_changes > 0 || sp.pin_rises.iter().any(|&n| n > 0) {

@@ -1,5 +1,6 @@
-//! Run statistics kept while the board runs: sleep time per 1 ms window (CPU load) and the
-//! TIM2 step interrupt's modeled duration, instruction count and update-to-BSRR offset.
+//! Run statistics kept while the board runs: sleep time per 1 ms window (the not-asleep load),
+//! handler-mode time per window (the interrupt load) and the step interrupt's modeled
+//! duration, instruction count and update-to-BSRR offset.
 //! For `board.rs` (collection) and `report.rs` (output).
 
 /// Modeled cycles per CPU-load window (1 ms at 72 MHz).
@@ -60,6 +61,11 @@ pub struct Stats {
     pub step_isr: IsrStats,
     /// TIM2 handler cycles per window (entry to end of return).
     pub isr_busy: Vec<u64>,
+    /// Handler-mode cycles per window: any exception, from the entry that leaves thread mode
+    /// to the return that goes back to it (nesting and tail-chains included once).
+    pub handler_busy: Vec<u64>,
+    /// Cycle the running stretch of handler mode began.
+    pub handler_since: Option<u64>,
     /// Every TIM2 handler run, while the per-entry log is on.
     pub isr_log: Option<Vec<IsrRun>>,
 }
@@ -71,6 +77,18 @@ impl Stats {
             self.first_sleep = Some(from);
         }
         add_per_window(&mut self.sleep, from, to);
+    }
+
+    // an exception is entered at cycle `at` (from thread mode, or nested / tail-chained)
+    pub fn handler_enter(&mut self, at: u64) {
+        self.handler_since.get_or_insert(at);
+    }
+
+    // the CPU goes back to thread mode (or sleeps on exit) at cycle `at`
+    pub fn handler_leave(&mut self, at: u64) {
+        if let Some(s) = self.handler_since.take() {
+            add_per_window(&mut self.handler_busy, s, at);
+        }
     }
 
     // close the running TIM2 handler at cycle `end` with `insns` executed so far
@@ -112,7 +130,34 @@ impl Stats {
     }
 
     fn peak_windows(&self, first: usize, now: u64) -> f64 {
-        (first..(now / WINDOW) as usize).map(|w| self.window_load(w)).fold(0.0, f64::max)
+        self.peak_of(first, now, |w| self.window_load(w))
+    }
+
+    // busiest complete window after boot (see `cpu_load_peak`) by `load`
+    fn peak_after_boot(&self, now: u64, load: impl Fn(usize) -> f64) -> f64 {
+        match self.first_sleep {
+            Some(s) => self.peak_of(s.div_ceil(WINDOW) as usize, now, load),
+            None => 0.0,
+        }
+    }
+
+    fn peak_of(&self, first: usize, now: u64, load: impl Fn(usize) -> f64) -> f64 {
+        (first..(now / WINDOW) as usize).map(load).fold(0.0, f64::max)
+    }
+
+    // interrupt load (handler mode, every exception) of the busiest complete window after boot
+    pub fn interrupt_load_peak(&self, now: u64) -> f64 {
+        self.peak_after_boot(now, |w| self.window_interrupt_load(w))
+    }
+
+    // step interrupt's share of the busiest complete window after boot
+    pub fn step_isr_load_peak(&self, now: u64) -> f64 {
+        self.peak_after_boot(now, |w| self.window_isr_load(w))
+    }
+
+    // fraction of window `w` in handler mode
+    pub fn window_interrupt_load(&self, w: usize) -> f64 {
+        *self.handler_busy.get(w).unwrap_or(&0) as f64 / WINDOW as f64
     }
 
     // fraction of window `w` spent in the TIM2 handler

@@ -10,9 +10,12 @@
 //! step rate in the busiest 10 ms since the last refresh, modeled CPU load). When the emulator falls more than 250 ms behind the wall
 //! clock, the lag is dropped (the board goes on from where it is, one second per second) and
 //! the status line says the host cannot keep up. Runs until Ctrl-C (SIGINT/SIGTERM) or
-//! `max_seconds` of simulated time, then writes the VCD/JSON if asked.
+//! `max_seconds` of simulated time. Each turn takes the board's pin edges off it: the VCD, if
+//! asked, is written as they come, and the JSON's edge figures are kept as they come
+//! (`emu/summary.rs`), so memory does not grow with the edges; the JSON is written at the end.
 
 mod pty;
+mod record;
 mod status;
 mod tcp;
 
@@ -26,6 +29,7 @@ use nix::sys::signal::{signal, SigHandler, Signal};
 
 use crate::emu::{Board, InputFlip, HZ};
 pub use pty::Pty;
+pub use record::Recorder;
 pub use status::Position;
 pub use tcp::Tcp;
 
@@ -109,7 +113,7 @@ impl Console {
 /// Serve the board until Ctrl-C or `max_seconds`.
 pub fn run(opts: &Options) -> Result<Summary> {
     // The endpoints first: bad use fails before anything runs.
-    let pty = Pty::open(opts.pty_link.as_deref())?;
+    let mut pty = Pty::open(opts.pty_link.as_deref())?;
     let mut tcp = opts.tcp.as_deref().map(Tcp::bind).transpose()?;
     let mut board = Board::load(&opts.elf)?;
     if let Some(m) = &opts.machine {
@@ -118,7 +122,9 @@ pub fn run(opts: &Options) -> Result<Summary> {
     for f in &opts.inputs {
         board.schedule_input(*f);
     }
-    let keep_edges = opts.vcd.is_some() || opts.json.is_some();
+    // The VCD is written as the edges come and the JSON's edge figures kept as they come: the
+    // board's edge list is emptied every turn.
+    let mut record = Recorder::new(&board, opts.vcd.as_deref(), opts.json.is_some())?;
 
     println!("serial: {}", pty.path.display());
     if let Some(l) = &opts.pty_link {
@@ -141,20 +147,24 @@ pub fn run(opts: &Options) -> Result<Summary> {
     let limit = opts.max_seconds.map(|s| (s * HZ as f64) as u64);
     let start = Instant::now();
     let mut lag = Duration::ZERO; // wall time the board could not keep up with, dropped
-    let (mut tx_mark, mut edge_mark) = (0usize, 0usize);
+    let mut tx_mark = 0usize;
     let mut pos = Position::default();
     let mut last = (Instant::now(), board.cycles(), Duration::ZERO);
     let mut buf = [0u8; 4096];
 
     while !STOP.load(Ordering::SeqCst) && limit.is_none_or(|l| board.cycles() < l) {
-        // clients -> board
+        // clients -> board (a pty client that came or left since the bytes before these: the
+        // output queued for the port is flushed first, see `pty.rs`)
+        let mut got = Vec::new();
         loop {
             let n = pty.read(&mut buf)?;
             if n == 0 {
                 break;
             }
-            feed(&mut board, &buf[..n]);
+            got.extend_from_slice(&buf[..n]);
         }
+        pty.clients();
+        feed(&mut board, &got);
         if let Some(t) = tcp.as_mut() {
             if let Some(peer) = t.accept() {
                 console.note(&format!("tcp: {peer} connected"));
@@ -200,12 +210,7 @@ pub fn run(opts: &Options) -> Result<Summary> {
                 t.write(&new);
             }
         }
-        if keep_edges {
-            pos.feed(&board.edges()[edge_mark..]);
-            edge_mark = board.edges().len();
-        } else {
-            pos.feed(&board.take_edges());
-        }
+        pos.feed(&record.turn(&mut board)?);
 
         if last.0.elapsed() >= status_every {
             let (t0, c0, lag0) = last;
@@ -239,11 +244,9 @@ pub fn run(opts: &Options) -> Result<Summary> {
         lagged_s: lag.as_secs_f64(),
         steps: pos.steps,
     };
-    if let Some(p) = &opts.vcd {
-        board.write_vcd(p)?;
-    }
-    if let Some(p) = &opts.json {
-        std::fs::write(p, serde_json::to_string_pretty(&board.report())?)?;
+    let report = record.finish(&mut board)?;
+    if let (Some(p), Some(r)) = (&opts.json, report) {
+        std::fs::write(p, serde_json::to_string_pretty(&r)?)?;
     }
     Ok(summary)
 }

@@ -5,6 +5,17 @@
 //! and opens it again finds the same device, and reading the master never fails with EIO
 //! between two clients. Baud rate and other settings a sender applies are accepted and ignored
 //! (the emulated USART keeps 115200 8N1 timing).
+//!
+//! New clients start on a quiet line: since the slave stays open, its input queue would keep
+//! what a client left unread and hand it to the next one. The slave's opens and closes by
+//! clients show up as inotify events on its device node (Linux reports every open and close of
+//! a file, device nodes included; the kernel gives a pty master no sign of a slave open while
+//! the slave is held open, and termios or packet-mode changes come only from clients that
+//! change settings). So the serve loop calls [`Pty::clients`] between reading client bytes and
+//! feeding them: when the last client closes, or a client opens after an earlier one, the
+//! queue is flushed (`tcflush(TCIFLUSH)` on the slave), and while no client has it open after
+//! one has, output is dropped as a serial line drops what nobody listens to. What the board
+//! sent before the first client opened (the boot banner) stays for that client.
 
 use std::os::fd::{AsFd, OwnedFd};
 use std::path::{Path, PathBuf};
@@ -13,14 +24,20 @@ use anyhow::{bail, Context, Result};
 use nix::errno::Errno;
 use nix::fcntl::{fcntl, FcntlArg, OFlag};
 use nix::pty::openpty;
-use nix::sys::termios::{cfmakeraw, tcgetattr, tcsetattr, SetArg};
+use nix::sys::inotify::{AddWatchFlags, InitFlags, Inotify};
+use nix::sys::termios::{cfmakeraw, tcflush, tcgetattr, tcsetattr, FlushArg, SetArg};
 
 /// The master side (ours), the slave kept open, its path and the symlink we made.
 pub struct Pty {
     master: OwnedFd,
-    _slave: OwnedFd,
+    slave: OwnedFd,
     pub path: PathBuf,
     link: Option<PathBuf>,
+    /// Opens and closes of the slave's device node (ours came before the watch).
+    watch: Inotify,
+    /// Clients holding the slave open now, and whether one ever did.
+    open: u32,
+    had_client: bool,
 }
 
 impl Pty {
@@ -32,11 +49,41 @@ impl Pty {
         cfmakeraw(&mut t);
         tcsetattr(&pty.slave, SetArg::TCSANOW, &t).context("setting the pseudo-terminal to raw mode")?;
         fcntl(&pty.master, FcntlArg::F_SETFL(OFlag::O_NONBLOCK)).context("making the pseudo-terminal non-blocking")?;
+        let watch = Inotify::init(InitFlags::IN_NONBLOCK | InitFlags::IN_CLOEXEC).context("inotify for the pseudo-terminal's clients")?;
+        watch.add_watch(&path, AddWatchFlags::IN_OPEN | AddWatchFlags::IN_CLOSE).context("watching the pseudo-terminal's opens")?;
         let link = match link {
             Some(l) => Some(make_link(l, &path)?),
             None => None,
         };
-        Ok(Self { master: pty.master, _slave: pty.slave, path, link })
+        Ok(Self { master: pty.master, slave: pty.slave, path, link, watch, open: 0, had_client: false })
+    }
+
+    // take note of clients that opened or closed the port since the last call; flush the
+    // output queued for the slave when the last one closed or one opened after an earlier
+    // one (the serve loop calls this after reading client bytes and before feeding them, so no
+    // reply to a new client's bytes is ever flushed); returns whether it flushed
+    pub fn clients(&mut self) -> bool {
+        let mut flush = false;
+        while let Ok(events) = self.watch.read_events() {
+            if events.is_empty() {
+                break;
+            }
+            for e in events {
+                if e.mask.contains(AddWatchFlags::IN_OPEN) {
+                    flush |= self.had_client;
+                    self.open += 1;
+                    self.had_client = true;
+                }
+                if e.mask.intersects(AddWatchFlags::IN_CLOSE) {
+                    self.open = self.open.saturating_sub(1);
+                    flush |= self.open == 0;
+                }
+            }
+        }
+        if flush {
+            let _ = tcflush(&self.slave, FlushArg::TCIFLUSH);
+        }
+        flush
     }
 
     // bytes a client wrote, if any (never blocks)
@@ -48,9 +95,13 @@ impl Pty {
         }
     }
 
-    // send bytes to the client; what does not fit (nobody reading, buffer full) is dropped,
-    // as a serial line drops what nobody listens to
+    // send bytes to the client; what does not fit (nobody reading, buffer full), or comes
+    // while no client has the port open after one has, is dropped, as a serial line drops what
+    // nobody listens to
     pub fn write(&self, mut bytes: &[u8]) {
+        if self.had_client && self.open == 0 {
+            return;
+        }
         while !bytes.is_empty() {
             match nix::unistd::write(self.master.as_fd(), bytes) {
                 Ok(0) | Err(_) => return,

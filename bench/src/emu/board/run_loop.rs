@@ -140,6 +140,7 @@ impl Board {
     // enter exception `n` with `exc_return` in LR, charging `cost` modeled cycles
     fn take(&mut self, n: u32, exc_return: u32, cost: u64) {
         let start = self.cycles();
+        self.stats.handler_enter(start);
         exception::enter(&mut self.cpu, n, exc_return);
         let m = self.cpu.get_data_mut();
         m.account(profile::ENTRY, cost, 0);
@@ -176,6 +177,9 @@ impl Board {
         }
         self.profile_return(n, return_cycles);
         let to_thread = exc_return & 8 != 0;
+        if to_thread {
+            self.stats.handler_leave(now + return_cycles);
+        }
         if to_thread && self.cpu.get_data().nvic.scr & 2 != 0 {
             self.sleeping = true;
             self.sleep_on_exit = Some(exc_return);
@@ -214,6 +218,7 @@ impl Board {
         self.sleep_on_exit = None;
         self.split = None;
         self.stats.isr = None;
+        self.stats.handler_leave(self.cycles());
     }
 
     // charge an exception return of exception `n` to the profile (the clock is charged apart)
