@@ -45,6 +45,7 @@ impl Decimal {
 
     /// `self × 25.4` (inches to mm; 25.4 = 254/10 exactly), or `None` if it needs more digits
     /// than a [`Decimal`] holds.
+    #[inline(never)]
     pub fn inches(self) -> Option<Decimal> {
         // |sig| ≤ MAX_SIG: no overflow.
         Decimal::new(self.sig * 254, self.frac as u32 + 1)
@@ -71,6 +72,7 @@ impl Decimal {
     }
 
     /// Whether [`Self::steps`] takes it (|sig| ≤ [`MAX_EXACT_SIG`]).
+    #[inline(never)]
     pub fn exact_steps(self) -> bool {
         self.sig.unsigned_abs() <= MAX_EXACT_SIG
     }
