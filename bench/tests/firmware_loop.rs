@@ -112,6 +112,18 @@ fn soft_reset_stops_motion_and_keeps_position_equal_to_pulses() {
     assert_eq!(net(&steps(&b))[0], 0);
 }
 
+/// A decimal with 3 fraction digits (`-4.595`) times 100 steps/mm, rounded half away from
+/// zero, in integers: thousandths / 10.
+fn exact_steps_at_100(text: &str) -> i64 {
+    let thousandths: i64 = text.replace('.', "").parse().unwrap();
+    let n = (thousandths.abs() + 5) / 10;
+    if thousandths < 0 {
+        -n
+    } else {
+        n
+    }
+}
+
 fn serde_json_value(r: &ddastep_bench::emu::Report) -> serde_json::Value {
     serde_json::to_value(r).expect("report serializes")
 }
@@ -129,9 +141,9 @@ proptest! {
         for (x, y, z, f) in &moves {
             let line = format!("G1 X{x:.3} Y{y:.3} Z{z:.3} F{f:.0}");
             ok(&mut b, &line);
-            // As the firmware (and Grbl) reads and rounds it: the nearest f32 to the decimal,
-            // times steps/mm in f32 (X4.595 is 459.49997 steps there: 459, where f64 gives 460).
-            want = [x, y, z].map(|v| (format!("{v:.3}").parse::<f32>().unwrap() * 100.0f32).round() as i64);
+            // As the firmware (and Grbl 1.1h) rounds it: the decimal as written times 100
+            // steps/mm, exactly, halves away from zero (X4.595 is 459.5 steps: 460).
+            want = [x, y, z].map(|v| exact_steps_at_100(&format!("{v:.3}")));
         }
         wait_idle(&mut b, 10.0);
         let n = net(&steps(&b));

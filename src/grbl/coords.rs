@@ -120,6 +120,11 @@ impl<const N: usize> Offsets<N> {
         core::array::from_fn(|i| w[i] + self.g92[i] + self.tlo_of(i))
     }
 
+    /// Work coordinate system `sel`'s offset on axis `i` (0 beyond the stored axes).
+    pub fn wcs_of(&self, sel: u8, i: usize) -> f32 {
+        self.stored.slots.get(sel as usize).and_then(|s| s.get(i)).copied().unwrap_or(0.0)
+    }
+
     /// Machine position of program coordinate `w` on axis `i` in system `sel` (G90).
     pub fn to_machine(&self, sel: u8, i: usize, w: f32) -> f32 {
         w + self.wcs(sel).get(i).copied().unwrap_or(0.0) + self.g92[i] + self.tlo_of(i)

@@ -7,7 +7,9 @@
 //! and catches word-level errors in line order; [`Modal::interpret`] applies the block to a copy
 //! of the modal state and yields the [`Effects`] to carry out, so a refused line changes nothing.
 //! Numbers are read exactly: up to 15 significant digits as an integer, then the nearest `f32`
-//! to the decimal (as `str::parse` gives).
+//! to the decimal (as `str::parse` gives). Axis words also keep the decimal itself: where the
+//! machine target is the word plus whole-millimetre offsets, [`Effects::exact`] carries it
+//! exactly and the planner rounds it to steps in integers (see `target_exact`).
 //!
 //! Files: [`number`] reads numbers, [`block`] reads a line's words into a [`Block`], this file
 //! interprets a block against the modal state. The parent re-exports the children's public
@@ -20,6 +22,7 @@ pub use block::{group, parse, Block, Motion, NonModal, Stop};
 pub use number::parse_number;
 
 use crate::planning::arc::{Arc, Center};
+use crate::planning::exact::Decimal;
 use crate::planning::planner::MAX_MM;
 use crate::grbl::coords::{Offsets, G28};
 use crate::error::Error;
@@ -48,6 +51,9 @@ pub struct Effects<const N: usize> {
     /// G0/G1 (or G28/G30's intermediate point): machine target of every axis, and whether it
     /// is a rapid.
     pub motion: Option<([f32; N], bool)>,
+    /// The motion target of each axis named, exactly, where it is an exact decimal
+    /// (`target_exact`); the planner rounds it to steps in integers.
+    pub exact: [Option<Decimal>; N],
     /// G2/G3, checked (machine mm).
     pub arc: Option<Arc<N>>,
     /// G28/G30: the rapid to the stored position that follows.
@@ -61,7 +67,19 @@ impl<const N: usize> Effects<N> {
     /// Nothing to do.
     #[inline(never)]
     pub fn none() -> Self {
-        Effects { drivers: None, dwell_ms: None, coord_write: None, g92: None, tlo: None, motion: None, arc: None, home: None, stop: None, probe: 0 }
+        Effects {
+            drivers: None,
+            dwell_ms: None,
+            coord_write: None,
+            g92: None,
+            tlo: None,
+            motion: None,
+            exact: [None; N],
+            arc: None,
+            home: None,
+            stop: None,
+            probe: 0,
+        }
     }
 }
 
@@ -243,6 +261,7 @@ impl Modal {
                         _ if m.relative => pos[i] + w,
                         _ => off.to_machine(m.coord, i, w),
                     })?;
+                    fx.exact[i] = b.exact.get(i).and_then(|d| target_exact(*d, &m, nm, pos, off, i));
                 }
             }
             let home = matches!(nm, Some(NonModal::GoHome(_)));
@@ -284,6 +303,25 @@ impl Modal {
         }
         Ok(m)
     }
+}
+
+/// The machine target of axis `i` exactly, from its word `d` as written: the word (G53; G90 with
+/// no offset on the axis), times 25.4 exactly under G20, plus each offset (G90: work system,
+/// G92, tool length; G91: the programmed position) whose `f32` value is a whole number or has
+/// at most 12 fraction bits ([`Decimal::plus`]); `None` where an offset is not such a value
+/// (G92 set at an arbitrary position, `G10 L2 X10.005` stored as 10.0050001…, G91 from a
+/// position that was not one) or the sum has more than 12 significant digits (beyond
+/// [`crate::planning::exact::MAX_EXACT_SIG`]): that axis is then rounded from its `f32`
+/// target, as Grbl does.
+#[inline(never)]
+fn target_exact<const N: usize>(d: Decimal, m: &Modal, nm: Option<NonModal>, pos: &[f32; N], off: &Offsets<N>, i: usize) -> Option<Decimal> {
+    let d = if m.inches { d.inches()? } else { d };
+    match nm {
+        Some(NonModal::Absolute) => Some(d),
+        _ if m.relative => d.plus(*pos.get(i)?),
+        _ => d.plus(off.wcs_of(m.coord, i))?.plus(*off.g92.get(i)?)?.plus(off.tlo_of(i)),
+    }
+    .filter(|d| d.exact_steps())
 }
 
 /// G10 L2/L20 P: the slot it writes and the slot's new value (Grbl's checks and order).

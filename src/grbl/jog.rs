@@ -9,11 +9,14 @@
 use crate::grbl::coords::Offsets;
 use crate::grbl::gcode::{group, parse, Block, Modal, Motion, NonModal};
 use crate::error::Error;
+use crate::planning::exact::Decimal;
 
-/// A checked jog: machine target (mm) and feed (mm/min).
+/// A checked jog: machine target (mm), exactly where it is a decimal
+/// ([`crate::grbl::gcode::Effects::exact`]), and feed (mm/min).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Jog<const N: usize> {
     pub target: [f32; N],
+    pub exact: [Option<Decimal>; N],
     pub feed: f32,
 }
 
@@ -48,5 +51,5 @@ pub fn plan<const N: usize>(
     let jog_modal = Modal { motion: Motion::Linear, feed: 0.0, ..*modal };
     let mut fx = crate::grbl::gcode::Effects::none();
     let m = jog_modal.interpret_into(&b, pos, off, &mut fx)?;
-    Ok(Jog { target: fx.motion.map_or(*pos, |(t, _)| t), feed: m.feed })
+    Ok(Jog { target: fx.motion.map_or(*pos, |(t, _)| t), exact: fx.exact, feed: m.feed })
 }

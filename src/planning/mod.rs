@@ -3,6 +3,7 @@
 //! hands them to the step interrupt prepared.
 //!
 //! - [`planner`]: targets in mm to moves (steps, nominal speed, acceleration, junction speed).
+//! - [`exact`]: step targets from a decimal as written, rounded as Grbl's `lround`.
 //! - [`lookahead`]: reverse and forward passes over the buffered moves, on the ramp table.
 //! - [`feeder`]: the look-ahead buffer and the just-in-time hand-over to the engine's ring.
 
@@ -12,3 +13,4 @@ pub mod planner;
 pub mod arc;
 pub mod inverse_time;
 pub mod trig;
+pub mod exact;

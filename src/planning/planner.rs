@@ -3,9 +3,10 @@
 //! Who uses it: the controller, once per G0/G1/G92 (outside any interrupt; `f32` math).
 //!
 //! Invariant: the planner keeps the programmed target in mm and the absolute step position
-//! `round(target × steps/mm)` of every axis; a move is the difference between two such step
-//! positions, so rounding never accumulates (a thousand G91 moves of 0.001 mm at 100 steps/mm
-//! make exactly 100 steps, in ten single steps).
+//! `round(target × steps/mm)` of every axis (halves away from zero, as Grbl's `lround`; from
+//! the decimal as written where the G-code front end gives it, [`crate::planning::exact`]); a
+//! move is the difference between two such step positions, so rounding never accumulates (a
+//! thousand G91 moves of 0.001 mm at 100 steps/mm make exactly 100 steps, in ten single steps).
 //!
 //! Rates (Grbl's): a G1 runs at F along its path (length over all moving axes, from the
 //! rounded steps), a G0 at the fastest speed its axes allow; no axis may exceed its `$110+i`
@@ -20,6 +21,7 @@ use crate::num::{f32_of_i64, f32_of_u64, sqrt};
 use crate::error::Error;
 use crate::motion::moves::{Move, Ovr, Path};
 use crate::motion::timing::Timing;
+use crate::planning::exact::Decimal;
 
 /// Largest axis target accepted, mm (beyond it: `error:33`; G-code words and arc chord ends).
 pub const MAX_MM: f32 = 1e6;
@@ -121,9 +123,30 @@ impl<const N: usize> Planner<N> {
     /// A straight move to `target` (mm): `feed` in mm/min for G1, `None` for G0. `Ok(None)` when
     /// no axis moves a whole step (the position still advances, so nothing is lost).
     pub fn line(&mut self, target: &[f32; N], feed: Option<f32>, lim: &Limits<N>) -> Result<Option<Planned<N>>, Error> {
+        self.line_exact(target, &[None; N], feed, lim)
+    }
+
+    /// [`Self::line`], with the target of some axes also given exactly (`exact[i]`, the same
+    /// position as `target[i]` but as written, see [`crate::planning::exact`]): those axes'
+    /// step targets are rounded from the decimal in integers (`Y4.595` at 100 steps/mm: 460,
+    /// as Grbl), the others from the `f32` target. An axis whose `f32` target is the position
+    /// already planned keeps its step position (an exact target before may differ by one
+    /// step from its `f32`'s rounding).
+    pub fn line_exact(
+        &mut self,
+        target: &[f32; N],
+        exact: &[Option<Decimal>; N],
+        feed: Option<f32>,
+        lim: &Limits<N>,
+    ) -> Result<Option<Planned<N>>, Error> {
         let mut to = [0i64; N];
-        for ((s, mm), spm) in to.iter_mut().zip(target).zip(&lim.steps_per_mm) {
-            *s = to_steps(*mm, *spm)?;
+        for i in 0..N {
+            let spm = lim.steps_per_mm[i];
+            to[i] = match exact[i] {
+                Some(d) => d.steps(spm)?,
+                None if target[i] == self.mm[i] => self.steps[i],
+                None => to_steps(target[i], spm)?,
+            };
         }
         let delta: [i64; N] = core::array::from_fn(|i| to[i] - self.steps[i]);
         let master_steps = delta.iter().map(|d| d.unsigned_abs()).max().unwrap_or(0);

@@ -36,7 +36,7 @@ impl<const N: usize> Controller<'_, N> {
         }
         let mut planner = self.planner;
         // Overrides never scale a jog (Grbl).
-        let mv = planner.line(&j.target, Some(j.feed), &self.limits)?.map(|p| Planned { mv: p.mv.fixed(), ..p });
+        let mv = planner.line_exact(&j.target, &j.exact, Some(j.feed), &self.limits)?.map(|p| Planned { mv: p.mv.fixed(), ..p });
         self.planner = planner;
         let mut job = Job::none();
         job.mv = mv;

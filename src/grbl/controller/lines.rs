@@ -12,6 +12,7 @@ use crate::grbl::reply::{put_error, put_ok, Out, REPLY_ROOM};
 use crate::grbl::report;
 use crate::grbl::store::STARTUP_LINES;
 use crate::motion::ramp::RampConfig;
+use crate::planning::exact::Decimal;
 use crate::planning::inverse_time;
 use crate::planning::planner::{Limits, Planned, Planner};
 
@@ -113,7 +114,7 @@ impl<const N: usize> Controller<'_, N> {
         let cfg = self.ramped.cfg;
         let lim = &self.limits;
         let mv = match &fx.motion {
-            Some((t, rapid)) => plan(&mut planner, t, if *rapid { Rate::Rapid } else { rate }, lim, &cfg)?,
+            Some((t, rapid)) => plan(&mut planner, t, &fx.exact, if *rapid { Rate::Rapid } else { rate }, lim, &cfg)?,
             None => None,
         };
         let mv2 = match &fx.home {
@@ -201,24 +202,25 @@ impl<const N: usize> Controller<'_, N> {
     }
 }
 
-/// Plans one straight move at `rate`. G93: the move starts and ends at rest (junction speed 0
+/// Plans one straight move at `rate`, to `target` (and `exact`, [`Planner::line_exact`]). G93: the move starts and ends at rest (junction speed 0
 /// on both sides) and its master steps decide the cruise rate that makes it last its time on
 /// the ramp the engine will walk for it ([`inverse_time::cruise_hz`]), given to the planner as
 /// the equivalent feed, so its axis-rate clamps apply as to any feed.
 pub(super) fn plan<const N: usize>(
     planner: &mut Planner<N>,
     target: &[f32; N],
+    exact: &[Option<Decimal>; N],
     rate: Rate,
     lim: &Limits<N>,
     cfg: &RampConfig,
 ) -> Result<Option<Planned<N>>, Error> {
     let feed = match rate {
-        Rate::Rapid => return planner.line(target, None, lim),
+        Rate::Rapid => return planner.line_exact(target, exact, None, lim),
         Rate::Feed(f) => f,
         Rate::Minutes(t) => {
             // At 1 mm/min no axis limit binds: the planner's rate is exactly master / (len·60).
             let mut dry = *planner;
-            let feed = match dry.line(target, Some(1.0), lim)? {
+            let feed = match dry.line_exact(target, exact, Some(1.0), lim)? {
                 Some(probe) => {
                     let master = probe.mv.steps().iter().map(|s| s.unsigned_abs()).max().unwrap_or(0);
                     let ramp = match probe.mv.path() {
@@ -231,10 +233,10 @@ pub(super) fn plan<const N: usize>(
             };
             // From rest to rest: no junction speed on either side.
             planner.rest();
-            let planned = planner.line(target, Some(feed), lim);
+            let planned = planner.line_exact(target, exact, Some(feed), lim);
             planner.rest();
             return planned;
         }
     };
-    planner.line(target, Some(feed), lim)
+    planner.line_exact(target, exact, Some(feed), lim)
 }

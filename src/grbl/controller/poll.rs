@@ -192,7 +192,7 @@ impl<const N: usize> Controller<'_, N> {
                     job.arc = None;
                     break;
                 };
-                job.mv = plan(&mut self.planner, &p, job.rate, &self.limits, &self.ramped.cfg).unwrap_or(None);
+                job.mv = plan(&mut self.planner, &p, &[None; N], job.rate, &self.limits, &self.ramped.cfg).unwrap_or(None);
                 if let Some(pl) = job.mv {
                     if !self.push(pl, false, job.power) {
                         break 'run false;

@@ -4,7 +4,8 @@
 //! Who uses it: the controller ([`parse`]), then [`crate::grbl::gcode::Modal::interpret`].
 
 use crate::error::Error;
-use crate::grbl::gcode::number::parse_number;
+use crate::grbl::gcode::number::parse_word;
+use crate::planning::exact::Decimal;
 use crate::grbl::spindle::SpindleDir;
 use crate::num::{round_u32, u32_of};
 use crate::AXIS_NAMES;
@@ -100,6 +101,8 @@ pub struct Block<const N: usize> {
     /// M7 / M8 / M9 (the code).
     pub coolant: Option<u8>,
     pub axes: [Option<f32>; N],
+    /// Each axis word as written (where `axes` has it): exact step targets.
+    pub exact: [Decimal; N],
     /// I J K arc offsets.
     pub ijk: [Option<f32>; 3],
     pub r: Option<f32>,
@@ -130,6 +133,7 @@ impl<const N: usize> Block<N> {
             spindle: None,
             coolant: None,
             axes: [None; N],
+            exact: [Decimal::ZERO; N],
             ijk: [None; 3],
             r: None,
             f: None,
@@ -179,11 +183,11 @@ pub fn parse<const N: usize>(line: &[u8]) -> Result<Block<N>, Error> {
             return Err(Error::ExpectedCommandLetter);
         }
         i += 1;
-        let v = parse_number(line, &mut i)?;
+        let (v, d) = parse_word(line, &mut i)?;
         match letter {
             b'G' => g_word(&mut b, v)?,
             b'M' => m_word(&mut b, v)?,
-            _ => value_word(&mut b, letter, v)?,
+            _ => value_word(&mut b, letter, v, d)?,
         }
     }
     Ok(b)
@@ -336,7 +340,7 @@ fn m_word<const N: usize>(b: &mut Block<N>, v: f32) -> Result<(), Error> {
 }
 
 #[inline(never)]
-fn value_word<const N: usize>(b: &mut Block<N>, letter: u8, v: f32) -> Result<(), Error> {
+fn value_word<const N: usize>(b: &mut Block<N>, letter: u8, v: f32, d: Decimal) -> Result<(), Error> {
     let slot = match letter {
         b'F' => &mut b.f,
         b'L' => &mut b.l,
@@ -347,7 +351,12 @@ fn value_word<const N: usize>(b: &mut Block<N>, letter: u8, v: f32) -> Result<()
         b'I' | b'J' | b'K' => &mut b.ijk[(letter - b'I') as usize],
         b'R' => &mut b.r,
         _ => match AXIS_NAMES[..N].iter().position(|&a| a as u8 == letter) {
-            Some(i) => &mut b.axes[i],
+            Some(i) => {
+                if let Some(e) = b.exact.get_mut(i) {
+                    *e = d;
+                }
+                &mut b.axes[i]
+            }
             None => return Err(Error::UnsupportedCommand),
         },
     };

@@ -1,10 +1,12 @@
 //! G-code numbers: a decimal read exactly (up to 15 significant digits as an integer, then the
-//! nearest `f32` to the decimal, as `str::parse` gives).
+//! nearest `f32` to the decimal, as `str::parse` gives; [`parse_word`] also returns the decimal
+//! itself, for exact step targets).
 //!
 //! Who uses it: the block parser ([`crate::grbl::gcode::block`]) for every word's value, and the
 //! `$` commands for setting values.
 
 use crate::error::Error;
+use crate::planning::exact::Decimal;
 
 /// Largest significand read: 15 decimal digits (below 2^50, as [`decimal_f32`] needs).
 const MAX_SIGNIFICAND: u64 = 999_999_999_999_999;
@@ -14,6 +16,12 @@ const MAX_FRAC: usize = 22;
 /// Reads a decimal number at `s[*i..]` (optional sign, digits, at most one point) and moves
 /// `*i` past it. No exponent, no `inf`/`nan`: anything else is [`Error::BadNumberFormat`].
 pub fn parse_number(s: &[u8], i: &mut usize) -> Result<f32, Error> {
+    parse_word(s, i).map(|(v, _)| v)
+}
+
+/// [`parse_number`], with the decimal exactly as written (`sig / 10^frac`, trailing zeros after
+/// the point dropped).
+pub fn parse_word(s: &[u8], i: &mut usize) -> Result<(f32, Decimal), Error> {
     let mut j = *i;
     let neg = s.get(j) == Some(&b'-');
     if matches!(s.get(j), Some(b'-' | b'+')) {
@@ -57,7 +65,9 @@ pub fn parse_number(s: &[u8], i: &mut usize) -> Result<f32, Error> {
     }
     *i = j;
     let v = decimal_f32(sig, frac as u32);
-    Ok(if neg { -v } else { v })
+    // sig ≤ MAX_SIGNIFICAND < 2^50 and frac ≤ MAX_FRAC: within a Decimal's bounds.
+    let d = Decimal { sig: if neg { -(sig as i64) } else { sig as i64 }, frac: frac as u8 };
+    Ok((if neg { -v } else { v }, d))
 }
 
 /// The nearest `f32` to `sig / 10^frac` (`sig` < 2^50, `frac` ≤ 22), as `str::parse` gives.
