@@ -76,7 +76,7 @@ impl Settings {
     /// Table rate per mm/s of path speed on the first `axes` axes: the largest `$100+i`, so no
     /// move's master runs faster than the table and `$40` is the finest axis's start, unless
     /// the table's top would then pass [`MAX_RATE_HZ`]: then lower, so that the fastest path
-    /// speed a move may need ([`Self::top_path`]) is exactly the top, and a coarser axis still
+    /// speed a move may need (`top_path`) is exactly the top, and a coarser axis still
     /// reaches its own limits whatever the finer ones' (a finer axis's master scales the
     /// table up). The top at `MAX_RATE_HZ` leaves the table's low end (its distance sums, in
     /// 1/256 step) the most resolution that range allows.
