@@ -119,6 +119,7 @@ pub fn uninstall() -> ddastep::motion::engine::Engine<'static, AXES> {
 /// Channel 1 played a half (or the whole buffer): fill it again. Times itself like the step
 /// interrupt (`$I`: cycles per fill of one half).
 #[interrupt]
+#[link_section = ".fill.dma1_channel1"]
 fn DMA1_CHANNEL1() {
     let t0 = cycles();
     let dma = dma1();

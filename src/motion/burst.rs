@@ -21,15 +21,18 @@
 //! the entries already buffered: at most two halves. Each entry is at most the layout's
 //! `max_tick` ticks long (longer periods are split into filler entries, word 0), so the
 //! buffered time is at most `2 × half × max_tick` ticks; [`Layout::for_pulse`] keeps that
-//! ≤ 1 ms. (A hard limit does not wait: its interrupt stops TIM2, and with it the DMA
+//! ≤ 1.33 ms. (A hard limit does not wait: its interrupt stops TIM2, and with it the DMA
 //! requests, at once.)
 //!
 //! Costs. Entries where nothing but a step (or a filler) happens take a fast path, the
 //! step half's lanes (`engine/stepper/plain.rs`: no per-tick checks, no shared load per step);
 //! every other entry is a whole tick plus the ramp half's work, as above. No interrupt entry or
-//! register access per entry; DMA moves two or three words per entry on the bus. Halves of 24
+//! register access per entry; DMA moves two or three words per entry on the bus. Halves of 32
 //! entries balance the fill's cost per half against splitting: entries up to 1500 ticks keep a
-//! step one entry from 48 kHz up. Modeled figures: bench/RESULTS.md, "DMA burst mode".
+//! step one entry from 48 kHz up, and a half lasts long enough (≈ 5.7k cycles at the 7-axis cap)
+//! for a fill that runs the ramp half's work twice (a millisecond and the deceleration's start
+//! in the same half); with 24 entries such fills came late at some move lengths and sender
+//! timings on 7 axes. Modeled figures: bench/RESULTS.md, "DMA burst mode".
 
 use crate::motion::engine::stepper::plain::tail;
 use crate::motion::engine::{Engine, Ramper, Stepper};
@@ -37,15 +40,15 @@ use crate::motion::shared::Shared;
 use crate::motion::ramp::RAMP_LEN;
 use crate::TICKS_PER_MS;
 
-/// Entries per buffer half, at most: 24 (both buffers 288 bytes; entries up to 1500 ticks: one
+/// Entries per buffer half, at most: 32 (both buffers 384 bytes; entries up to 1500 ticks: one
 /// entry per step from 48 kHz up).
-pub const HALF_MAX: usize = 24;
+pub const HALF_MAX: usize = 32;
 
-/// Longest entry at the full half length: 1 ms over both halves.
-pub const ENTRY_TICKS: u32 = TICKS_PER_MS / (2 * HALF_MAX as u32);
+/// Longest entry at the full half length: 1/48 ms, 1500 ticks (one entry per step from 48 kHz up).
+pub const ENTRY_TICKS: u32 = TICKS_PER_MS / 48;
 
-/// Buffered time, at most (ticks): 1 ms.
-pub const HORIZON_TICKS: u32 = TICKS_PER_MS;
+/// Buffered time, at most (ticks): both halves of full-length entries, 1.33 ms.
+pub const HORIZON_TICKS: u32 = 2 * HALF_MAX as u32 * ENTRY_TICKS;
 
 /// Buffer geometry for a pulse width: entries per half and the longest entry.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

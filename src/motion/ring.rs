@@ -163,11 +163,13 @@ pub struct RingPeek<'a, const N: usize> {
 
 impl<const N: usize> RingPeek<'_, N> {
     /// The oldest published move, if any.
+    #[cfg_attr(target_os = "none", link_section = ".fill.front")]
     pub fn front(&self) -> Option<*const Prepared<N>> {
         self.nth(0)
     }
 
     /// The `k`-th published move after the oldest, if any.
+    #[cfg_attr(target_os = "none", link_section = ".fill.nth")]
     pub fn nth(&self, k: u32) -> Option<*const Prepared<N>> {
         let h = self.ring.head.load(Acquire);
         (self.ring.tail.load(Acquire).wrapping_sub(h) > k).then(|| self.ring.slot(h.wrapping_add(k)) as *const Prepared<N>)

@@ -92,6 +92,7 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
     }
 
     /// Does what the step half asked for since the last run (see the module).
+    #[cfg_attr(target_os = "none", link_section = ".fill.run")]
     pub fn run(&mut self) {
         loop {
             let link = &self.shared.link;
@@ -166,6 +167,7 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
 
     /// The walk goes on with move `p` (a switch at speed: the index carries over; a start
     /// from rest after the walk was reset).
+    #[cfg_attr(target_os = "none", link_section = ".fill.enter")]
     fn enter(&mut self, p: *const Prepared<N>) {
         self.cur = p;
         self.primed.0 = 0;
@@ -203,6 +205,7 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
     }
 
     /// Starts walking down: one walk down now (the step half restarted the millisecond).
+    #[cfg_attr(target_os = "none", link_section = ".fill.start_decel")]
     fn start_decel(&mut self) {
         let target = self.target();
         self.walk.start_decel(&self.plan, target);
@@ -211,6 +214,7 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
 
     /// The exit target: 0 under a hold or when no successor is queued yet; never above the
     /// cruise (an override may have lowered it below the planned exit).
+    #[cfg_attr(target_os = "none", link_section = ".fill.target")]
     fn target(&self) -> u32 {
         if self.hold || self.succ.is_none() {
             0
@@ -252,6 +256,7 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
 
     /// Every distance the walk needs next: the trigger for the index and target, then the one
     /// from a walk up.
+    #[cfg_attr(target_os = "none", link_section = ".fill.settle")]
     fn settle(&mut self) {
         let table = &self.ramp.profile().ramp;
         if self.walk.pending & TRIGGER != 0 {
@@ -264,6 +269,7 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
     }
 
     /// The running move's period for the walk's index.
+    #[cfg_attr(target_os = "none", link_section = ".fill.set_period")]
     fn set_period(&mut self) {
         let base = base_at(self.walk.idx, &self.ramp.profile().ramp);
         self.period = scaled(base, self.walk.idx, &self.plan, self.min_period).to_bits();
@@ -272,6 +278,7 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
 
     /// The period (bits) one walk down from the walk's index towards `target`, for a move with
     /// `plan` and floor `min`: where a trigger puts it at once.
+    #[cfg_attr(target_os = "none", link_section = ".fill.down_period")]
     fn down_period(&self, plan: &RampPlan, min: Period, target: u32) -> u32 {
         let idx = self.walk.idx;
         let down = if idx > target { idx.saturating_sub(plan.walk_q).max(target) } else { idx };

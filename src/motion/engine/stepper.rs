@@ -124,6 +124,7 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
     /// The next edge when not simply stepping: a move change's second half, a direction
     /// change, a hold, idle; `None` when it is a step after all (the phase is `Run` now).
     #[inline(never)]
+    #[cfg_attr(target_os = "none", link_section = ".fill.other_event")]
     fn other_event(&mut self) -> Option<(u32, u32)> {
         match self.phase {
             Phase::Run => None,
@@ -178,6 +179,7 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
     /// (this step's gap already at the period one walk down, which the ramp half published with
     /// the trigger; it takes the walk from there). Returns that period.
     #[inline(never)]
+    #[cfg_attr(target_os = "none", link_section = ".fill.trigger")]
     fn trigger(&mut self) -> u32 {
         let p = self.cur;
         // SAFETY: `cur` is the running move's slot (as in `step`); only its atomic fields.

@@ -42,6 +42,7 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
 
     /// The next move starts with its direction change, then the setup gap.
     #[inline(never)]
+    #[cfg_attr(target_os = "none", link_section = ".fill.dir_change")]
     pub(super) fn dir_change(&mut self) -> (u32, u32) {
         self.enter_next();
         // SAFETY: as in `step`; plain fields the feeder never writes after publishing.
@@ -54,6 +55,7 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
     /// at speed the change comes one whole period after the last step, since this tick's late
     /// ARR store would otherwise shorten the setup gap instead.
     #[inline(never)]
+    #[cfg_attr(target_os = "none", link_section = ".fill.finish")]
     pub(super) fn finish(&mut self, gap: u32, period: u32) -> u32 {
         bump(&self.shared.moves_done);
         // The successor the ramp half primed (its period and trigger), else one queued since
@@ -87,6 +89,7 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
     /// Slow steps before a direction change: the change comes `dir_setup` before the next
     /// step would have (never sooner than the move's shortest gap after the last step).
     #[inline(never)]
+    #[cfg_attr(target_os = "none", link_section = ".fill.room_for_dir")]
     pub(super) fn room_for_dir(&self, p: *mut Prepared<N>, gap: u32) -> u32 {
         // SAFETY: a published slot; plain fields.
         let (setup, min_gap) = unsafe { ((*p).dir_setup, (*p).min_gap) };
@@ -96,6 +99,7 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
     /// The running move ended with nothing queued after it: idle (at rest unless the feeder
     /// was late at speed, counted).
     #[inline(never)]
+    #[cfg_attr(target_os = "none", link_section = ".fill.end_of_queue")]
     pub(super) fn end_of_queue(&mut self, gap: u32) -> u32 {
         self.ring.pop();
         if self.link().idx.load(Relaxed) != 0 && !self.hold {
@@ -111,6 +115,7 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
     /// too). Null when none.
     #[cold]
     #[inline(never)]
+    #[cfg_attr(target_os = "none", link_section = ".fill.unprimed")]
     pub(super) fn unprimed(&mut self, period: u32) -> *mut Prepared<N> {
         let Some(p) = self.ring.second() else { return core::ptr::null_mut() };
         // SAFETY: a published slot; plain fields and an atomic.

@@ -9,6 +9,7 @@ use super::state::Stepper;
 impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
     /// A period longer than the timer holds: its first piece now, fillers for the rest.
     #[inline(never)]
+    #[cfg_attr(target_os = "none", link_section = ".fill.extended")]
     pub(super) fn extended(&mut self, ticks: u32) -> u16 {
         self.extend = ticks;
         self.whole = ticks;
@@ -17,6 +18,7 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
 
     /// A filler event of an extended period: an empty word and the next piece.
     #[inline(never)]
+    #[cfg_attr(target_os = "none", link_section = ".fill.filler")]
     pub(super) fn filler(&mut self) -> u16 {
         self.word = 0;
         self.filler_piece()
@@ -25,6 +27,7 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
     /// The next piece of an extended period, at most the longest period (65 536 ticks, less in
     /// DMA burst mode) and at least half of it: with the timer's 16 bits a filler never gets
     /// shorter than a real period, and a step's own first piece always holds its pulse.
+    #[cfg_attr(target_os = "none", link_section = ".fill.filler_piece")]
     pub(super) fn filler_piece(&mut self) -> u16 {
         let rem = self.extend;
         let chunk = piece(rem, self.max_tick);

@@ -31,6 +31,7 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
     /// Fills the front of `words` and `periods` with plain entries; returns how many (0 when
     /// the next one needs a whole tick). Not inlined: the fill's own loop stays small.
     #[inline(never)]
+    #[cfg_attr(target_os = "none", link_section = ".fill.quick_entries")]
     pub(crate) fn quick_entries(&mut self, words: &mut [u32], periods: &mut [u16]) -> usize {
         if self.extend == 0 {
             return self.plain(words, periods);
@@ -66,6 +67,7 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
 
     /// Plain steps from a period boundary on (`extend` is 0), each gap at most two entries (from
     /// 24 kHz up; slower steps are whole ticks, their fillers plain).
+    #[cfg_attr(target_os = "none", link_section = ".fill.plain")]
     fn plain(&mut self, words: &mut [u32], periods: &mut [u16]) -> usize {
         // Steps may be plain: running, no control change.
         if self.phase != Phase::Run || self.shared.ctl.load() != self.ctl_seen {
@@ -109,6 +111,7 @@ impl<const N: usize, const L: usize> Stepper<'_, N, L> {
     /// fewer values). `FLIP`: one axis in dual-edge mode, its words alternating between
     /// setting and resetting the pin.
     #[inline(never)]
+    #[cfg_attr(target_os = "none", link_section = ".fill.lane")]
     fn lane<const SPLIT: bool, const SLAVES: bool, const FLIP: bool>(&mut self, words: &mut [u32], periods: &mut [u16], period: u32, on: u32, room: u32) -> usize {
         let p = self.cur;
         let (mut frac, mut ms_left, mut word, mut level, mut gap_in) = (self.frac, self.ms_left, self.word, self.level, self.gap_in);
