@@ -206,9 +206,11 @@ proptest! {
     /// event adds): two halves hold at most 1 ms, each half at least 2 entries, and a split
     /// period's first piece (at least half the longest entry) always holds the falling edge.
     #[test]
-    fn layout_keeps_latency_within_a_millisecond(fall in 0u32..=7_300) {
+    fn layout_keeps_latency_within_its_horizon(fall in 0u32..=7_300) {
         let l = Layout::for_pulse(fall);
-        prop_assert!(l.latency_ticks() <= ddastep::TICKS_PER_MS);
+        // 1.33 ms: two halves of 32 entries of at most 1500 ticks.
+        prop_assert!(l.latency_ticks() <= ddastep::motion::burst::HORIZON_TICKS);
+        prop_assert!(ddastep::motion::burst::HORIZON_TICKS <= ddastep::TICKS_PER_MS * 4 / 3);
         prop_assert!((2..=HALF_MAX).contains(&l.half));
         prop_assert!(l.max_tick / 2 > fall);
         prop_assert!(l.max_tick <= ddastep::motion::engine::MAX_TICK);
