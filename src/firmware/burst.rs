@@ -68,7 +68,7 @@ pub fn active() -> bool {
 /// The compare value of the falling edge for a pulse of `ticks` in DMA mode, if the buffers'
 /// layout holds it (else the layout must change: a rebuild, `output::rebuild`).
 pub fn fall_ticks(ticks: u32) -> Option<u32> {
-    let fall = ticks + ddastep::motion::timing::DMA_MARGIN_TICKS;
+    let fall = ddastep::motion::timing::dma_fall_ticks(ticks);
     (fall < MAX_TICK.load(Relaxed) / 2).then_some(fall)
 }
 

@@ -12,7 +12,7 @@ use crate::board::PinMap;
 use crate::grbl::controller::{Actions, Controller};
 use crate::grbl::settings::Settings;
 use crate::motion::burst::Layout;
-use crate::motion::timing::DMA_MARGIN_TICKS;
+use crate::motion::timing::dma_fall_ticks;
 use crate::grbl::overrides;
 use crate::grbl::protocol::{realtime, Realtime};
 use crate::grbl::reply::Out;
@@ -126,7 +126,7 @@ impl<const N: usize> StepOutput<N> {
     pub fn of(s: &Settings) -> Self {
         let pins = s.pins::<N>();
         let burst = s.dma_burst.then(|| {
-            let fall = if pins.dual { 0 } else { s.timing().pulse_ticks + DMA_MARGIN_TICKS };
+            let fall = if pins.dual { 0 } else { dma_fall_ticks(s.timing().pulse_ticks) };
             (Layout::for_pulse(fall), fall)
         });
         StepOutput { pins, burst }

@@ -81,11 +81,8 @@ impl Timing {
     /// and low time alone (never below [`DMA_FLOOR_TICKS`], 1 MHz); the fill's cost comes in
     /// [`Self::min_period_for`].
     pub const fn burst(self, dual: bool) -> Self {
-        let floor = if dual {
-            self.pulse_ticks + DMA_MARGIN_TICKS
-        } else {
-            2 * (self.pulse_ticks + DMA_MARGIN_TICKS)
-        };
+        let fall = dma_fall_ticks(self.pulse_ticks);
+        let floor = if dual { fall } else { 2 * fall };
         let floor = if floor > DMA_FLOOR_TICKS { floor } else { DMA_FLOOR_TICKS };
         Timing { min_period_ticks: floor, dual, dma: true, ..self }
     }
@@ -234,6 +231,12 @@ pub const DMA_FLOOR_TICKS: u32 = 72;
 /// edge's compare event comes this much after the pulse width, and the low time gets the
 /// same margin.
 pub const DMA_MARGIN_TICKS: u32 = 8;
+
+/// DMA burst mode: the falling edge's compare value for a pulse of `pulse_ticks` (the pulse
+/// plus [`DMA_MARGIN_TICKS`]).
+pub const fn dma_fall_ticks(pulse_ticks: u32) -> u32 {
+    pulse_ticks + DMA_MARGIN_TICKS
+}
 
 /// Timer ticks from an update event to the step handler's BSRR store, at most (rounded up to
 /// 1 µs): the compare event comes this much after the pulse width, so the high time is never
