@@ -7,6 +7,7 @@ pub mod gcode;
 pub mod jog;
 pub mod limits;
 pub mod overrides;
+pub mod packet;
 pub mod protocol;
 pub mod reply;
 pub mod report;
