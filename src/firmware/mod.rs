@@ -6,6 +6,8 @@
 //! - `output`: which of the two runs the engine, built in `init` and rebuilt at rest;
 //! - `tim1_pwm`: the spindle PWM; `encoder`: TIM3 as the encoder counter;
 //! - `limits`: the limit and probe EXTIs; `watchdog`: the IWDG and the reset cause;
+//! - `usb`: USB CDC ACM on PA11/PA12, the second port to the same protocol (cargo feature
+//!   `usb`, off until the image fits 62 KiB with it);
 //! - `flash_store`: the settings pages; `dwt`: the cycle counter; `panic`, `mem`;
 //! - `axes`: the axis count (a leaf, so the app and the handlers do not import each other).
 
@@ -28,6 +30,8 @@ mod setup;
 mod step;
 mod tim1_pwm;
 mod tim2;
+#[cfg(feature = "usb")]
+mod usb;
 mod watchdog;
 
 use defmt_rtt as _;
@@ -52,6 +56,8 @@ mod app {
     use super::axes::AXES;
     use super::setup::Board;
     use super::{dwt, encoder, flash_store, gpio, limits, output, pulse, tim1_pwm, tim2, watchdog};
+    #[cfg(feature = "usb")]
+    use super::usb;
 
     /// Lock-free state shared with the step interrupt.
     pub static SHARED: Shared<AXES> = Shared::new();
@@ -64,19 +70,34 @@ mod app {
     /// Work for `idle`: set by SysTick (every ms) and USART1, not by the step interrupt, so
     /// `idle` sleeps through step ticks instead of polling after each one.
     static POLL: AtomicBool = AtomicBool::new(true);
+    /// Replies (the one TX ring) go to USB, else to USART1: the port last heard from (any
+    /// byte, realtime ones too) or opened (DTR rose); USART1 again when the USB port is gone.
+    static REPLY_USB: AtomicBool = AtomicBool::new(false);
+    /// DTR rose: `idle` sends the banner (no reset).
+    #[cfg(feature = "usb")]
+    static BANNER: AtomicBool = AtomicBool::new(false);
+
+    #[cfg(feature = "usb")]
+    type UsbPort = usb::Usb;
+    #[cfg(not(feature = "usb"))]
+    type UsbPort = ();
 
     #[shared]
     struct SharedRes {
         tx: Tx<pac::USART1>,
+        /// Both ports' receive interrupts fill the one RX ring.
+        rx_in: Producer<'static, u8>,
+        /// The port replies go to drains the one TX ring.
+        tx_out: Consumer<'static, u8>,
     }
 
     #[local]
     struct Local {
         rx: Rx<pac::USART1>,
-        rx_in: Producer<'static, u8>,
+        /// The USB device (nothing without the `usb` feature).
+        usb: UsbPort,
         rx_out: Consumer<'static, u8>,
         tx_in: Producer<'static, u8>,
-        tx_out: Consumer<'static, u8>,
         controller: &'static mut Controller<'static, AXES>,
         flash: stm32f1xx_hal::flash::Parts,
         /// For the output's vectors when it is rebuilt (`output::rebuild`).
@@ -100,6 +121,10 @@ mod app {
         // (The step interrupt is bound outside RTIC: `step.rs`.)
         dwt::start_cycle_counter(&mut core.DCB, &mut core.DWT);
         let board = Board::setup(cx.device, core.SYST);
+        #[cfg(feature = "usb")]
+        let usb = usb::Usb::new(board.usb);
+        #[cfg(not(feature = "usb"))]
+        let usb = ();
         let stored = flash_store::load();
         let settings = stored.settings;
         let (mv_in, mv_out) = cx.local.moves.split();
@@ -128,13 +153,12 @@ mod app {
         tim2::start();
         watchdog::start();
         (
-            SharedRes { tx: board.tx },
+            SharedRes { tx: board.tx, rx_in, tx_out },
             Local {
                 rx: board.rx,
-                rx_in,
+                usb,
                 rx_out,
                 tx_in,
-                tx_out,
                 controller,
                 flash: board.flash,
                 nvic: core.NVIC,
@@ -166,30 +190,62 @@ mod app {
         limits::on_probe_edge(&SHARED);
     }
 
-    /// USART1: realtime bytes act at once, line bytes go to the RX ring, the TX ring drains.
-    #[task(binds = USART1, priority = 2, local = [rx, rx_in, tx_out], shared = [tx])]
-    fn usart(mut cx: usart::Context) {
+    /// USART1: realtime bytes act at once, line bytes go to the RX ring, the TX ring drains
+    /// (while replies go here).
+    #[task(binds = USART1, priority = 2, local = [rx], shared = [tx, rx_in, tx_out])]
+    fn usart(cx: usart::Context) {
         POLL.store(true, Relaxed);
-        while let Ok(b) = cx.local.rx.read() {
-            if let Some(b) = dispatch(b, &SHARED, &REQUESTS) {
-                // A full ring drops the byte: a character-counting sender never fills it.
-                let _ = cx.local.rx_in.enqueue(b);
+        let rx = cx.local.rx;
+        let mut rx_in = cx.shared.rx_in;
+        rx_in.lock(|rx_in| {
+            while let Ok(b) = rx.read() {
+                REPLY_USB.store(false, Relaxed);
+                if let Some(b) = dispatch(b, &SHARED, &REQUESTS) {
+                    // A full ring drops the byte: a character-counting sender never fills it.
+                    let _ = rx_in.enqueue(b);
+                }
             }
-        }
-        let tx_out = cx.local.tx_out;
-        cx.shared.tx.lock(|tx| {
-            while tx.is_tx_empty() {
+        });
+        (cx.shared.tx, cx.shared.tx_out).lock(|tx, tx_out| {
+            while tx.is_tx_empty() && !REPLY_USB.load(Relaxed) {
                 match tx_out.dequeue() {
                     Some(b) => {
                         let _ = tx.write_u8(b);
                     }
-                    None => {
-                        tx.unlisten();
-                        break;
-                    }
+                    None => break,
                 }
             }
+            if tx_out.len() == 0 || REPLY_USB.load(Relaxed) {
+                tx.unlisten();
+            }
         });
+    }
+
+    /// USB (CTR, RESET, SUSP, WKUP; pended by `idle` for TX, unmasked by it for a held
+    /// packet): at RTIC's lowest priority, below the step interrupt, with SysTick and the
+    /// ramp vector (neither preempts the other). The host NAKs and retries, so a late run
+    /// loses nothing.
+    #[cfg(feature = "usb")]
+    #[task(binds = USB_LP_CAN_RX0, priority = 1, local = [usb], shared = [rx_in, tx_out])]
+    fn usb_lp(cx: usb_lp::Context) {
+        POLL.store(true, Relaxed);
+        let usb = cx.local.usb;
+        let ev = usb.poll();
+        if ev.gone {
+            REPLY_USB.store(false, Relaxed);
+        }
+        if ev.opened {
+            REPLY_USB.store(true, Relaxed);
+            BANNER.store(true, Relaxed);
+        }
+        let mut rx_in = cx.shared.rx_in;
+        if rx_in.lock(|rx_in| usb.receive(rx_in, |b| dispatch(b, &SHARED, &REQUESTS))) {
+            REPLY_USB.store(true, Relaxed);
+        }
+        let mut tx_out = cx.shared.tx_out;
+        if REPLY_USB.load(Relaxed) {
+            tx_out.lock(|tx_out| usb.send(tx_out));
+        }
     }
 
     /// 1 kHz clock for the protocol (dwell, idle delay) and the heartbeat; wakes `idle`;
@@ -232,7 +288,15 @@ mod app {
             let invert = ctl.settings().limit_invert;
             let (counts, window) = encoder::read();
             ctl.encoder(counts, window, tx_in);
+            #[cfg(feature = "usb")]
+            if BANNER.swap(false, Relaxed) {
+                ctl.welcome(tx_in);
+            }
             let act = idle_step(ctl, rx_out, tx_in, now, &REQUESTS);
+            #[cfg(feature = "usb")]
+            if usb::HELD.load(Relaxed) {
+                usb::retry();
+            }
             // After the poll: a homing pass it just queued is watched before its move starts.
             limits::arm(ctl.settings().hard_limits, invert, ddastep::grbl::limits::active_pins(idr, invert), ctl.homing_watch());
             gpio::ENABLE_OFF_HIGH.store(!ctl.settings().enable_invert, Relaxed);
@@ -271,7 +335,12 @@ mod app {
                 watchdog::feed();
             }
             if tx_in.len() > 0 {
-                cx.shared.tx.lock(|tx| tx.listen());
+                if REPLY_USB.load(Relaxed) {
+                    #[cfg(feature = "usb")]
+                    rtic::pend(usb::IRQ);
+                } else {
+                    cx.shared.tx.lock(|tx| tx.listen());
+                }
             }
         }
     }

@@ -7,6 +7,8 @@ use stm32f1xx_hal::pac;
 use stm32f1xx_hal::prelude::*;
 use stm32f1xx_hal::rcc::Config;
 use stm32f1xx_hal::serial::{self, Rx, Tx};
+#[cfg(feature = "usb")]
+use stm32f1xx_hal::usb;
 
 use super::{encoder, gpio, tim1_pwm, tim2};
 
@@ -15,10 +17,14 @@ pub struct Board {
     pub tx: Tx<pac::USART1>,
     pub rx: Rx<pac::USART1>,
     pub flash: flash::Parts,
+    /// The USB peripheral and its pins (D+ already pulsed low: `usb::detach`).
+    #[cfg(feature = "usb")]
+    pub usb: usb::Peripheral,
 }
 
 impl Board {
-    /// Clocks 72 MHz from the 8 MHz crystal, pins, USART1 at 115200 8N1, TIM2 running idle.
+    /// Clocks 72 MHz from the 8 MHz crystal (USB 48 MHz: the HAL's USBPRE /1.5), pins, USART1
+    /// at 115200 8N1, the USB detach pulse, TIM2 running idle.
     #[inline(never)]
     pub fn setup(dp: pac::Peripherals, mut syst: cortex_m::peripheral::SYST) -> Board {
         let mut flash = dp.FLASH.constrain();
@@ -46,6 +52,12 @@ impl Board {
         let (tx, mut rx) = serial.split();
         rx.listen();
 
+        // USB on PA11/PA12, after a detach the host sees.
+        #[cfg(feature = "usb")]
+        let pin_dp = super::usb::detach(gpioa.pa12, &mut gpioa.crh);
+        #[cfg(feature = "usb")]
+        let usb = usb::Peripheral { usb: dp.USB, pin_dm: gpioa.pa11, pin_dp };
+
         tim2::setup(&mut rcc);
         tim1_pwm::setup(&mut rcc);
         encoder::setup(&mut rcc);
@@ -59,6 +71,12 @@ impl Board {
         // (SYST has no Drop: configured, it runs on when `syst` goes.)
         drop(syst);
 
-        Board { tx, rx, flash }
+        Board {
+            tx,
+            rx,
+            flash,
+            #[cfg(feature = "usb")]
+            usb,
+        }
     }
 }
