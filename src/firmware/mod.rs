@@ -70,15 +70,17 @@ mod app {
     /// Work for `idle`: set by SysTick (every ms) and USART1, not by the step interrupt, so
     /// `idle` sleeps through step ticks instead of polling after each one.
     static POLL: AtomicBool = AtomicBool::new(true);
-    /// Replies (the one TX ring) go to USB, else to USART1: the port last heard from (any
-    /// byte, realtime ones too) or opened (DTR rose); USART1 again when the USB port is gone.
+    /// Replies (the one TX ring) go to USB, else to USART1: the port that last sent a line
+    /// byte or opened (DTR rose); USART1 again when the USB port is gone. Realtime bytes do not
+    /// move it: a pendant's `?` on one port does not take the `ok`s of a sender on the other
+    /// (its status reports go to the sender, which takes them as unsolicited).
     static REPLY_USB: AtomicBool = AtomicBool::new(false);
     /// DTR rose: `idle` sends the banner (no reset).
     #[cfg(feature = "usb")]
     static BANNER: AtomicBool = AtomicBool::new(false);
 
     #[cfg(feature = "usb")]
-    type UsbPort = usb::Usb;
+    type UsbPort = &'static mut usb::Usb;
     #[cfg(not(feature = "usb"))]
     type UsbPort = ();
 
@@ -113,6 +115,8 @@ mod app {
         ctl: core::mem::MaybeUninit<Controller<'static, AXES>> = core::mem::MaybeUninit::uninit(),
         rxq: Queue<u8, 256> = Queue::new(),
         txq: Queue<u8, 512> = Queue::new(),
+        #[cfg(feature = "usb")]
+        usb_slot: core::mem::MaybeUninit<usb::Usb> = core::mem::MaybeUninit::uninit(),
     ])]
     fn init(cx: init::Context) -> (SharedRes, Local) {
         // (Step pins low and drivers off came first: `boot.rs`.)
@@ -122,7 +126,7 @@ mod app {
         dwt::start_cycle_counter(&mut core.DCB, &mut core.DWT);
         let board = Board::setup(cx.device, core.SYST);
         #[cfg(feature = "usb")]
-        let usb = usb::Usb::new(board.usb);
+        let usb = usb::Usb::init(cx.local.usb_slot, board.usb);
         #[cfg(not(feature = "usb"))]
         let usb = ();
         let stored = flash_store::load();
@@ -199,8 +203,8 @@ mod app {
         let mut rx_in = cx.shared.rx_in;
         rx_in.lock(|rx_in| {
             while let Ok(b) = rx.read() {
-                REPLY_USB.store(false, Relaxed);
                 if let Some(b) = dispatch(b, &SHARED, &REQUESTS) {
+                    REPLY_USB.store(false, Relaxed);
                     // A full ring drops the byte: a character-counting sender never fills it.
                     let _ = rx_in.enqueue(b);
                 }

@@ -15,6 +15,7 @@
 //! - Class: `CdcAcmClass` (usbd-serial), device class 0x02 with no IAD; the line coding is
 //!   accepted and ignored (a virtual port has no baud rate).
 
+use core::mem::MaybeUninit;
 use core::sync::atomic::{AtomicBool, Ordering::Relaxed};
 
 use ddastep::grbl::packet::{Held, PACKET_LEN};
@@ -23,7 +24,7 @@ use stm32f1xx_hal::gpio::{gpioa::PA12, Cr, Floating, Input};
 use stm32f1xx_hal::pac;
 use stm32f1xx_hal::usb::{Peripheral, UsbBus, UsbBusType};
 use usb_device::bus::UsbBusAllocator;
-use usb_device::device::{StringDescriptors, UsbDevice, UsbDeviceBuilder, UsbDeviceState, UsbVidPid};
+use usb_device::device::{StringDescriptors, UsbDevice, UsbDeviceBuilder, UsbDeviceState, UsbRev, UsbVidPid};
 use usbd_serial::{CdcAcmClass, USB_CLASS_CDC};
 
 /// The vector of the USB low-priority interrupt (RM0008 Table 63: CTR, RESET, SUSP, WKUP).
@@ -70,19 +71,23 @@ pub struct Usb {
 }
 
 impl Usb {
-    /// Builds the device on the bus (in `init`, before interrupts; once).
-    pub fn new(usb: Peripheral) -> Usb {
+    /// Builds the device on the bus in `slot` (in `init`, before interrupts; once). In place
+    /// and in a frame of its own: the device is 0.9 KB, and `init`'s frame is the stack's peak.
+    #[inline(never)]
+    pub fn init(slot: &'static mut MaybeUninit<Usb>, usb: Peripheral) -> &'static mut Usb {
         let bus: &'static UsbBusAllocator<UsbBusType> =
             cortex_m::singleton!(: UsbBusAllocator<UsbBusType> = UsbBus::new(usb)).unwrap_or_else(|| cortex_m::asm::udf());
         let acm = CdcAcmClass::new(bus, PACKET_LEN as u16);
         let strings = StringDescriptors::default().manufacturer("ddastep").product("ddastep Grbl");
         let dev = UsbDeviceBuilder::new(bus, VID_PID)
             .device_class(USB_CLASS_CDC)
+            // USB 2.0, as most CDC ACM devices say (usb-device's default 2.1 adds a BOS read).
+            .usb_rev(UsbRev::Usb200)
             .strings(&[strings])
             // (One language, fewer than the builder's limit: never an error.)
             .unwrap_or_else(|_| cortex_m::asm::udf())
             .build();
-        Usb { dev, acm, held: Held::new(), out: [0; PACKET_LEN], out_len: 0, zlp: false, configured: false, dtr: false }
+        slot.write(Usb { dev, acm, held: Held::new(), out: [0; PACKET_LEN], out_len: 0, zlp: false, configured: false, dtr: false })
     }
 
     /// Runs the device's state machine (bus reset, control requests); notes DTR's edges.
@@ -103,15 +108,15 @@ impl Usb {
 
     /// Moves held line bytes into the RX ring, then reads the next OUT packet if nothing is
     /// held (its realtime bytes act through `dispatch`). Masks the interrupt while bytes wait.
-    /// True when a packet was read.
+    /// True when the packet read held line bytes.
     pub fn receive(&mut self, rx: &mut Producer<'_, u8>, dispatch: impl FnMut(u8) -> Option<u8>) -> bool {
         let mut read = false;
         if self.held.flush(rx) {
             let mut packet = [0u8; PACKET_LEN];
             if let Ok(n) = self.acm.read_packet(&mut packet) {
                 self.held.take(&packet[..n], dispatch);
+                read = !self.held.is_empty();
                 self.held.flush(rx);
-                read = true;
             }
         }
         let held = !self.held.is_empty();

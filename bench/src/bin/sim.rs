@@ -6,7 +6,8 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
 use clap::Parser;
-use ddastep_bench::emu::{firmware_elf, gcode_lines, isr_profile, sweep, Board, InputFlip, Port, HZ};
+use ddastep_bench::emu::sender::{stream_char_count, stream_wait_ok, Link};
+use ddastep_bench::emu::{firmware_elf, firmware_usb_elf, gcode_lines, isr_profile, sweep, Board, InputFlip, Port, HZ};
 use ddastep_bench::machine::{MachineSpec, VirtualMachine};
 use ddastep_bench::serve;
 
@@ -28,6 +29,14 @@ struct Args {
     /// Stop after this many simulated seconds (default 60; with --serve: until Ctrl-C).
     #[arg(long)]
     max_seconds: Option<f64>,
+    /// Stream --gcode over the board's own USB port: the modeled host enumerates it as Linux
+    /// does and opens the port first (firmware: the `usb` feature's build unless --elf).
+    #[arg(long, conflicts_with_all = ["sweep", "point", "serve"])]
+    usb: bool,
+    /// Stream with Grbl's character counting (lines in flight up to the 128-byte RX buffer)
+    /// instead of waiting for each `ok`; over USART1, or USB with --usb.
+    #[arg(long, conflicts_with_all = ["sweep", "point", "serve"])]
+    char_count: bool,
     /// Serve the board to a G-code sender in real time: USART1 on a pseudo-terminal (prints
     /// `serial: /dev/pts/N`) until Ctrl-C or --max-seconds.
     #[arg(long, conflicts_with_all = ["gcode", "sweep", "point", "profile"])]
@@ -118,6 +127,7 @@ fn run(args: Args) -> Result<()> {
     }
     let elf = match args.elf.clone() {
         Some(p) => p,
+        None if args.usb => firmware_usb_elf()?,
         None => firmware_elf()?,
     };
     if args.sweep {
@@ -177,7 +187,29 @@ fn run(args: Args) -> Result<()> {
     let limit = (args.max_seconds.unwrap_or(60.0) * HZ as f64) as u64;
     let wall = std::time::Instant::now();
     board.run_seconds(0.05)?; // boot
-    for line in gcode_lines(&gcode) {
+    if args.usb {
+        board.usb_connect(2 * HZ)?;
+        board.run_seconds(0.01)?; // the banner
+    }
+    let sender_lines = if args.usb || args.char_count { gcode_lines(&gcode) } else { Vec::new() };
+    if !sender_lines.is_empty() {
+        let link = if args.usb { Link::Usb } else { Link::Usart };
+        let wait = limit.saturating_sub(board.cycles()).max(1);
+        let replies = if args.char_count {
+            stream_char_count(&mut board, link, &sender_lines, wait)?
+        } else {
+            stream_wait_ok(&mut board, link, &sender_lines, wait)?
+        };
+        let errors = replies.iter().filter(|r| r.starts_with("error")).count();
+        eprintln!(
+            "[{:9.4} s] {} lines over {link:?}{}: {} ok, {errors} error",
+            board.seconds(),
+            replies.len(),
+            if args.char_count { " (character counting)" } else { "" },
+            replies.len() - errors
+        );
+    }
+    for line in gcode_lines(&gcode).into_iter().filter(|_| !args.usb && !args.char_count) {
         if board.cycles() >= limit {
             eprintln!("stopped at --max-seconds");
             break;

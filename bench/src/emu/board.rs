@@ -16,6 +16,7 @@ use super::profile::{self, FnCost};
 use super::stats::{IsrRun, Stats};
 
 mod run_loop;
+mod usb_port;
 
 /// An emulated Blue Pill with a program loaded.
 pub struct Board {

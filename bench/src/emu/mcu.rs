@@ -23,6 +23,8 @@ use super::qenc::EncoderTimer;
 use super::systick::SysTick;
 use super::timer::Timer;
 use super::usart::Usart;
+use super::usb::UsbPeripheral;
+use super::usb_host::UsbHost;
 use address::{FLASH_IF, RCC, RCC_CFGR, RCC_CSR};
 
 mod address;
@@ -66,6 +68,9 @@ pub struct Mcu {
     /// DMA1 (`dma.rs`, `dma_run.rs`).
     pub dma: Dma,
     pub usart1: Usart,
+    /// The USB device peripheral and the host on the cable (unplugged unless a run asks).
+    pub usb: UsbPeripheral,
+    pub usb_host: UsbHost,
     pub systick: SysTick,
     pub ports: Vec<GpioPort>,
     pub edges: Vec<PinEdge>,
@@ -130,6 +135,8 @@ impl Mcu {
             tim3: EncoderTimer::default(),
             dma: Dma::default(),
             usart1: Usart::default(),
+            usb: UsbPeripheral::default(),
+            usb_host: UsbHost::default(),
             systick: SysTick::default(),
             ports: vec![GpioPort::new(); 5],
             edges: Vec::new(),
@@ -184,6 +191,8 @@ impl Mcu {
         self.usart1.tx_times = u.tx_times;
         self.usart1.rx_queue = u.rx_queue;
         self.usart1.rx_overruns = u.rx_overruns;
+        // The host stays on the cable; the peripheral starts over (the D+ pulse detaches it).
+        self.usb_host = old.usb_host;
         for (p, o) in self.ports.iter_mut().zip(&old.ports) {
             p.ext_level = o.ext_level;
             p.ext_driven = o.ext_driven;
@@ -261,6 +270,8 @@ impl Mcu {
         self.dma_collect();
         self.tim1.advance(t);
         self.usart1.advance(t);
+        let dp = self.usb_dp_high();
+        self.usb_host.advance(&mut self.usb, t, dp);
         let wraps = self.systick.advance(t);
         if wraps > 0 {
             self.nvic.pending[super::nvic::SYSTICK as usize] = true;
@@ -276,10 +287,19 @@ impl Mcu {
             self.nvic.level[(IRQ0 + exti::irq_of(line)) as usize] |= self.exti.irq(line);
         }
         self.nvic.level[(IRQ0 + USART1_IRQ) as usize] = self.usart1.irq();
+        self.nvic.level[(IRQ0 + super::usb::IRQ_LP) as usize] = self.usb.irq_lp();
+        self.nvic.level[(IRQ0 + super::usb::IRQ_HP) as usize] = self.usb.irq_hp();
         for x in 0..dma::CHANNELS {
             self.nvic.level[(IRQ0 + dma::IRQ_CHANNEL1) as usize + x] = self.dma.irq(x);
         }
         self.pending = self.nvic.any_pending();
+    }
+
+    // the Blue Pill's D+ (PA12, pulled up by R10) is high unless the firmware drives it low
+    pub fn usb_dp_high(&self) -> bool {
+        let a = &self.ports[0];
+        let output = a.crh >> 16 & 3 != 0;
+        !(output && a.odr & 1 << 12 == 0)
     }
 
     // the next cycle at which a peripheral changes state
@@ -290,6 +310,7 @@ impl Mcu {
             self.systick.next_event(),
             self.iwdg.expires_at(super::clock::HZ),
             self.dma.next_event(),
+            self.usb_host.next_event(&self.usb, self.now, self.usb_dp_high()),
         ]
             .into_iter()
             .flatten()

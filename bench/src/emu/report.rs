@@ -91,6 +91,25 @@ pub struct Report {
     pub unmodeled_registers: Vec<String>,
     pub spindle: SpindleReport,
     pub dma: DmaReport,
+    /// The USB side (`--usb`); left out of the JSON when the cable was never plugged.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub usb: Option<UsbReport>,
+}
+
+/// The modeled USB link (`usb.rs`, `usb_host.rs`), as the host counted it.
+#[derive(Clone, Debug, Serialize)]
+pub struct UsbReport {
+    /// SET_CONFIGURATIONs: how many times the host enumerated the board.
+    pub enumerations: u64,
+    /// Bulk bytes host to board (`bytes_out`) and board to host (`bytes_in`).
+    pub bytes_out: u64,
+    pub bytes_in: u64,
+    /// OUT packets the board NAKed (flow control; each retry counts).
+    pub naked_out_packets: u64,
+    /// Descriptor rule violations, stalls, timeouts and toggle errors seen by the host.
+    pub errors: Vec<String>,
+    /// What the board sent over USB.
+    pub serial: String,
 }
 
 /// DMA1 (`dma.rs`): what the step-output DMA mode moved and what it cost the bus.
@@ -174,6 +193,7 @@ impl Board {
                 bus_load: self.dma_bus_cycles() as f64 / self.cycles().max(1) as f64,
                 overruns: self.dma_overruns(),
             },
+            usb: self.usb_report(),
         }
     }
 
@@ -249,6 +269,9 @@ impl std::fmt::Display for Report {
         let d = &self.dma;
         if d.transfers.iter().any(|&n| n > 0) {
             writeln!(f, "DMA1: transfers per channel 1..7 {:?}, bus {:.2} % ({} cycles, {} taken from the running CPU), overruns {}", d.transfers, d.bus_load * 100.0, d.bus_cycles, d.stolen_cycles, d.overruns)?;
+        }
+        if let Some(u) = &self.usb {
+            writeln!(f, "USB: {} enumeration(s), {} bytes out, {} bytes in, {} NAKed OUT packets, {} errors", u.enumerations, u.bytes_out, u.bytes_in, u.naked_out_packets, u.errors.len())?;
         }
         if !self.unmodeled_registers.is_empty() {
             writeln!(f, "unmodeled registers: {}", self.unmodeled_registers.join(", "))?;

@@ -47,6 +47,8 @@ impl Mcu {
             TIM1..=0x4001_2FFF => self.tim1.read(word - TIM1),
             TIM3..=0x4000_07FF => self.tim3.read(word - TIM3, t),
             USART1..=0x4001_3BFF => self.usart1.read(word - USART1, t),
+            USB..=0x4000_5FFF => self.usb.read(word - USB),
+            USB_PMA..=0x4000_63FF => self.usb.pma_read(word - USB_PMA),
             IWDG..=0x4000_33FF => self.iwdg.read(word - IWDG),
             EXTI..=0x4001_07FF => self.exti.read(word - EXTI),
             GPIOA..=0x4001_1BFF => {
@@ -106,6 +108,8 @@ impl Mcu {
                 self.tim3.write(off, merged)
             }
             USART1..=0x4001_3BFF => self.usart1.write(word - USART1, v, t),
+            USB..=0x4000_5FFF => self.usb.write(word - USB, v, mask),
+            USB_PMA..=0x4000_63FF => self.usb.pma_write(word - USB_PMA, v, mask),
             IWDG..=0x4000_33FF => self.iwdg.write(word - IWDG, v, t),
             EXTI..=0x4001_07FF => {
                 let merged = if word - EXTI == 0x14 { v } else { (self.exti.read(word - EXTI) & !mask) | v };

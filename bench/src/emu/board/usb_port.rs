@@ -1,0 +1,108 @@
+//! The board's USB side, for tests and the `sim` CLI: the cable, the tty opened by a program
+//! (DTR), bytes written to it and read from it, and what the host counted.
+
+use anyhow::{bail, Result};
+
+use super::Board;
+use crate::emu::clock::HZ;
+use crate::emu::report::UsbReport;
+use crate::emu::usb_host::UsbStats;
+
+impl Board {
+    // plug the USB cable in (or pull it)
+    pub fn usb_plug(&mut self, plugged: bool) {
+        let m = self.cpu.get_data_mut();
+        let now = m.now;
+        m.usb_host.set_plugged(plugged, now);
+    }
+
+    // a program opens the tty (DTR and RTS set) or closes it
+    pub fn usb_open(&mut self, open: bool) {
+        self.cpu.get_data_mut().usb_host.open = open;
+    }
+
+    // the host enumerated and configured the board
+    pub fn usb_configured(&self) -> bool {
+        self.cpu.get_data().usb_host.configured()
+    }
+
+    // one write to the tty
+    pub fn usb_send(&mut self, bytes: &[u8]) {
+        self.cpu.get_data_mut().usb_host.write(bytes);
+    }
+
+    // bytes written to the tty and not yet taken by the board
+    pub fn usb_pending(&self) -> usize {
+        self.cpu.get_data().usb_host.pending()
+    }
+
+    // everything the board sent over USB
+    pub fn usb_output(&self) -> String {
+        String::from_utf8_lossy(&self.cpu.get_data().usb_host.received).into_owned()
+    }
+
+    // raw bytes the board sent over USB and the cycle of each
+    pub fn usb_bytes(&self) -> (&[u8], &[u64]) {
+        let h = &self.cpu.get_data().usb_host;
+        (&h.received, &h.rx_times)
+    }
+
+    // what the host counted (enumerations, bytes, NAKs, descriptor errors)
+    pub fn usb_stats(&self) -> UsbStats {
+        self.cpu.get_data().usb_host.stats.clone()
+    }
+
+    // the report's `usb` object, if the cable was ever plugged
+    pub fn usb_report(&self) -> Option<UsbReport> {
+        let m = self.cpu.get_data();
+        let h = &m.usb_host;
+        if !h.plugged && h.stats.enumerations == 0 {
+            return None;
+        }
+        let mut errors = h.stats.errors.clone();
+        if h.stats.in_toggle_errors > 0 || m.usb.toggle_mismatches > 0 {
+            errors.push(format!("DATA0/1 toggle: {} IN, {} OUT", h.stats.in_toggle_errors, m.usb.toggle_mismatches));
+        }
+        Some(UsbReport {
+            enumerations: h.stats.enumerations,
+            bytes_out: h.stats.bytes_out,
+            bytes_in: h.stats.bytes_in,
+            naked_out_packets: h.stats.naked_out,
+            errors,
+            serial: String::from_utf8_lossy(&h.received).into_owned(),
+        })
+    }
+
+    // OUT packets the board took with a stale DATA0/1 toggle
+    pub fn usb_toggle_mismatches(&self) -> u64 {
+        self.cpu.get_data().usb.toggle_mismatches
+    }
+
+    // plug in, run until the host has configured the board and the port is open
+    pub fn usb_connect(&mut self, max_cycles: u64) -> Result<()> {
+        self.usb_plug(true);
+        if !self.run_until(max_cycles, |b| b.usb_configured())? {
+            bail!("not enumerated within {:.3} s (simulated): {:?}", max_cycles as f64 / HZ as f64, self.usb_stats());
+        }
+        self.usb_open(true);
+        Ok(())
+    }
+
+    // send one line over USB (adds '\n') and run until a reply line starts with "ok" or "error"
+    pub fn usb_send_line_wait_ok(&mut self, line: &str) -> Result<String> {
+        let mark = self.cpu.get_data().usb_host.received.len();
+        self.usb_send(format!("{}\n", line.trim_end()).as_bytes());
+        let reply = |b: &Board| {
+            let text = String::from_utf8_lossy(&b.cpu.get_data().usb_host.received[mark..]).into_owned();
+            let complete = &text[..text.rfind('\n').map_or(0, |i| i + 1)];
+            let last = complete.lines().find(|l| l.starts_with("ok") || l.starts_with("error"));
+            last.map(|l| (text.clone(), l.starts_with("ok")))
+        };
+        let got = self.run_until(10 * HZ, |b| reply(b).is_some())?;
+        match reply(self) {
+            Some((text, true)) if got => Ok(text),
+            Some((text, _)) => bail!("{line:?} -> {}", text.trim_end()),
+            None => bail!("no ok/error for {line:?} over USB; got {:?}", String::from_utf8_lossy(&self.cpu.get_data().usb_host.received[mark..])),
+        }
+    }
+}

@@ -1,0 +1,125 @@
+//! The firmware over the modeled USB (the `usb` feature's build, `firmware_usb_elf`): a host
+//! that enumerates it as Linux does (bench/src/emu/usb_host.rs), then a sender on the CDC ACM
+//! port.
+
+mod firmware_rig;
+
+use ddastep_bench::emu::sender::{stream_char_count, Link};
+use ddastep_bench::emu::{firmware_usb_elf, Board, HZ};
+use firmware_rig::{net, steps};
+
+/// The USB build on blank flash (the defaults: 250 steps/mm, 500 mm/min; no `$` writes: its
+/// image overlaps the settings pages until it fits 62 KiB), enumerated, port open, banner
+/// seen on USB.
+fn boot_usb() -> Board {
+    let mut b = Board::load(firmware_usb_elf().expect("USB firmware builds")).expect("ELF loads");
+    b.usb_connect(2 * HZ).unwrap();
+    assert!(b.run_until(HZ / 10, |b| b.usb_output().contains("Grbl 1.1")).unwrap(), "banner: {:?}", b.usb_output());
+    b
+}
+
+/// The status line, asked with a `?` on USART1 (the other port reaches the same protocol)
+/// and read on USB (replies go to the port that last sent a line byte).
+fn usart_status(b: &mut Board) -> String {
+    let mark = b.usb_output().len();
+    b.serial_send(b"?");
+    b.run_until(HZ / 10, |b| b.usb_output()[mark..].contains(">\r\n")).unwrap();
+    b.usb_output()[mark..].lines().find(|l| l.starts_with('<')).unwrap_or("").to_string()
+}
+
+/// Enumeration: one SET_CONFIGURATION, descriptors that pass the host's chapter 9 / CDC checks
+/// (bcdUSB 2.0, device class 0x02 without an IAD, 64-byte bulk endpoints, an interrupt
+/// endpoint with a non-zero interval), the strings, and the banner when the port opens (DTR
+/// rises) without a reset.
+#[test]
+fn enumerates_as_cdc_acm_and_sends_the_banner_on_open() {
+    let mut b = Board::load(firmware_usb_elf().expect("USB firmware builds")).expect("ELF loads");
+    b.usb_connect(2 * HZ).unwrap();
+    let s = b.usb_stats();
+    assert_eq!(s.enumerations, 1, "{s:?}");
+    assert!(s.errors.is_empty(), "{:?}", s.errors);
+    assert!(!s.iad);
+    assert_eq!(s.strings, ["ddastep", "ddastep Grbl"]);
+    assert!(b.run_until(HZ / 10, |b| b.usb_output().contains("Grbl 1.1")).unwrap(), "banner: {:?}", b.usb_output());
+    // Closing and opening the port again: the banner again, no reset (no second banner on USART1).
+    let usart = b.serial_output();
+    b.usb_open(false);
+    b.run_seconds(0.01).unwrap();
+    b.usb_open(true);
+    assert!(b.run_until(HZ / 10, |b| b.usb_output().matches("Grbl 1.1").count() == 2).unwrap(), "{:?}", b.usb_output());
+    assert_eq!(b.serial_output(), usart);
+    assert_eq!(b.usb_stats().enumerations, 1);
+    assert!(b.fault().is_none(), "{:?}", b.fault());
+}
+
+/// A job streamed with character counting: one `ok` per line, every byte through once, the
+/// exact step counts.
+#[test]
+fn streams_a_job_with_character_counting_exact_counts() {
+    let mut b = boot_usb();
+    let mut lines = vec!["G91".to_string()];
+    lines.extend((0..150).map(|i| format!("G1 X{:.2} Y-0.02 F500", 0.04 * (1 + i % 3) as f64)));
+    let replies = stream_char_count(&mut b, Link::Usb, &lines, 2 * HZ).unwrap();
+    assert_eq!(replies.len(), lines.len());
+    assert!(replies.iter().all(|r| r == "ok"), "{:?}", replies.iter().find(|r| *r != "ok"));
+    // Until the steps stop (100 ms without one).
+    let mut seen = 0;
+    while steps(&b).len() != seen {
+        seen = steps(&b).len();
+        b.run_seconds(0.1).unwrap();
+    }
+    // X: 50 lines each of 10, 20 and 30 steps; Y: 150 × -5.
+    assert_eq!(net(&steps(&b))[..2], [3000, -750]);
+    let s = b.usb_stats();
+    let sent: usize = lines.iter().map(|l| l.len() + 1).sum();
+    assert_eq!(s.bytes_out, sent as u64);
+    assert_eq!((s.enumerations, s.in_toggle_errors, b.usb_toggle_mismatches()), (1, 0, 0));
+    assert!(s.errors.is_empty(), "{:?}", s.errors);
+}
+
+/// A sender that does not count floods the RX ring: the board NAKs OUT packets (the host
+/// holds the bytes), a `!` in a packet read while the ring is full acts at once (hold while
+/// the host still has bytes waiting), and after `~` every line gets its one reply and every
+/// step is made: nothing lost or doubled.
+#[test]
+fn realtime_bytes_act_with_the_rx_ring_full_and_no_byte_is_lost() {
+    let mut b = boot_usb();
+    assert!(b.usb_send_line_wait_ok("G91").unwrap().contains("ok"));
+    let line = "G1 X0.04 F500\n";
+    let mut flood = line.repeat(60);
+    flood.push('!');
+    flood.push_str(&line.repeat(60));
+    let lines = 120;
+    let mark = b.usb_output().len();
+    let usart_ok_before = b.serial_output().matches("ok\r\n").count();
+    b.usb_send(flood.as_bytes());
+    let held = b.run_until(3 * HZ, |b| b.usb_stats().naked_out > 0 && b.usb_pending() > 0).unwrap();
+    assert!(held, "the ring never filled: {:?}", b.usb_stats());
+    // The hold takes effect while the host still has bytes waiting behind NAKs.
+    let mut hold = String::new();
+    for _ in 0..300 {
+        b.run_seconds(0.01).unwrap();
+        hold = usart_status(&mut b);
+        if hold.starts_with("<Hold:0") {
+            break;
+        }
+    }
+    assert!(hold.starts_with("<Hold:0"), "{hold}");
+    assert!(b.usb_pending() > 0, "the stream drained before the hold");
+    let before = steps(&b).len();
+    b.run_seconds(0.2).unwrap();
+    assert_eq!(steps(&b).len(), before, "steps during the hold");
+    b.serial_send(b"~");
+    let total_ok = |b: &Board| b.usb_output()[mark..].matches("ok\r\n").count() + b.serial_output().matches("ok\r\n").count();
+    // (Every `ok` went to USB: USART1 sent only realtime bytes.)
+    let done = b.run_until(10 * HZ, |b| total_ok(b) - usart_ok_before >= lines && b.usb_pending() == 0).unwrap();
+    b.run_seconds(0.3).unwrap();
+    assert!(done, "{} replies of {lines}", total_ok(&b) - usart_ok_before);
+    assert_eq!(total_ok(&b) - usart_ok_before, lines);
+    assert_eq!(b.serial_output().matches("ok\r\n").count(), usart_ok_before);
+    assert_eq!(net(&steps(&b))[0], 10 * lines as i64); // 0.04 mm at 250 steps/mm
+    let s = b.usb_stats();
+    assert_eq!(s.bytes_out as usize, flood.len() + 4);
+    assert_eq!(b.usb_toggle_mismatches(), 0);
+    assert!(s.errors.is_empty(), "{:?}", s.errors);
+}
