@@ -1,0 +1,72 @@
+//! The USB link against USART1 on the virtual bench (modeled cycles): the same 400 short G1
+//! lines streamed with character counting over each, on the firmware defaults (250 steps/mm,
+//! F500: about 2 kHz steps; the `usb` feature's image overlaps the settings pages, so no `$`
+//! writes). Prints the line rate, what each port's interrupts cost per line and per ms, USB
+//! NAKs, and the step interrupt's latency (update event to its first BSRR store) while the
+//! port's interrupts run: stm32-usbd masks every interrupt (PRIMASK) around its register and
+//! packet-memory accesses, which the step interrupt sees as latency.
+//!
+//! `cargo bench -p ddastep-bench --target host-tuple --bench usb_link` (about a minute; the
+//! first run builds the USB firmware in target/usb).
+
+use ddastep_bench::emu::nvic::IRQ0;
+use ddastep_bench::emu::sender::{stream_char_count, Link};
+use ddastep_bench::emu::{firmware_elf, firmware_usb_elf, Board, HZ, TIM2_IRQ, USART1_IRQ};
+
+/// USB_LP_CAN1_RX0.
+const USB_IRQ: u32 = 20;
+
+fn lines() -> Vec<String> {
+    let mut v = vec!["G91".to_string()];
+    v.extend((0..400).map(|i| format!("G1 X{:.3} Y{:.3} F500", 0.02 + 0.004 * (i % 5) as f64, if i % 2 == 0 { 0.008 } else { -0.008 })));
+    v
+}
+
+fn run(link: Link) -> anyhow::Result<()> {
+    let (mut b, irq) = match link {
+        Link::Usart => (Board::load(firmware_elf()?)?, USART1_IRQ),
+        Link::Usb => (Board::load(firmware_usb_elf()?)?, USB_IRQ),
+    };
+    b.run_until(HZ / 2, |b| b.serial_output().contains("Grbl"))?;
+    if link == Link::Usb {
+        b.usb_connect(2 * HZ)?;
+        b.run_until(HZ / 10, |b| b.usb_output().contains("Grbl"))?;
+    }
+    b.set_profile(true);
+    b.reset_step_isr_stats();
+    let lines = lines();
+    let t0 = b.cycles();
+    let replies = stream_char_count(&mut b, link, &lines, 2 * HZ)?;
+    let t1 = b.cycles();
+    let ms = (t1 - t0) as f64 / (HZ as f64 / 1000.0);
+    let port: u64 = b.profile(IRQ0 + irq).iter().map(|f| f.cycles).sum();
+    let r = b.report();
+    println!(
+        "{link:?}: {} lines ({} ok) in {:.3} s modeled = {:.0} lines/s; port interrupt {:.0} modeled cycles/line, {:.0} cycles/ms ({:.2} % of the CPU)",
+        lines.len(),
+        replies.iter().filter(|r| *r == "ok").count(),
+        ms / 1000.0,
+        lines.len() as f64 / (ms / 1000.0),
+        port as f64 / lines.len() as f64,
+        port as f64 / ms,
+        port as f64 / ms / 720.0
+    );
+    println!(
+        "  step ISR during the stream: {} entries, max {} modeled cycles; update event -> first BSRR {:?}..{:?} modeled cycles",
+        r.step_isr.entries, r.step_isr.max_cycles, r.step_isr.bsrr_offset_min_cycles, r.step_isr.bsrr_offset_max_cycles
+    );
+    if let Some(u) = &r.usb {
+        println!("  USB: {} bytes out, {} bytes in, {} NAKed OUT packets, {} enumeration(s), errors {:?}", u.bytes_out, u.bytes_in, u.naked_out_packets, u.enumerations, u.errors);
+    }
+    let _ = TIM2_IRQ;
+    Ok(())
+}
+
+fn main() -> anyhow::Result<()> {
+    if !std::env::args().any(|a| a == "--bench") {
+        return Ok(());
+    }
+    run(Link::Usart)?;
+    run(Link::Usb)?;
+    Ok(())
+}
