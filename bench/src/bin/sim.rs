@@ -1,5 +1,5 @@
 //! `cargo sim -- [ARGS]`: run the release firmware on the emulated Blue Pill, stream G-code
-//! over USART1, and print the summary (optionally VCD and JSON); or, with `--serve`, serve the
+//! over USART1 (or USB, `--usb`), and print the summary (optionally VCD and JSON); or, with `--serve`, serve the
 //! board to a real G-code sender in real time (pseudo-terminal, TCP). See bench/README.md.
 
 use std::path::PathBuf;
@@ -196,18 +196,23 @@ fn run(args: Args) -> Result<()> {
         let link = if args.usb { Link::Usb } else { Link::Usart };
         let wait = limit.saturating_sub(board.cycles()).max(1);
         let replies = if args.char_count {
-            stream_char_count(&mut board, link, &sender_lines, wait)?
+            stream_char_count(&mut board, link, &sender_lines, wait)
         } else {
-            stream_wait_ok(&mut board, link, &sender_lines, wait)?
+            stream_wait_ok(&mut board, link, &sender_lines, wait)
         };
-        let errors = replies.iter().filter(|r| r.starts_with("error")).count();
-        eprintln!(
-            "[{:9.4} s] {} lines over {link:?}{}: {} ok, {errors} error",
-            board.seconds(),
-            replies.len(),
-            if args.char_count { " (character counting)" } else { "" },
-            replies.len() - errors
-        );
+        match replies {
+            Ok(replies) => {
+                let errors = replies.iter().filter(|r| r.starts_with("error")).count();
+                eprintln!(
+                    "[{:9.4} s] {} lines over {link:?}{}: {} ok, {errors} error",
+                    board.seconds(),
+                    replies.len(),
+                    if args.char_count { " (character counting)" } else { "" },
+                    replies.len() - errors
+                );
+            }
+            Err(e) => eprintln!("[{:9.4} s] {e:#}", board.seconds()),
+        }
     }
     for line in gcode_lines(&gcode).into_iter().filter(|_| !args.usb && !args.char_count) {
         if board.cycles() >= limit {
