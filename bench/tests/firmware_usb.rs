@@ -123,3 +123,47 @@ fn realtime_bytes_act_with_the_rx_ring_full_and_no_byte_is_lost() {
     assert_eq!(b.usb_toggle_mismatches(), 0);
     assert!(s.errors.is_empty(), "{:?}", s.errors);
 }
+
+/// The cable pulled mid-job: the queued motion completes (exact steps) and nothing stalls; on
+/// replug the host enumerates the board again (the firmware did not restart: no banner on
+/// USART1), the banner comes when the port opens, and the status is right.
+#[test]
+fn unplug_mid_job_completes_the_motion_and_replug_reenumerates() {
+    let mut b = boot_usb();
+    let mut lines = vec!["G91".to_string()];
+    lines.extend((0..6).map(|_| "G1 X0.4 F500".to_string()));
+    stream_char_count(&mut b, Link::Usb, &lines, 2 * HZ).unwrap();
+    let usart = b.serial_output();
+    b.usb_plug(false);
+    b.run_seconds(0.05).unwrap();
+    let moving = steps(&b).len();
+    b.run_seconds(2.0).unwrap();
+    assert!(steps(&b).len() > moving, "the motion stopped with the cable");
+    assert_eq!(net(&steps(&b))[0], 6 * 100);
+    assert!(!b.usb_configured());
+    b.usb_plug(true);
+    assert!(b.run_until(2 * HZ, |b| b.usb_configured()).unwrap(), "{:?}", b.usb_stats());
+    assert_eq!(b.usb_stats().enumerations, 2);
+    let mark = b.usb_output().len();
+    assert!(b.run_until(HZ / 10, |b| b.usb_output()[mark..].contains("Grbl 1.1")).unwrap(), "no banner after replug");
+    b.usb_send(b"?");
+    assert!(b.run_until(HZ / 10, |b| b.usb_output()[mark..].contains(">\r\n")).unwrap());
+    let status = b.usb_output()[mark..].lines().find(|l| l.starts_with('<')).unwrap_or("").to_string();
+    assert!(status.starts_with("<Idle|MPos:2.400,0.000,0.000"), "{status}");
+    assert_eq!(b.serial_output(), usart, "USART1 saw a restart or replies");
+    assert!(b.usb_stats().errors.is_empty(), "{:?}", b.usb_stats().errors);
+    assert!(b.fault().is_none());
+}
+
+/// `--unplug AT_S,REPLUG_S` (`Board::usb_unplug_at`): the cable goes at the first time, the
+/// board suspends, and it is enumerated again after the second.
+#[test]
+fn scheduled_unplug_and_replug() {
+    let mut b = boot_usb();
+    let now = b.cycles();
+    b.usb_unplug_at(now + HZ / 10, Some(now + HZ / 5));
+    b.run_seconds(0.15).unwrap();
+    assert!(!b.usb_configured());
+    assert!(b.run_until(HZ, |b| b.usb_stats().enumerations == 2).unwrap(), "{:?}", b.usb_stats());
+    assert!(b.usb_stats().errors.is_empty(), "{:?}", b.usb_stats().errors);
+}

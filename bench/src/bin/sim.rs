@@ -33,6 +33,9 @@ struct Args {
     /// does and opens the port first (firmware: the `usb` feature's build unless --elf).
     #[arg(long, conflicts_with_all = ["sweep", "point", "serve"])]
     usb: bool,
+    /// With --usb: pull the cable at AT_S simulated seconds and plug it back at REPLUG_S.
+    #[arg(long, requires = "usb", value_name = "AT_S[,REPLUG_S]")]
+    unplug: Option<String>,
     /// Stream with Grbl's character counting (lines in flight up to the 128-byte RX buffer)
     /// instead of waiting for each `ok`; over USART1, or USB with --usb.
     #[arg(long, conflicts_with_all = ["sweep", "point", "serve"])]
@@ -190,6 +193,11 @@ fn run(args: Args) -> Result<()> {
     if args.usb {
         board.usb_connect(2 * HZ)?;
         board.run_seconds(0.01)?; // the banner
+        if let Some(spec) = &args.unplug {
+            let mut t = spec.split(',').map(|v| v.trim().parse::<f64>().map(|s| (s * HZ as f64) as u64));
+            let at = t.next().context("--unplug AT_S[,REPLUG_S]")??;
+            board.usb_unplug_at(at, t.next().transpose()?);
+        }
     }
     let sender_lines = if args.usb || args.char_count { gcode_lines(&gcode) } else { Vec::new() };
     if !sender_lines.is_empty() {

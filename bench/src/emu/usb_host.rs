@@ -112,6 +112,8 @@ pub struct UsbHost {
     pub plugged: bool,
     /// A program has the tty open (DTR, RTS set).
     pub open: bool,
+    /// Cable pulls and plugs to come: (cycle, plugged), in cycle order (`--unplug`).
+    pub plug_schedule: VecDeque<(u64, bool)>,
     line_state: bool,
     attached: bool,
     suspended: bool,
@@ -145,6 +147,7 @@ impl Default for UsbHost {
         UsbHost {
             plugged: false,
             open: false,
+            plug_schedule: VecDeque::new(),
             line_state: false,
             attached: false,
             suspended: false,
@@ -245,6 +248,15 @@ impl UsbHost {
 
     /// The next cycle at which the host does something the device notices.
     pub fn next_event(&self, dev: &UsbPeripheral, now: u64, dp_high: bool) -> Option<u64> {
+        let plug = self.plug_schedule.front().map(|p| p.0.max(now));
+        let host = self.host_event(dev, now, dp_high);
+        match (plug, host) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
+    }
+
+    fn host_event(&self, dev: &UsbPeripheral, now: u64, dp_high: bool) -> Option<u64> {
         if let Some(idle) = self.idle_since.filter(|_| !self.suspended) {
             return Some(idle + SUSPEND_AFTER);
         }
@@ -283,6 +295,10 @@ impl UsbHost {
 
     /// Runs the host up to cycle `t`; `dp_high` says whether the device's D+ pull-up shows.
     pub fn advance(&mut self, dev: &mut UsbPeripheral, t: u64, dp_high: bool) {
+        while let Some(&(at, plugged)) = self.plug_schedule.front().filter(|p| p.0 <= t) {
+            self.plug_schedule.pop_front();
+            self.set_plugged(plugged, at);
+        }
         if let Some(idle) = self.idle_since {
             if !self.suspended && idle + SUSPEND_AFTER <= t {
                 self.suspended = true;

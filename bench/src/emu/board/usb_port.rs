@@ -16,6 +16,15 @@ impl Board {
         m.usb_host.set_plugged(plugged, now);
     }
 
+    // pull the cable at `at` (modeled cycle) and plug it back at `back`, if given
+    pub fn usb_unplug_at(&mut self, at: u64, back: Option<u64>) {
+        let h = &mut self.cpu.get_data_mut().usb_host;
+        h.plug_schedule.push_back((at, false));
+        if let Some(back) = back {
+            h.plug_schedule.push_back((back.max(at), true));
+        }
+    }
+
     // a program opens the tty (DTR and RTS set) or closes it
     pub fn usb_open(&mut self, open: bool) {
         self.cpu.get_data_mut().usb_host.open = open;
