@@ -1,5 +1,5 @@
-; A small job for the USB port on the firmware defaults (250 steps/mm, 500 mm/min): no `$`
-; settings, because the `usb` build's image still overlaps the settings pages (cargo sim -- --usb).
+; A small job for the USB port (cargo sim -- --usb) on the firmware defaults (250 steps/mm,
+; 500 mm/min): a fresh board, no `$` settings needed.
 G91
 G1 X0.10 Y0.05 F500
 G1 X0.15 Y-0.05 F500

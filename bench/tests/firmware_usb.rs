@@ -8,9 +8,8 @@ use ddastep_bench::emu::sender::{stream_char_count, Link};
 use ddastep_bench::emu::{firmware_usb_elf, Board, HZ};
 use firmware_rig::{net, steps};
 
-/// The USB build on blank flash (the defaults: 250 steps/mm, 500 mm/min; no `$` writes: its
-/// image overlaps the settings pages until it fits 62 KiB), enumerated, port open, banner
-/// seen on USB.
+/// The USB build on blank flash (the defaults: 250 steps/mm, 500 mm/min), enumerated, port
+/// open, banner seen on USB.
 fn boot_usb() -> Board {
     let mut b = Board::load(firmware_usb_elf().expect("USB firmware builds")).expect("ELF loads");
     b.usb_connect(2 * HZ).unwrap();

@@ -5,7 +5,16 @@ use ddastep::grbl::store::{Stored, IMAGE_LEN, PAGE_LEN};
 use stm32f1xx_hal::flash;
 
 /// The two pages' offsets in flash.
+#[cfg(not(feature = "store-at-126k"))]
 const STORE_OFFSETS: [u32; 2] = [62 * 1024, 63 * 1024];
+/// Bench only (`store-at-126k`): the last two pages of the C8 die's 128 KiB, above an image
+/// over the 62 KiB budget (the `usb` build's, until it fits).
+#[cfg(feature = "store-at-126k")]
+const STORE_OFFSETS: [u32; 2] = [126 * 1024, 127 * 1024];
+#[cfg(not(feature = "store-at-126k"))]
+const FLASH_SIZE: flash::FlashSize = flash::FlashSize::Sz64K;
+#[cfg(feature = "store-at-126k")]
+const FLASH_SIZE: flash::FlashSize = flash::FlashSize::Sz128K;
 
 /// Page `i` of the store, as mapped flash.
 fn store_page(i: usize) -> &'static [u8] {
@@ -24,7 +33,7 @@ pub fn load() -> Stored {
 pub fn save(parts: &mut flash::Parts, image: &[u8; IMAGE_LEN]) {
     let target = Stored::newest([store_page(0), store_page(1)]).map_or(0, |i| 1 - i);
     let at = STORE_OFFSETS[target];
-    let mut w = parts.writer(flash::SectorSize::Sz1K, flash::FlashSize::Sz64K);
+    let mut w = parts.writer(flash::SectorSize::Sz1K, FLASH_SIZE);
     // The read-back below compares the whole image: the HAL's own per-halfword and erase checks
     // would only repeat it (and cost flash).
     w.change_verification(false);

@@ -22,11 +22,15 @@ pub fn firmware_elf() -> Result<PathBuf> {
 }
 
 // build the release firmware with the `usb` feature once (its own target dir, linked against
-// bench/usb_link/memory.x while it is over the 62 KiB budget) and return its ELF path
+// bench/usb_link/memory.x while it is over the 62 KiB budget, the settings at 126 K:
+// `USB_STORE_ADDR`) and return its ELF path
 pub fn firmware_usb_elf() -> Result<PathBuf> {
     static ELF: OnceLock<Result<PathBuf, String>> = OnceLock::new();
     ELF.get_or_init(|| build_usb().map_err(|e| format!("{e:#}"))).clone().map_err(anyhow::Error::msg)
 }
+
+/// Flash address of the `usb` build's settings store (feature `store-at-126k`).
+pub const USB_STORE_ADDR: u32 = 0x0800_0000 + 126 * 1024;
 
 fn build_usb() -> Result<PathBuf> {
     let root = repo_root();
@@ -35,7 +39,7 @@ fn build_usb() -> Result<PathBuf> {
     let linker = root.join("bench/usb_link/ld.sh");
     let status = Command::new(cargo)
         .current_dir(&root)
-        .args(["build", "--release", "--target", "thumbv7m-none-eabi", "--bin", "ddastep", "--features", "usb"])
+        .args(["build", "--release", "--target", "thumbv7m-none-eabi", "--bin", "ddastep", "--features", "usb,store-at-126k"])
         .arg("--target-dir")
         .arg(&target)
         .arg("--config")
