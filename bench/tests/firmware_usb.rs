@@ -5,7 +5,9 @@
 mod firmware_rig;
 
 use ddastep_bench::emu::sender::{stream_char_count, Link};
-use ddastep_bench::emu::{firmware_usb_elf, Board, HZ};
+use ddastep::grbl::settings::Settings;
+use ddastep::grbl::store::Stored;
+use ddastep_bench::emu::{firmware_usb_elf, Board, Port, HZ, USB_STORE_ADDR};
 use firmware_rig::{net, steps};
 
 /// The USB build on blank flash (the defaults: 250 steps/mm, 500 mm/min), enumerated, port
@@ -165,4 +167,34 @@ fn scheduled_unplug_and_replug() {
     assert!(!b.usb_configured());
     assert!(b.run_until(HZ, |b| b.usb_stats().enumerations == 2).unwrap(), "{:?}", b.usb_stats());
     assert!(b.usb_stats().errors.is_empty(), "{:?}", b.usb_stats().errors);
+}
+
+/// Settings that rebuild the step output in place (`$2`, `$580`, `$581`) and Ctrl-X after a
+/// hard limit keep the link: the answers come over USB, the board is enumerated once, the MCU
+/// never restarts.
+#[test]
+fn settings_rebuilds_and_ctrl_x_after_a_hard_limit_keep_the_link() {
+    let mut b = Board::load(firmware_usb_elf().expect("USB firmware builds")).expect("ELF loads");
+    let settings = Settings { hard_limits: true, ..Settings::BENCH };
+    b.write_mem(USB_STORE_ADDR, &Stored::from(settings).to_bytes()).unwrap();
+    b.usb_connect(2 * HZ).unwrap();
+    assert!(b.run_until(HZ / 10, |b| b.usb_output().contains("Grbl 1.1")).unwrap());
+    for line in ["$2=1", "$580=1", "$581=1", "$581=0", "$580=0", "$2=0", "G91 G1 X5 F600"] {
+        let r = b.usb_send_line_wait_ok(line).unwrap_or_else(|e| panic!("{line}: {e}"));
+        assert!(r.contains("ok"), "{line}: {r}");
+    }
+    b.run_seconds(0.1).unwrap();
+    // X's limit switch (PA0, to ground) closes mid-move.
+    let mark = b.usb_output().len();
+    b.set_input(Port::A, 0, false);
+    assert!(b.run_until(HZ / 10, |b| b.usb_output()[mark..].contains("ALARM:1")).unwrap(), "{:?}", &b.usb_output()[mark..]);
+    b.set_input(Port::A, 0, true);
+    let mark = b.usb_output().len();
+    b.usb_send(&[0x18]);
+    assert!(b.run_until(HZ / 2, |b| b.usb_output()[mark..].contains("to unlock]\r\n")).unwrap(), "{:?}", &b.usb_output()[mark..]);
+    assert!(b.usb_send_line_wait_ok("$X").unwrap().contains("ok"));
+    assert_eq!(b.usb_stats().enumerations, 1);
+    assert!(b.system_resets().is_empty() && b.watchdog_resets().is_empty());
+    assert!(b.usb_stats().errors.is_empty(), "{:?}", b.usb_stats().errors);
+    assert!(b.fault().is_none());
 }
