@@ -109,6 +109,7 @@ fn plan(cmd: &str) -> Option<Plan> {
         "cargo sim -- --gcode my.gcode --max-seconds 5 --pin PA0@0.25=0" => Run(&[]),
         "cargo sim -- --machine bench/demo/gantry300.toml" => Run(&[]),
         "cargo sim -- --usb --char-count --gcode bench/demo/usb_job.gcode --json usb.json" => Run(&["usb.json"]),
+        "cargo sim -- --serve --usb --pty-link /tmp/ttyBLUEPILL --max-seconds 2" => Run(&[]),
         "cargo build --release --features usb" => Skip("does not link yet: the `usb` image is over the 62 KiB FLASH region (bench/tests/firmware_usb.rs builds it against bench/usb_link/memory.x)"),
         "cargo bench -p ddastep-bench --target host-tuple --bench usb_link" => Skip("a benchmark: about a minute of both cores"),
         "cargo sim -- --machine bench/demo/encoder_x.toml" => Run(&[]),

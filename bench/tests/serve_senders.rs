@@ -324,3 +324,44 @@ fn bad_use_is_a_clear_error() {
     assert_eq!(out.status.code(), Some(2));
     let _ = std::fs::remove_file(file);
 }
+
+/// `cargo sim -- --serve --usb --pty-link …`: UGS connects and stream.py runs a job over the
+/// board's USB port (the `usb` build; a modeled host enumerates it and holds it open).
+#[test]
+fn ugs_then_stream_py_over_usb() {
+    let link = std::env::temp_dir().join(format!("ttyBLUEPILL-usb-{}", std::process::id()));
+    let elf = ddastep_bench::emu::firmware_usb_elf().expect("USB firmware builds");
+    let server = Server::start_elf(&elf, &["--usb", "--pty-link", link.to_str().unwrap()]);
+    assert!(server.stdout_head.contains("USB port"), "{}", server.stdout_head);
+    let mut c = Client::pty(link.to_str().unwrap());
+    ugs_connect(&mut c);
+    bench_settings(&mut c);
+    let mut job = vec!["G91", "G21"];
+    let moves: Vec<String> = (0..32).map(|i| format!("G1 X{}.25 Y-0.125 F{}", i % 3, 3000 + 60 * i)).collect();
+    job.extend(moves.iter().map(String::as_str));
+    job.push("G90");
+    let replies = stream_py(&mut c, &job);
+    assert_eq!(replies.len(), job.len());
+    assert!(replies.iter().all(|r| r == "ok"), "{replies:?}");
+    let s = wait_state(&mut c, "Idle", Duration::from_secs(10));
+    let x: f64 = (0..32).map(|i| (i % 3) as f64 + 0.25).sum();
+    assert!((mpos_x(&s) - x).abs() < 0.006, "{s}: X should be {x}");
+    assert!(c.errors().is_empty(), "{:?}", c.errors());
+    drop(c);
+    let err = server.stop();
+    assert!(err.contains("stopped (Ctrl-C)"), "{err}");
+}
+
+/// CNCjs (TCP) and bCNC (pty) connect to the board's USB port through `--serve --usb`.
+#[test]
+fn cncjs_and_bcnc_over_usb() {
+    let elf = ddastep_bench::emu::firmware_usb_elf().expect("USB firmware builds");
+    let server = Server::start_elf(&elf, &["--usb", "--tcp", "127.0.0.1:0"]);
+    let addr = server.tcp.clone().expect("tcp: line");
+    let mut tcp = Client::tcp(&addr);
+    let mut pty = Client::pty(&server.pty);
+    cncjs_connect(&mut tcp);
+    bcnc_connect(&mut pty);
+    assert!(tcp.errors().is_empty() && pty.errors().is_empty(), "{:?} {:?}", tcp.errors(), pty.errors());
+    server.stop();
+}

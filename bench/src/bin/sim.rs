@@ -30,8 +30,9 @@ struct Args {
     #[arg(long)]
     max_seconds: Option<f64>,
     /// Stream --gcode over the board's own USB port: the modeled host enumerates it as Linux
-    /// does and opens the port first (firmware: the `usb` feature's build unless --elf).
-    #[arg(long, conflicts_with_all = ["sweep", "point", "serve"])]
+    /// does and opens the port first (firmware: the `usb` feature's build unless --elf). With
+    /// --serve: the pty/TCP clients talk to the USB port instead of USART1.
+    #[arg(long, conflicts_with_all = ["sweep", "point"])]
     usb: bool,
     /// With --usb: pull the cable at AT_S simulated seconds and plug it back at REPLUG_S.
     #[arg(long, requires = "usb", value_name = "AT_S[,REPLUG_S]")]
@@ -147,6 +148,7 @@ fn run(args: Args) -> Result<()> {
             json: args.json.clone(),
             inputs: args.pin.iter().map(|p| parse_pin(p)).collect::<Result<_>>()?,
             machine,
+            usb: args.usb,
         };
         let s = serve::run(&opts)?;
         println!(

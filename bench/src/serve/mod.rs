@@ -50,6 +50,9 @@ pub struct Options {
     pub inputs: Vec<InputFlip>,
     /// A virtual machine wired to the pins (`--machine`).
     pub machine: Option<crate::machine::MachineSpec>,
+    /// Serve the board's USB port instead of USART1 (`--usb`: a modeled host enumerates it
+    /// and holds the port open; the firmware must be the `usb` build).
+    pub usb: bool,
 }
 
 /// What a finished run did.
@@ -73,8 +76,13 @@ extern "C" fn on_signal(_: nix::libc::c_int) {
     STOP.store(true, Ordering::SeqCst);
 }
 
-// queue client bytes: realtime bytes ahead of everything not yet on the wire, the rest in order
-fn feed(board: &mut Board, bytes: &[u8]) {
+// queue client bytes: over USART1 realtime bytes ahead of everything not yet on the wire, the
+// rest in order; over USB each read as one write to the tty, in order (as a host sends them)
+fn feed(board: &mut Board, bytes: &[u8], usb: bool) {
+    if usb {
+        board.usb_send(bytes);
+        return;
+    }
     let (urgent, lines): (Vec<u8>, Vec<u8>) = bytes.iter().partition(|&&b| is_realtime(b));
     if !urgent.is_empty() {
         board.serial_send_urgent(&urgent);
@@ -133,7 +141,13 @@ pub fn run(opts: &Options) -> Result<Summary> {
     if let Some(t) = &tcp {
         println!("tcp: {}", t.addr);
     }
-    println!("115200 8N1; simulated time runs at wall-clock pace; Ctrl-C stops");
+    if opts.usb {
+        board.usb_plug(true);
+        board.usb_open(true);
+        println!("115200 8N1 accepted and ignored: the board's USB port (a modeled host enumerates it); simulated time runs at wall-clock pace; Ctrl-C stops");
+    } else {
+        println!("115200 8N1; simulated time runs at wall-clock pace; Ctrl-C stops");
+    }
     std::io::stdout().flush()?;
     STOP.store(false, Ordering::SeqCst);
     // SAFETY: the handler only stores to an atomic, which is async-signal-safe.
@@ -164,7 +178,7 @@ pub fn run(opts: &Options) -> Result<Summary> {
             got.extend_from_slice(&buf[..n]);
         }
         pty.clients();
-        feed(&mut board, &got);
+        feed(&mut board, &got, opts.usb);
         if let Some(t) = tcp.as_mut() {
             if let Some(peer) = t.accept() {
                 console.note(&format!("tcp: {peer} connected"));
@@ -173,7 +187,7 @@ pub fn run(opts: &Options) -> Result<Summary> {
                 let peer = t.peer();
                 match t.read(&mut buf) {
                     Some(0) => break,
-                    Some(n) => feed(&mut board, &buf[..n]),
+                    Some(n) => feed(&mut board, &buf[..n], opts.usb),
                     None => {
                         if let Some(p) = peer {
                             console.note(&format!("tcp: {p} disconnected"));
@@ -201,7 +215,7 @@ pub fn run(opts: &Options) -> Result<Summary> {
         }
 
         // board -> clients
-        let (tx, _) = board.serial_bytes();
+        let (tx, _) = if opts.usb { board.usb_bytes() } else { board.serial_bytes() };
         if tx.len() > tx_mark {
             let new = tx[tx_mark..].to_vec();
             tx_mark = tx.len();
