@@ -67,6 +67,14 @@ pub fn put_u32(out: &mut impl Out, v: u32) {
     put_padded(out, v, 1);
 }
 
+/// Writes `v` as eight upper-case hex digits.
+pub fn put_hex(out: &mut impl Out, v: u32) {
+    for i in (0..8).rev() {
+        let n = (v >> (4 * i) & 0xF) as usize;
+        out.put(&b"0123456789ABCDEF"[n..n + 1]);
+    }
+}
+
 /// Writes `v` in decimal with at least `width` digits (leading zeros; at most 10).
 fn put_padded(out: &mut impl Out, mut v: u32, width: usize) {
     let mut buf = [b'0'; 10];

@@ -42,6 +42,9 @@ pub const ALARM_HOMING_DOOR: u8 = 7;
 pub const ALARM_PULLOFF: u8 = 8;
 /// Homing: the approach found no switch.
 pub const ALARM_APPROACH: u8 = 9;
+/// The chip check at boot failed (grblHAL's "self-test failed"): the part has too little
+/// flash (`crate::grbl::chip`); nothing unlocks it.
+pub const ALARM_SELF_TEST: u8 = 16;
 /// Step loss with `$98=1` (grblHAL's "motor fault"), then the critical-event message: nothing
 /// is read until Ctrl-X.
 pub const ALARM_STEP_LOSS: u8 = 17;
@@ -310,6 +313,10 @@ pub fn build_info(out: &mut impl Out, info: &[u8], queue_moves: usize, r: &Rampe
     out.put(if r.table_limited { b" (table-limited)]\r\n" } else { b"]\r\n" });
 }
 
+/// Longest [`step_time`] line.
+pub const STEP_TIME_LEN: usize =
+    b"[MSG:step fill 4294967295/4294967295.0/4294967295 cycles min/mean/max, load 100.0 % peak 100.0 %, late 4294967295]\r\n".len();
+
 /// `$I`'s step-interrupt line: the firmware's own DWT timing of the step path since the last
 /// `$I` (`steptime`): body cycles min/mean/max, average and peak 1 ms load.
 pub fn step_time(out: &mut impl Out, t: &crate::steptime::StepTimeReport, dma: bool) {
@@ -429,7 +436,9 @@ mod tests {
         let r = Ramped { table_limited: true, dual: true, dma: true, junction_hz: 1_000_000, ..r };
         let all = text(|o| {
             build_info(o, &[b'x'; crate::grbl::store::TEXT_LEN], 15, &r);
+            let info_len = o.len();
             step_time(o, &worst, true);
+            assert!(o.len() <= STEP_TIME_LEN + info_len, "step time line");
             o.put(b"ok\r\n");
         });
         assert!(all.len() <= crate::grbl::reply::REPLY_ROOM, "{}", all.len());
