@@ -102,6 +102,7 @@ fn plan(cmd: &str) -> Option<Plan> {
         }
         "cargo sim -- --point 7@200000" => Run(&[]),
         "cargo sim -- --floor" => Run(&[]),
+        "cargo sim -- --flash-kib 32" => Run(&[]),
         "cargo bench --target host-tuple -p ddastep-la --bench la_throughput" => {
             Skip("a benchmark: numbers only, half a minute")
         }
@@ -293,6 +294,11 @@ fn every_readme_command_runs_as_written() {
     let example = &outputs["cargo run --example step_move --target host-tuple"];
     assert!(example.contains("5:3:2: counts X 5000 Y 3000 Z 2000 "), "{example}");
     assert!(example.contains("BSRR 0x00000600  step X+, Y+"), "{example}");
+    // A part too small: every line refused with the reason, no step made.
+    let small = &outputs["cargo sim -- --flash-kib 32"];
+    assert!(small.contains("\"G91\" -> [MSG:chip flash 32 KiB, needs 64 KiB: motion refused]\r\nerror:9"), "{small}");
+    assert!(small.contains("firmware self-report: [MSG:chip flash 32 KiB uid "), "{small}");
+    assert!(small.contains("(each move against its own line, 0 moves)"), "{small}");
     // The pair: a 7-axis bench VCD of a 3-axis move (there and back) checks against a
     // 3-term ratio.
     let out = Command::new("bash")

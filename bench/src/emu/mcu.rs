@@ -106,6 +106,8 @@ pub struct Mcu {
     /// The machine wired to the pins, and the input changes it scheduled (board applies them).
     pub plant: Option<Box<dyn super::plant::Plant>>,
     pub plant_flips: Vec<super::input::InputFlip>,
+    /// SCB CPUID as the part reads it (`Board::set_chip`; a reset keeps it).
+    pub cpuid: u32,
 }
 
 impl Mcu {
@@ -155,6 +157,7 @@ impl Mcu {
             exti: Exti::default(),
             plant: None,
             plant_flips: Vec::new(),
+            cpuid: super::cpu::BLUE_PILL.cpuid,
         }
     }
 
@@ -179,6 +182,7 @@ impl Mcu {
         self.tim1.changes = old.tim1.changes;
         self.plant = old.plant;
         self.plant_flips = old.plant_flips;
+        self.cpuid = old.cpuid;
         let u = old.usart1;
         self.usart1.transcript = u.transcript;
         self.usart1.tx_times = u.tx_times;

@@ -49,6 +49,7 @@ mod usart;
 pub mod vcd_out;
 
 pub use board::Board;
+pub use cpu::BLUE_PILL;
 pub use clock::HZ;
 pub use input::{InputFlip, Port};
 pub use stats::IsrRun;

@@ -50,6 +50,9 @@ pub struct Options {
     pub inputs: Vec<InputFlip>,
     /// A virtual machine wired to the pins (`--machine`).
     pub machine: Option<crate::machine::MachineSpec>,
+    /// The emulated part's device registers (`--flash-kib`, `--uid`, `--cpuid`; default
+    /// `emu::BLUE_PILL`).
+    pub chip: Option<ddastep::grbl::chip::Chip>,
 }
 
 /// What a finished run did.
@@ -116,6 +119,9 @@ pub fn run(opts: &Options) -> Result<Summary> {
     let mut pty = Pty::open(opts.pty_link.as_deref())?;
     let mut tcp = opts.tcp.as_deref().map(Tcp::bind).transpose()?;
     let mut board = Board::load(&opts.elf)?;
+    if let Some(c) = &opts.chip {
+        board.set_chip(c)?;
+    }
     if let Some(m) = &opts.machine {
         board.attach_plant(Box::new(crate::machine::VirtualMachine::new(m)));
     }
