@@ -31,7 +31,7 @@ const SYSTEM_BASE: u32 = 0x1FFF_F000;
 pub const BLUE_PILL: Chip = Chip {
     flash_kib: 64,
     uid: [u32::from_le_bytes(*b"ddas"), u32::from_le_bytes(*b"tep-"), u32::from_le_bytes(*b"emu!")],
-    cpuid: 0x411F_C231,
+    cpuid: super::mcu::CPUID_M3_R1P1,
 };
 
 /// The loaded program: entry state and symbols the bench uses.

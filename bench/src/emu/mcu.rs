@@ -32,6 +32,8 @@ mod mmio;
 pub const TIM2_IRQ: u32 = 28;
 /// USART1 global interrupt (IRQ 37).
 pub const USART1_IRQ: u32 = 37;
+/// CPUID of the STM32F103's core, a Cortex-M3 r1p1 (the default part's).
+pub const CPUID_M3_R1P1: u32 = 0x411F_C231;
 
 /// Why the block hook stopped the CPU.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -157,7 +159,7 @@ impl Mcu {
             exti: Exti::default(),
             plant: None,
             plant_flips: Vec::new(),
-            cpuid: super::cpu::BLUE_PILL.cpuid,
+            cpuid: CPUID_M3_R1P1,
         }
     }
 
