@@ -20,9 +20,9 @@ impl<const N: usize> Controller<'_, N> {
         if core::mem::take(&mut self.watchdog_note) {
             out.put(report::WATCHDOG_RESET);
         }
-        if let Some(c) = self.chip.filter(|c| !c.fits()) {
+        if self.chip.as_ref().is_some_and(|c| !c.fits()) {
             report::alarm(out, report::ALARM_SELF_TEST);
-            chip::refusal(out, &c);
+            self.refuse(out);
         } else if self.alarm {
             out.put(report::UNLOCK_HINT);
         }
@@ -42,11 +42,13 @@ impl<const N: usize> Controller<'_, N> {
 
     /// On a part that failed the chip check: writes why (a line is being refused), true.
     pub(super) fn refuse(&self, out: &mut impl Out) -> bool {
-        let c = self.chip.filter(|c| !c.fits());
-        if let Some(c) = &c {
-            chip::refusal(out, c);
+        match &self.chip {
+            Some(c) if !c.fits() => {
+                chip::refusal(out, c);
+                true
+            }
+            _ => false,
         }
-        c.is_some()
     }
 
     /// The MCU came up from a watchdog reset (call before [`Self::welcome`]): the banner is
