@@ -87,3 +87,34 @@ fn without_a_chip_check_dollar_i_has_no_chip_line() {
     let info = b.line("$I");
     assert!(!info.contains("chip") && info.ends_with("ok\r\n"), "{info}");
 }
+
+/// Whatever the flash size register reads, the part boots into `ALARM:16` and refuses a move
+/// exactly when it gives a size below the settings pages' end (64 KiB).
+fn check_refused_exactly_below_the_settings_pages(kib: u16) -> Result<(), proptest::test_runner::TestCaseError> {
+    let (mut b, banner) = boot(Settings::BENCH, part(kib));
+    let refused = kib != 0 && kib != 0xFFFF && kib < 64;
+    proptest::prop_assert_eq!(banner.contains("ALARM:16\r\n"), refused, "{} KiB: {}", kib, banner);
+    let reply = b.line("G91 G0 X0.01");
+    let refusal = format!("[MSG:chip flash {kib} KiB, needs 64 KiB: motion refused]\r\nerror:9\r\n");
+    proptest::prop_assert_eq!(reply == refusal, refused, "{} KiB: {}", kib, reply);
+    proptest::prop_assert_eq!(reply == "ok\r\n", !refused, "{} KiB: {}", kib, reply);
+    b.run_ms(5);
+    proptest::prop_assert_eq!(b.shared.positions()[0] != 0 || b.ctl.pending_moves() > 0, !refused, "{} KiB", kib);
+    Ok(())
+}
+
+#[test]
+fn refused_exactly_below_the_settings_pages_at_the_edges() {
+    for kib in [0, 1, 16, 32, 63, 64, 65, 128, 256, 0xFFFE, 0xFFFF] {
+        check_refused_exactly_below_the_settings_pages(kib).unwrap();
+    }
+}
+
+proptest::proptest! {
+    #[test]
+    fn refused_exactly_below_the_settings_pages(
+        kib in proptest::prop_oneof![0u16..=130, proptest::strategy::Just(0xFFFF), proptest::prelude::any::<u16>()]
+    ) {
+        check_refused_exactly_below_the_settings_pages(kib)?;
+    }
+}
