@@ -78,6 +78,7 @@ fn plan(cmd: &str) -> Option<Plan> {
         "cargo xtask cycles" => Run(&[]),
         "cargo run --release" => Skip("flashes a board: needs a debug probe and probe-rs"),
         "cargo xtask dist" => Run(&[]),
+        "cargo doc" => Skip("the API docs of every workspace crate, named in prose (internals.md); minutes of rustdoc"),
         "cargo run --example step_move --target host-tuple" => Run(&[]),
         "bash .ci/setup" => Run(&[]),
         "cargo install probe-rs-tools --locked" => {
