@@ -107,6 +107,13 @@ fn plan(cmd: &str) -> Option<Plan> {
             Skip("a benchmark: numbers only, half a minute")
         }
         "cargo sim -- --vcd paper.vcd --json paper.json" => Run(&["paper.vcd", "paper.json"]),
+        "cargo la -- paper.vcd --plot paper_rates.png --pulses paper_pulses.png --pulses-at 75 --dir-invert" => {
+            Run(&["paper_rates.png", "paper_pulses.png"])
+        }
+        "cargo sim -- --gcode bench/demo/scurve_532.gcode --vcd scurve.vcd" => Run(&["scurve.vcd"]),
+        "cargo la -- scurve.vcd --plot scurve_rates.png --dir-invert" => Run(&["scurve_rates.png"]),
+        "cargo sim -- --gcode bench/demo/cam_job.gcode --vcd cam.vcd" => Run(&["cam.vcd"]),
+        "cargo la -- cam.vcd --path cam_path.png --per-mm 100 --dir-invert" => Run(&["cam_path.png"]),
         "cargo sim -- --gcode my.gcode --max-seconds 5 --pin PA0@0.25=0" => Run(&[]),
         "cargo sim -- --machine bench/demo/gantry300.toml" => Run(&[]),
         "cargo sim -- --machine bench/demo/encoder_x.toml" => Run(&[]),
@@ -307,6 +314,13 @@ fn check_page_outputs(name: &str, outputs: &std::collections::HashMap<String, St
     // 3-term ratio.
     let stdout = &outputs["cargo la -- fast.vcd --expect 5:3:2"];
     assert!(stdout.contains("X:Y:Z = 10000:6000:4000 = 5:3:2 exact") && stdout.contains("no steps on A, B, C, U"), "{stdout}");
+    // The pictures show what the page says: the 5:3:2 pattern at cruise, the CAM job at its
+    // rapid rate (6000 mm/min on X, a step per 5 ms either way).
+    let pulses = &outputs["cargo la -- paper.vcd --plot paper_rates.png --pulses paper_pulses.png --pulses-at 75 --dir-invert"];
+    assert!(pulses.contains("pulses: X 5, Y 3, Z 2 rising edges in 100 us"), "{pulses}");
+    let path = &outputs["cargo la -- cam.vcd --path cam_path.png --per-mm 100 --dir-invert"];
+    let top: f64 = path.split("path: top XY speed ").nth(1).and_then(|s| s.split(' ').next()).and_then(|s| s.parse().ok()).unwrap_or(0.0);
+    assert!((5_900.0..=6_200.0).contains(&top), "{path}");
 }
 
 #[test]
