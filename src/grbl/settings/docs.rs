@@ -135,7 +135,7 @@ const LOW: [Low; 35] = [
     doc(DMA_BURST, "DMA burst step output", "boolean", BOOL,
         "TIM2 still paces every edge but DMA stores the step words and periods the engine buffered: no interrupt per \
          edge, higher rates, far less CPU per step. A feed hold or stop reaches the pins after at most the buffered \
-         1.33 ms. Works with `$580`. Applied in place at rest ([internals](internals.md#dma-burst-mode-581)).",
+         1.33 ms. Works with `$580`. Applied in place at rest ([internals](internals.md#dma-burst-mode-5811)).",
         "Not in Grbl or grblHAL; listed after the axis settings."),
 ];
 
