@@ -159,3 +159,28 @@ fn every_pin_the_firmware_uses_is_on_the_header_and_drawn() {
         assert!(svg.contains(&format!("{axis} STEP")) && svg.contains(&format!("{axis} DIR")), "axis {i}");
     }
 }
+
+#[test]
+fn the_pin_tables_in_wiring_md_match_the_pin_map() {
+    let md = std::fs::read_to_string(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("docs/wiring.md")).unwrap();
+    for (i, axis) in AXIS_NAMES.iter().enumerate() {
+        // U's limit input is the spindle PWM pin (board.rs), shown as such
+        let limit = if LIMIT_PINS[i] == SPINDLE_PWM_PIN { format!("(PA{}: spindle PWM)", LIMIT_PINS[i]) } else { format!("PA{}", LIMIT_PINS[i]) };
+        let row = format!("| {axis} | PB{} | PB{} | {limit} |", STEP_PINS[i], DIR_PINS[i]);
+        assert!(md.contains(&row), "wiring.md lacks {row}");
+    }
+    for (signal, pin) in [
+        ("EN (all drivers", format!("PB{ENABLE_PIN}")),
+        ("spindle / laser PWM", format!("PA{SPINDLE_PWM_PIN}")),
+        ("spindle enable", format!("PA{SPINDLE_ENABLE_PIN}")),
+        ("spindle direction", format!("PA{SPINDLE_DIR_PIN}")),
+        ("flood coolant M8 / mist coolant M7", format!("PA{COOLANT_FLOOD_PIN} / PA{COOLANT_MIST_PIN}")),
+        ("LED heartbeat", format!("PC{LED_PIN}")),
+        ("probe (input", format!("PC{PROBE_PIN}")),
+        ("safety door (input", format!("PC{DOOR_PIN}")),
+        ("quadrature encoder A / B", format!("PA{} / PA{}", ENCODER_PINS[0], ENCODER_PINS[1])),
+    ] {
+        let line = md.lines().find(|l| l.starts_with(&format!("| {signal}"))).unwrap_or_else(|| panic!("wiring.md has no row for {signal}"));
+        assert!(line.trim_end().ends_with(&format!("| {pin} |")), "{signal}: wiring.md says {line}, board.rs {pin}");
+    }
+}
