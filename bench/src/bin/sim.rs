@@ -55,7 +55,7 @@ struct Args {
     /// With --sweep: write bench/RESULTS.md-style results to this file.
     #[arg(long)]
     results: Option<PathBuf>,
-    /// With --sweep: rewrite the measured rows of this README's "Figures" table.
+    /// With --sweep: rewrite the measured rows of this page's "Figures" table (docs/performance.md).
     #[arg(long)]
     readme: Option<PathBuf>,
     /// With --sweep: axis counts, e.g. 1,3,7 (default 1..=7).
