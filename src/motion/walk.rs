@@ -158,7 +158,11 @@ impl Walk {
 
     /// Pending trigger work: the trigger for the current index and `target` (only when
     /// [`TRIGGER`] is pending).
-    #[inline(always)]
+    // Out of line (in the DMA fill's block): the ramp half runs it from `settle` and from
+    // priming a successor; inlined in both it cost ~300 B of flash for no cycle saved that
+    // matters (once per trigger change, not per step).
+    #[inline(never)]
+    #[cfg_attr(target_os = "none", link_section = ".fill.settle_trigger")]
     pub fn settle_trigger<const L: usize>(&mut self, plan: &RampPlan, target: u32, table: &RampTable<L>) {
         self.aim(target, table);
         self.decel_at = self.decel_from(self.idx, plan, table);
