@@ -132,7 +132,9 @@ impl Walk {
     /// Master steps walking down from `idx` to `decel_for` (samples at idx − walk, …, target, one
     /// per ms: the table distance less half the end slopes, plus [`DECEL_MARGIN`]), with the
     /// target's end cached; none when `idx` is not above the target.
-    #[inline(always)]
+    // Out of line (in the DMA fill's block): three callers (trigger, walk up, priming).
+    #[inline(never)]
+    #[cfg_attr(target_os = "none", link_section = ".fill.decel_from")]
     fn decel_from<const L: usize>(&self, idx: u32, plan: &RampPlan, table: &RampTable<L>) -> u32 {
         if idx <= self.decel_for {
             return DECEL_MARGIN;
