@@ -214,6 +214,15 @@ pub fn base_at<const L: usize>(idx: u32, table: &RampTable<L>) -> u32 {
     }
 }
 
+/// [`scaled`] of [`base_at`]: a move's master period (bits) at index `idx`. Out of line (in
+/// the DMA fill's block): the ramp half's three callers (its period, the period one walk down,
+/// a successor's) share one copy.
+#[inline(never)]
+#[cfg_attr(target_os = "none", link_section = ".fill.period_bits")]
+pub fn period_bits<const L: usize>(idx: u32, table: &RampTable<L>, plan: &RampPlan, min: Period) -> u32 {
+    scaled(base_at(idx, table), idx, plan, min).to_bits()
+}
+
 /// A move's master period from the table's period `base` (bits) at index `idx`: scaled by its
 /// master's share, never below `min`, nor below the cruise up to its index (above it, walking
 /// down to a cruise an override lowered, the table alone).
