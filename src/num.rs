@@ -45,10 +45,20 @@ pub fn u32_of(x: f32) -> u32 {
     x as u32
 }
 
-/// `x as u64`.
+/// `x as u64`: below 2^32 the `u32` conversion (NaN and negatives give 0, as the cast does),
+/// from 2^32 up the significand shifted into place, so the 64-bit conversion routine
+/// (`__aeabi_f2ulz`) is not linked.
 #[inline(never)]
 pub fn u64_of(x: f32) -> u64 {
-    x as u64
+    if !(x >= 4_294_967_296.0) {
+        return x as u32 as u64;
+    }
+    if x >= 18_446_744_073_709_551_616.0 {
+        return u64::MAX;
+    }
+    // x = m · 2^(exp − 150), the shift 9..=40 here (2^32 ≤ x < 2^64).
+    let bits = x.to_bits();
+    ((bits & 0x7F_FFFF | 0x80_0000) as u64) << ((bits >> 23) - 150)
 }
 
 /// `x as i32`.
@@ -107,7 +117,7 @@ mod tests {
 
     #[test]
     fn same_as_the_casts() {
-        for x in [f32::NAN, f32::NEG_INFINITY, -1.5, -0.4, 0.0, 0.49, 0.5, 1.5, 2.5, 4294967040.0, 4294967296.0, 1e30, f32::INFINITY] {
+        for x in [f32::NAN, f32::NEG_INFINITY, -1.5, -0.4, 0.0, 0.49, 0.5, 1.5, 2.5, 4294967040.0, 4294967296.0, 4294967808.0, 1.844_674_3e19, 18446744073709551616.0, 1e30, f32::INFINITY] {
             assert_eq!(u32_of(x), x as u32);
             assert_eq!(u64_of(x), x as u64);
             assert_eq!(round_u32(x), libm::roundf(x) as u32);
@@ -127,6 +137,9 @@ mod tests {
             r >> (r % 64)
         });
         for x in edges.into_iter().chain(random) {
+            // The same bits read as an f32 (every sign, exponent and NaN payload).
+            let f = f32::from_bits(x as u32);
+            assert_eq!(u64_of(f), f as u64, "{f}");
             assert_eq!(f32_of_u64(x).to_bits(), (x as f32).to_bits(), "{x}");
             for y in [x as i64, (x as i64).wrapping_neg()] {
                 assert_eq!(f32_of_i64(y).to_bits(), (y as f32).to_bits(), "{y}");
