@@ -18,7 +18,7 @@ use crate::motion::prepared::{Prepared, RampPlan};
 use crate::motion::shared::Shared;
 use crate::motion::ramp::{Period, RampSlot, RAMP_LEN};
 use crate::motion::ring::RingPeek;
-use crate::motion::walk::{base_at, scaled, Step as WalkStep, Walk, TRIGGER};
+use crate::motion::walk::{period_bits, Step as WalkStep, Walk, TRIGGER};
 
 /// The ramp half for `N` axes.
 pub struct Ramper<'a, const N: usize, const L: usize = RAMP_LEN> {
@@ -271,8 +271,7 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
     /// The running move's period for the walk's index.
     #[cfg_attr(target_os = "none", link_section = ".fill.set_period")]
     fn set_period(&mut self) {
-        let base = base_at(self.walk.idx, &self.ramp.profile().ramp);
-        self.period = scaled(base, self.walk.idx, &self.plan, self.min_period).to_bits();
+        self.period = period_bits(self.walk.idx, &self.ramp.profile().ramp, &self.plan, self.min_period);
         self.shared.period_bits.store(self.period, Relaxed);
     }
 
@@ -282,7 +281,7 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
     fn down_period(&self, plan: &RampPlan, min: Period, target: u32) -> u32 {
         let idx = self.walk.idx;
         let down = if idx > target { idx.saturating_sub(plan.walk_q).max(target) } else { idx };
-        scaled(base_at(down, &self.ramp.profile().ramp), down, plan, min).to_bits()
+        period_bits(down, &self.ramp.profile().ramp, plan, min)
     }
 
     /// Primes successor `n` (its exit `exit`) at the walk's index: its period, and its trigger
@@ -294,7 +293,7 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
         let (ramp, min) = unsafe { ((*n).ramp, (*n).min_period) };
         let table = &self.ramp.profile().ramp;
         // SAFETY: as above.
-        unsafe { (*n).period.store(scaled(base_at(self.walk.idx, table), self.walk.idx, &ramp, min).to_bits(), Relaxed) };
+        unsafe { (*n).period.store(period_bits(self.walk.idx, table, &ramp, min), Relaxed) };
         let mut w = self.walk;
         let at = if self.hold {
             0

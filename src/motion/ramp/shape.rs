@@ -3,7 +3,9 @@
 //!
 //! Who uses it: the table build (`ramp/table.rs`), for its entries and its length.
 
-use crate::num::{f32_of_u64, i32_of, u64_of};
+use core::num::NonZeroU64;
+
+use crate::num::{div_rem_u64, f32_of_u64, i32_of, u64_of};
 
 /// Shape of the acceleration.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -82,8 +84,10 @@ pub(super) fn mean_millihz(cfg: &RampConfig, i: usize, n: usize) -> u64 {
                 // Ramp part of length f = (vmax-start)/a ms, then vmax for 1-f: the mean is
                 // vmax - d²/(2a) with d = vmax - start < a, whose floor is taken in integers
                 // (d² < 2^64 as d < a ≤ u32::MAX; f32 has too few bits for milli-steps/s).
+                // (⌈⌈x/a⌉/2⌉ = ⌈x/2a⌉; `a` ≥ 1 as `build` refuses a zero accel.)
                 let d = vmax - start;
-                vmax - (d * d).div_ceil(2 * a)
+                let (q, r) = div_rem_u64(d * d, NonZeroU64::new(a).unwrap_or(NonZeroU64::MIN));
+                vmax - (q + (r != 0) as u64).div_ceil(2)
             }
         }
         Shape::SCurve => {
@@ -110,6 +114,31 @@ mod tests {
             let (a, b) = (exp_small(x) as f64, libm::exp(x as f64));
             assert!(((a - b) / b).abs() < 1e-6, "exp({x}): {a} vs {b}");
             x += 0.01;
+        }
+    }
+}
+
+#[cfg(test)]
+mod props {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// The trapezoid's means as with the runtime's 64-bit `div_ceil`, over the configs a
+        /// table is built from (1 ≤ v0 ≤ vmax ≤ 10^6 steps/s, any nonzero accel), at every ms.
+        #[test]
+        fn trapezoid_means_match_u64_division(v0 in 1u32..=1_000_000, top in 0u32..=1_000_000, accel in 1u32.., ashift in 0u32..32, i in 0usize..2048) {
+            let cfg = RampConfig { v0, vmax: v0.max(top), accel: (accel >> ashift).max(1), shape: Shape::Trapezoid };
+            let (v0, vmax, a) = (cfg.v0 as u64 * 1000, cfg.vmax as u64 * 1000, cfg.accel as u64);
+            let start = v0 + a * i as u64;
+            let want = if v0 + a * (i as u64 + 1) <= vmax {
+                v0 + a * (2 * i as u64 + 1) / 2
+            } else if start >= vmax {
+                vmax
+            } else {
+                vmax - ((vmax - start) * (vmax - start)).div_ceil(2 * a)
+            };
+            prop_assert_eq!(mean_millihz(&cfg, i, 2048), want);
         }
     }
 }

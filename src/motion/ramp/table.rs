@@ -7,8 +7,10 @@
 
 use super::shape::{mean_millihz, s_curve_stretch, RampConfig, Shape};
 use crate::motion::rate::{period_of_millihz, Period, MAX_RATE_HZ, MIN_RATE_HZ};
-use crate::num::{f32_of_u64, u64_of};
+use crate::num::{div_rem_u64, f32_of_u64, u64_of};
 use crate::TIMER_HZ;
+
+const THOUSAND: core::num::NonZeroU64 = core::num::NonZeroU64::new(1000).unwrap();
 
 /// Entries (milliseconds) in the firmware's table.
 pub const RAMP_LEN: usize = 512;
@@ -90,7 +92,7 @@ impl<const L: usize> RampTable<L> {
         if n > L as u64 {
             let reachable = match cfg.shape {
                 // 64-bit integers: the same whole part as the exact quotient.
-                Shape::Trapezoid => cfg.v0 as u64 + cfg.accel as u64 * L as u64 / 1000,
+                Shape::Trapezoid => cfg.v0 as u64 + div_rem_u64(cfg.accel as u64 * L as u64, THOUSAND).0,
                 Shape::SCurve => {
                     cfg.v0 as u64 + u64_of(cfg.accel as f32 * L as f32 / 1000.0 / s_curve_stretch())
                 }
