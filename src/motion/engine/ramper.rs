@@ -16,7 +16,7 @@ use core::sync::atomic::Ordering::Relaxed;
 
 use crate::motion::prepared::{Prepared, RampPlan};
 use crate::motion::shared::Shared;
-use crate::motion::ramp::{Period, RampSlot, RAMP_LEN};
+use crate::motion::ramp::{peak, Leg, Period, RampSlot, RAMP_LEN};
 use crate::motion::ring::RingPeek;
 use crate::motion::walk::{base_at, scaled, Step as WalkStep, Walk, TRIGGER};
 
@@ -32,6 +32,12 @@ pub struct Ramper<'a, const N: usize, const L: usize = RAMP_LEN> {
     /// The running move's period at the walk's index (bits).
     period: u32,
     walk: Walk,
+    /// S mode: the leg the walk is on (the index in use is [`Leg::at`] the walk's linear
+    /// index), what it was started for (down, its end or the cruise, the target), and whether
+    /// a new move's own leg is still to start.
+    leg: Leg,
+    leg_key: (bool, u32, u32),
+    leg_due: bool,
     hold: bool,
     /// A hold brought the walk to rest (the running move's period is 0 until the resume).
     resting: bool,
@@ -71,6 +77,9 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
             min_period: Period::ZERO,
             period: 0,
             walk: Walk::REST,
+            leg: Leg::new(0, 0),
+            leg_key: (false, 0, 0),
+            leg_due: false,
             hold: link.hold.load(Relaxed),
             resting: false,
             published_at: 0,
@@ -88,7 +97,7 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
 
     /// (index Q20, decelerating, trigger) for tests.
     pub(super) fn walk_state(&self) -> (u32, bool, u32) {
-        (self.walk.idx, self.walk.decel, self.walk.decel_at)
+        (self.idx(), self.walk.decel, self.walk.decel_at)
     }
 
     /// Does what the step half asked for since the last run (see the module).
@@ -115,7 +124,7 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
                 if p.is_null() {
                     self.cur = p;
                     self.primed.0 = 0;
-                    self.walk = Walk::REST;
+                    self.rest();
                     self.resting = false;
                 } else if p != self.cur {
                     self.enter(p);
@@ -124,7 +133,7 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
             if primes != self.seen_primes {
                 self.seen_primes = primes;
                 if let Some(p) = self.ring.front() {
-                    self.walk = Walk::REST;
+                    self.rest();
                     self.resting = false;
                     self.enter(p);
                 }
@@ -178,6 +187,11 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
         }
         // SAFETY: an atomic field (the trigger primed while it was the successor, or 0).
         self.published_at = unsafe { (*p).decel_at.load(Relaxed) };
+        // S mode: the move's own legs start from the index in use (linear: the same index).
+        let at = self.idx();
+        self.walk.idx = at;
+        self.leg = Leg::new(at, at);
+        self.leg_due = true;
         self.walk.decel = self.hold;
         self.walk.defer_decel();
         self.set_period();
@@ -195,7 +209,8 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
             }
         } else if self.resting {
             self.resting = false;
-            self.walk = Walk::REST;
+            self.rest();
+            self.leg_due = true;
             self.walk.defer_decel();
             self.set_period();
         } else {
@@ -208,6 +223,12 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
     #[cfg_attr(target_os = "none", link_section = ".fill.start_decel")]
     fn start_decel(&mut self) {
         let target = self.target();
+        // S mode: the way down is a leg of its own, from the index in use.
+        let at = self.idx();
+        self.walk.idx = at;
+        self.leg = Leg::new(at, target.min(at));
+        self.leg_key = (true, target, 0);
+        self.leg_due = false;
         self.walk.start_decel(&self.plan, target);
         self.set_period();
     }
@@ -234,7 +255,10 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
         let target = self.target();
         // SAFETY: a plain field of the running slot.
         let left = unsafe { (*self.cur).total }.wrapping_sub(self.shared.mv_done.load(Relaxed));
-        match self.walk.per_ms(&self.plan, target, left) {
+        if self.ramp.profile().scurve.on() {
+            self.steer(target, left);
+        }
+        match self.walk.per_ms(&self.walk_plan(), target, left) {
             WalkStep::Same => {}
             WalkStep::AtRest if self.hold => self.resting = true,
             _ => self.set_period(),
@@ -264,15 +288,67 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
             self.walk.settle_trigger(&self.plan, target, table);
         }
         if self.walk.unsettled() {
-            self.walk.settle_up(&self.plan, table);
+            self.walk.settle_up(&self.walk_plan(), table);
         }
+    }
+
+    /// The walk back at rest (index 0, no leg).
+    fn rest(&mut self) {
+        self.walk = Walk::REST;
+        self.leg = Leg::new(0, 0);
+    }
+
+    /// The index in use: the walk's linear index through the leg's S (itself in trapezoid
+    /// mode).
+    #[inline(always)]
+    fn idx(&self) -> u32 {
+        self.leg.at(self.walk.idx, &self.ramp.profile().scurve)
+    }
+
+    /// The plan the linear walk runs: in S mode an up leg's end caps the cruise (its peak).
+    #[inline(always)]
+    fn walk_plan(&self) -> RampPlan {
+        let mut plan = self.plan;
+        if self.ramp.profile().scurve.on() && !self.leg.down() && !self.walk.decel {
+            plan.cruise_q = plan.cruise_q.min(self.leg.to);
+        }
+        plan
+    }
+
+    /// S mode, once per ramp millisecond: a new leg from the index in use wherever the walk
+    /// now heads elsewhere (a move entered, a resume, a target or cruise that changed, a
+    /// deceleration that ended); an up leg ends at the move's peak (`ramp::peak`).
+    #[cfg_attr(target_os = "none", link_section = ".fill.steer")]
+    fn steer(&mut self, target: u32, left: u32) {
+        let at = self.idx();
+        let cruise = self.plan.cruise_q;
+        let (leg, key) = if self.walk.decel || at > cruise {
+            let end = if self.walk.decel { target.min(at) } else { cruise };
+            (Leg::new(at, end), (true, end, 0))
+        } else {
+            if !self.leg_due && self.leg_key == (false, cruise, target) {
+                return;
+            }
+            let top = peak(at, cruise, target, left, &self.plan, &self.ramp.profile().ramp);
+            (Leg::new(at, top), (false, cruise, target))
+        };
+        if !self.leg_due && self.leg_key == key {
+            return;
+        }
+        self.leg = leg;
+        self.leg_key = key;
+        self.leg_due = false;
+        self.walk.idx = at;
+        self.walk.replan();
+        self.settle();
     }
 
     /// The running move's period for the walk's index.
     #[cfg_attr(target_os = "none", link_section = ".fill.set_period")]
     fn set_period(&mut self) {
-        let base = base_at(self.walk.idx, &self.ramp.profile().ramp);
-        self.period = scaled(base, self.walk.idx, &self.plan, self.min_period).to_bits();
+        let idx = self.idx();
+        let base = base_at(idx, &self.ramp.profile().ramp);
+        self.period = scaled(base, idx, &self.plan, self.min_period).to_bits();
         self.shared.period_bits.store(self.period, Relaxed);
     }
 
@@ -280,8 +356,10 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
     /// `plan` and floor `min`: where a trigger puts it at once.
     #[cfg_attr(target_os = "none", link_section = ".fill.down_period")]
     fn down_period(&self, plan: &RampPlan, min: Period, target: u32) -> u32 {
-        let idx = self.walk.idx;
-        let down = if idx > target { idx.saturating_sub(plan.walk_q).max(target) } else { idx };
+        let idx = self.idx();
+        // (S mode: the first millisecond of a leg from here down to `target`.)
+        let lin = idx.saturating_sub(plan.walk_q).max(target);
+        let down = if idx > target { Leg::new(idx, target).at(lin, &self.ramp.profile().scurve) } else { idx };
         scaled(base_at(down, &self.ramp.profile().ramp), down, plan, min).to_bits()
     }
 
@@ -293,9 +371,11 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
         // writes and atomics, through the pointer (the step half may enter it meanwhile).
         let (ramp, min) = unsafe { ((*n).ramp, (*n).min_period) };
         let table = &self.ramp.profile().ramp;
+        let idx = self.idx();
         // SAFETY: as above.
-        unsafe { (*n).period.store(scaled(base_at(self.walk.idx, table), self.walk.idx, &ramp, min).to_bits(), Relaxed) };
+        unsafe { (*n).period.store(scaled(base_at(idx, table), idx, &ramp, min).to_bits(), Relaxed) };
         let mut w = self.walk;
+        w.idx = idx;
         let at = if self.hold {
             0
         } else {
@@ -339,12 +419,13 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
                 Err(now) => now,
             };
         }
-        self.shared.link.idx.store(self.walk.idx, Relaxed);
+        let idx = self.idx();
+        self.shared.link.idx.store(idx, Relaxed);
         let next = self.succ;
         if let Some(n) = next {
             // SAFETY: a published slot after the running one; an atomic field.
             let exit = unsafe { (*n).exit_q.load(Relaxed) };
-            let key = (n as usize, self.walk.idx, self.hold, self.succ_next, exit);
+            let key = (n as usize, idx, self.hold, self.succ_next, exit);
             if key != self.primed {
                 self.primed = key;
                 self.prime(n, exit);
