@@ -300,7 +300,6 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
 
     /// The index in use: the walk's linear index through the leg's S (itself in trapezoid
     /// mode).
-    #[inline(always)]
     fn idx(&self) -> u32 {
         self.leg.at(self.walk.idx, &self.ramp.profile().scurve)
     }
@@ -318,6 +317,7 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
     /// S mode, once per ramp millisecond: a new leg from the index in use wherever the walk
     /// now heads elsewhere (a move entered, a resume, a target or cruise that changed, a
     /// deceleration that ended); an up leg ends at the move's peak (`ramp::peak`).
+    #[inline(never)]
     #[cfg_attr(target_os = "none", link_section = ".fill.steer")]
     fn steer(&mut self, target: u32, left: u32) {
         let at = self.idx();

@@ -130,7 +130,7 @@ impl Leg {
 
     /// The index in use when the linear walk is at `lin`: `from + (to − from)·s(p)`, `p` the
     /// linear progress from `from` to `to` (clamped to the leg). Off, or an empty leg: `lin`.
-    #[inline(always)]
+    #[inline(never)]
     pub fn at(&self, lin: u32, c: &SCurve) -> u32 {
         let (from, to) = (self.from, self.to);
         if from == to || !c.on() {
