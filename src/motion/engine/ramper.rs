@@ -256,7 +256,9 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
         // SAFETY: a plain field of the running slot.
         let left = unsafe { (*self.cur).total }.wrapping_sub(self.shared.mv_done.load(Relaxed));
         if self.ramp.profile().scurve.on() {
-            self.steer(target, left);
+            // (At most the move's steps: the step half may not have restarted its count yet.)
+            // SAFETY: a plain field of the running slot.
+            self.steer(target, left.min(unsafe { (*self.cur).total }));
         }
         match self.walk.per_ms(&self.walk_plan(), target, left) {
             WalkStep::Same => {}

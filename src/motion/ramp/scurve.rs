@@ -164,7 +164,10 @@ pub fn peak<const L: usize>(from: u32, cap: u32, exit: u32, left: u32, plan: &Ra
     let xs = table.sum_at(exit.min(top));
     let fits = |p: u32| {
         let sp = table.sum_at(p.min(top));
-        let d = (sp - base.min(sp)) as u64 + sp.saturating_sub(xs) as u64;
+        // (Two milliseconds at the peak to spare: the walk's samples and its trigger are a
+        // millisecond apart, and a leg cut short before its end would leave the way down short.)
+        let spare = 2 * ((table.per_ms_at(p.min(top)) as u64 * plan.walk_q as u64) >> 20);
+        let d = (sp - base.min(sp)) as u64 + sp.saturating_sub(xs) as u64 + spare;
         (d * plan.dist_q as u64) >> 24 <= left as u64
     };
     if fits(cap) {
