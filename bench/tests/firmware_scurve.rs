@@ -113,3 +113,27 @@ fn paper_532_in_s_mode_keeps_its_exact_pattern() {
     assert!((rate - 50_000.0).abs() < 250.0, "cruise {rate} Hz");
     assert_eq!(b.report().overruns, 0);
 }
+
+#[test]
+fn short_moves_after_a_long_one_each_get_their_own_s() {
+    // Each 3 mm move at F6000 after the first is a triangle from rest (S up to its peak, S down): 86 ms with `$120=2000`
+    // (63 ms as trapezoids). None may crawl at the table's bottom (a peak planned from the
+    // previous move's step count did: 200 ms).
+    let mut b = boot();
+    for l in ["$100=100", "$110=36000", "$120=2000", "$41=1", "G91", "G1 X60 F3000"] {
+        ok(&mut b, l);
+    }
+    for _ in 0..10 {
+        ok(&mut b, "G1 X3 F6000");
+        ok(&mut b, "G1 X-3 F6000");
+    }
+    wait_idle(&mut b, 10.0);
+    let s = steps(&b);
+    assert_eq!(net(&s), [6000, 0, 0, 0, 0, 0, 0]);
+    let x: Vec<u64> = s.iter().filter(|s| s.axis == 0).map(|s| s.cycle).collect();
+    assert_eq!(x.len(), 12_000);
+    let ms: Vec<f64> = (0..20).map(|i| (x[6000 + 300 * i + 299] - x[6000 + 300 * i]) as f64 / HZ as f64 * 1e3).collect();
+    eprintln!("short moves, ms: {:?}", ms.iter().map(|m| m.round()).collect::<Vec<_>>());
+    // (The first joins the long move at speed: shorter.)
+    assert!(ms[0] <= 95.0 && ms[1..].iter().all(|&m| (75.0..=95.0).contains(&m)), "{ms:?}");
+}

@@ -256,9 +256,7 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
         // SAFETY: a plain field of the running slot.
         let left = unsafe { (*self.cur).total }.wrapping_sub(self.shared.mv_done.load(Relaxed));
         if self.ramp.profile().scurve.on() {
-            // (At most the move's steps: the step half may not have restarted its count yet.)
-            // SAFETY: a plain field of the running slot.
-            self.steer(target, left.min(unsafe { (*self.cur).total }));
+            self.steer(target, left);
         }
         match self.walk.per_ms(&self.walk_plan(), target, left) {
             WalkStep::Same => {}
@@ -326,17 +324,34 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
         let cruise = self.plan.cruise_q;
         let (leg, key) = if self.walk.decel || at > cruise {
             let end = if self.walk.decel { target.min(at) } else { cruise };
-            (Leg::new(at, end), (true, end, 0))
-        } else {
-            if !self.leg_due && self.leg_key == (false, cruise, target) {
+            let key = (true, end, 0);
+            if !self.leg_due && self.leg_key == key {
                 return;
             }
-            let top = peak(at, cruise, target, left, &self.plan, &self.ramp.profile().ramp);
-            (Leg::new(at, top), (false, cruise, target))
+            (Leg::new(at, end), key)
+        } else {
+            let key = (false, cruise, target);
+            let table = &self.ramp.profile().ramp;
+            if !self.leg_due && self.leg_key == key {
+                // At a peak below the cruise: higher if the steps left allow (a peak found
+                // short), else wait there for the trigger.
+                if self.leg.to >= cruise || self.walk.idx < self.leg.to {
+                    return;
+                }
+                let top = peak(at, cruise, target, left, &self.plan, table);
+                if top <= at {
+                    return;
+                }
+                (Leg::new(at, top), key)
+            } else {
+                // (A move's peak once the step half runs it: until then the steps left are
+                // the previous move's.)
+                if self.shared.running() != self.cur {
+                    return;
+                }
+                (Leg::new(at, peak(at, cruise, target, left, &self.plan, table)), key)
+            }
         };
-        if !self.leg_due && self.leg_key == key {
-            return;
-        }
         self.leg = leg;
         self.leg_key = key;
         self.leg_due = false;
