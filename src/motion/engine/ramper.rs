@@ -338,7 +338,7 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
                 if self.leg.to >= cruise || self.walk.idx < self.leg.to {
                     return;
                 }
-                let top = peak(at, cruise, target, left, &self.plan, table);
+                let top = peak(at, cruise, target, left, (self.plan.walk_q, self.plan.dist_q), table);
                 if top <= at {
                     return;
                 }
@@ -349,7 +349,7 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
                 if self.shared.running() != self.cur {
                     return;
                 }
-                (Leg::new(at, peak(at, cruise, target, left, &self.plan, table)), key)
+                (Leg::new(at, peak(at, cruise, target, left, (self.plan.walk_q, self.plan.dist_q), table)), key)
             }
         };
         self.leg = leg;

@@ -19,7 +19,6 @@
 //! (its cruise, or lower where the way down to the exit must start first: [`peak`]).
 
 use super::table::{RampTable, IDX_ONE};
-use crate::motion::prepared::RampPlan;
 use crate::num::i32_of;
 
 /// Segments of the shared curve (linear interpolation between its 65 points).
@@ -152,10 +151,11 @@ impl Leg {
 }
 
 /// The highest index in `from..=cap` (within 1/64 entry) whose way up from `from` and down to
-/// `exit` fit in `left` master steps at the move's walk (`plan`): where an up leg must end for
-/// the deceleration to start on time (the cruise when it fits). Binary search on the distance
+/// `exit` fit in `left` master steps at the move's walk (`walk_q` entries per ms, Q20; `dist_q`
+/// master steps per table distance, Q24: `RampPlan`'s): where an up leg must end for the
+/// deceleration to start on time (the cruise when it fits). Binary search on the distance
 /// sums, at a leg's start only.
-pub fn peak<const L: usize>(from: u32, cap: u32, exit: u32, left: u32, plan: &RampPlan, table: &RampTable<L>) -> u32 {
+pub fn peak<const L: usize>(from: u32, cap: u32, exit: u32, left: u32, (walk_q, dist_q): (u32, u32), table: &RampTable<L>) -> u32 {
     if cap <= from || table.is_empty() {
         return from;
     }
@@ -166,9 +166,9 @@ pub fn peak<const L: usize>(from: u32, cap: u32, exit: u32, left: u32, plan: &Ra
         let sp = table.sum_at(p.min(top));
         // (Two milliseconds at the peak to spare: the walk's samples and its trigger are a
         // millisecond apart, and a leg cut short before its end would leave the way down short.)
-        let spare = 2 * ((table.per_ms_at(p.min(top)) as u64 * plan.walk_q as u64) >> 20);
+        let spare = 2 * ((table.per_ms_at(p.min(top)) as u64 * walk_q as u64) >> 20);
         let d = (sp - base.min(sp)) as u64 + sp.saturating_sub(xs) as u64 + spare;
-        (d * plan.dist_q as u64) >> 24 <= left as u64
+        (d * dist_q as u64) >> 24 <= left as u64
     };
     if fits(cap) {
         return cap;
