@@ -38,6 +38,8 @@ pub struct Ramper<'a, const N: usize, const L: usize = RAMP_LEN> {
     leg: Leg,
     leg_key: (bool, u32, u32),
     leg_due: bool,
+    /// S mode (`$41=1`), as the profile was when the walk's move was entered.
+    s_on: bool,
     hold: bool,
     /// A hold brought the walk to rest (the running move's period is 0 until the resume).
     resting: bool,
@@ -80,6 +82,7 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
             leg: Leg::new(0, 0),
             leg_key: (false, 0, 0),
             leg_due: false,
+            s_on: false,
             hold: link.hold.load(Relaxed),
             resting: false,
             published_at: 0,
@@ -189,6 +192,7 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
         self.published_at = unsafe { (*p).decel_at.load(Relaxed) };
         // S mode: the move's own legs start from the index in use (linear: the same index).
         let at = self.idx();
+        self.s_on = self.ramp.profile().scurve.on();
         self.walk.idx = at;
         self.leg = Leg::new(at, at);
         self.leg_due = true;
@@ -255,7 +259,7 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
         let target = self.target();
         // SAFETY: a plain field of the running slot.
         let left = unsafe { (*self.cur).total }.wrapping_sub(self.shared.mv_done.load(Relaxed));
-        if self.ramp.profile().scurve.on() {
+        if self.s_on {
             self.steer(target, left);
         }
         match self.walk.per_ms(&self.walk_plan(), target, left) {
@@ -300,15 +304,20 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
 
     /// The index in use: the walk's linear index through the leg's S (itself in trapezoid
     /// mode).
+    #[inline(never)]
     fn idx(&self) -> u32 {
-        self.leg.at(self.walk.idx, &self.ramp.profile().scurve)
+        if self.s_on {
+            self.leg.at(self.walk.idx, &self.ramp.profile().scurve)
+        } else {
+            self.walk.idx
+        }
     }
 
     /// The plan the linear walk runs: in S mode an up leg's end caps the cruise (its peak).
     #[inline(always)]
     fn walk_plan(&self) -> RampPlan {
         let mut plan = self.plan;
-        if self.ramp.profile().scurve.on() && !self.leg.down() && !self.walk.decel {
+        if self.s_on && !self.leg.down() && !self.walk.decel {
             plan.cruise_q = plan.cruise_q.min(self.leg.to);
         }
         plan
@@ -376,7 +385,13 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
         let idx = self.idx();
         // (S mode: the first millisecond of a leg from here down to `target`.)
         let lin = idx.saturating_sub(plan.walk_q).max(target);
-        let down = if idx > target { Leg::new(idx, target).at(lin, &self.ramp.profile().scurve) } else { idx };
+        let down = if idx <= target {
+            idx
+        } else if self.s_on {
+            Leg::new(idx, target).at(lin, &self.ramp.profile().scurve)
+        } else {
+            lin
+        };
         scaled(base_at(down, &self.ramp.profile().ramp), down, plan, min).to_bits()
     }
 
