@@ -11,6 +11,11 @@
 //! walk up) at once, and it publishes the running move's period and trigger in its slot and
 //! primes its successor's period at the walk's index. The step interrupt preempts it at every
 //! edge; it loops until the counters stand still.
+//!
+//! S mode (`$41=1`, `ramp/scurve.rs`): the walk stays linear (at the move's a / k) and the index
+//! in use is its leg's S of it; each ramp millisecond first checks what the walk heads for
+//! (`steer`: a new leg from the index in use when that changed), and the trigger,
+//! a hold's way down and the successor's priming all start from the index in use.
 
 use core::sync::atomic::Ordering::Relaxed;
 
