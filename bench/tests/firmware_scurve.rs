@@ -137,3 +137,18 @@ fn short_moves_after_a_long_one_each_get_their_own_s() {
     // (The first joins the long move at speed: shorter.)
     assert!(ms[0] <= 95.0 && ms[1..].iter().all(|&m| (75.0..=95.0).contains(&m)), "{ms:?}");
 }
+
+#[test]
+fn paper_532_in_s_mode_with_dma_keeps_its_exact_pattern() {
+    // DMA burst mode (`$581=1`): the fill runs the same ramp half ahead of the pins.
+    let base = ddastep::grbl::settings::Settings { shape: ddastep::motion::ramp::Shape::SCurve, ..ddastep::grbl::settings::Settings::BENCH };
+    let mut b = boot_dma(base, false);
+    for l in ["$120=25000", "$121=25000", "$122=25000", "G91", "G1 X50 Y30 Z20 F36986.484"] {
+        ok(&mut b, l);
+    }
+    wait_idle(&mut b, 2.0);
+    let s = steps(&b);
+    assert_eq!(net(&s), [5000, 3000, 2000, 0, 0, 0, 0]);
+    assert_eq!(assert_paper_pattern(&s), 5000);
+    assert_paper_cruise(&b, &s, 1000.0);
+}
