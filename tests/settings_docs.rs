@@ -23,12 +23,12 @@ safe for a small gantry. This page and [settings.csv](settings.csv) (the columns
 `tests/settings_docs.rs`, which fails when they differ from what `$$` prints; regenerate with
 `UPDATE_DOCS=1 cargo test -p ddastep --target host-tuple --test settings_docs`.
 
-`$$` lists the axis settings (`$100`-`$136`) for the `$42` axes in use, and `$580`, `$581` last.
-`$29`, `$33`, `$40`-`$42`, `$87`-`$89`, `$97`-`$99`, `$580` and `$581` are not Grbl 1.1's:
-`$29` and `$33` are grblHAL's numbers for the same thing; `$87`-`$89`, `$97`-`$99`, `$580` and
-`$581` are numbers neither Grbl 1.1 nor grblHAL gives a meaning (grblHAL's 80-86 and 90-96 are
-its spindle and position PID, 400-449 its MPG encoders, 540-579 its panel and 590-599 its
-button settings; it has no dual-edge or DMA setting).
+`$$` lists the axis settings (`$100`-`$136`) for the `$42` axes in use, and `$580`-`$582` last.
+`$29`, `$33`, `$40`-`$42`, `$87`-`$89`, `$97`-`$99` and `$580`-`$582` are not Grbl 1.1's:
+`$29` and `$33` are grblHAL's numbers for the same thing; `$87`-`$89`, `$97`-`$99` and
+`$580`-`$582` are numbers neither Grbl 1.1 nor grblHAL gives a meaning (grblHAL's 80-86 and
+90-96 are its spindle and position PID, 400-449 its MPG encoders, 540-579 its panel and 590-599
+its button settings, 580-589 unused; it has no dual-edge, DMA or S-curve setting).
 
 ## Starting points
 

@@ -308,7 +308,7 @@ pub fn build_info(out: &mut impl Out, info: &[u8], queue_moves: usize, r: &Rampe
     put_u32(out, r.cfg.accel);
     out.put(match r.cfg.shape {
         Shape::Trapezoid => b" Hz/s trapezoid",
-        Shape::SCurve => b" Hz/s S-curve",
+        Shape::SCurve => b" Hz/s S-curve per move (table at a/k)",
     });
     out.put(if r.table_limited { b" (table-limited)]\r\n" } else { b"]\r\n" });
 }
@@ -465,7 +465,7 @@ mod tests {
             junction_hz: 5,
         };
         let all = text(|o| build_info(o, b"i", 5, &r));
-        assert!(all.ends_with("[MSG:max step rate 4 Hz dual-edge DMA]\r\n[MSG:max junction rate 5 Hz]\r\n[MSG:ramp 1-2 Hz 3 Hz/s S-curve (table-limited)]\r\n"), "{all}");
+        assert!(all.ends_with("[MSG:max step rate 4 Hz dual-edge DMA]\r\n[MSG:max junction rate 5 Hz]\r\n[MSG:ramp 1-2 Hz 3 Hz/s S-curve per move (table at a/k) (table-limited)]\r\n"), "{all}");
     }
 
     #[test]

@@ -7,7 +7,7 @@
 //!
 //! Invariant: entry `i` holds the period (timer ticks, 1/16 resolution, [`Period`]) of the mean
 //! rate of the ideal profile during millisecond `i`: `v0 + a·(i+½) ms` for the trapezoid,
-//! clamped at `vmax` in its last entry; the S-curve uses the same mean of a normalized logistic.
+//! clamped at `vmax` in its last entry (the S-curve's table too, at `a / k`: see `scurve`).
 //! Entries strictly never rise in rate past `vmax` and never fall in rate along the table. The
 //! engine decelerates by walking the same entries down, so one table serves every move that
 //! shares the acceleration, and a move's step count never depends on the table. Beside each
@@ -18,17 +18,21 @@
 //! that fits (the settings code then builds a steeper table instead, which slower moves walk at
 //! a smaller fraction: see `Settings::build_profile`).
 //!
-//! - `shape`: the ideal profiles (trapezoid, S-curve) the entries take their mean rates from.
+//! - `shape`: the ideal profile (the trapezoid, for both shapes) the entries take their mean
+//!   rates from.
+//! - `scurve`: the S-curve (`$41=1`): each ramp leg mapped through the seeds' logistic.
 //! - `table`: the table, its build and the engine's interpolated lookups.
 //! - `search`: the look-ahead's searches on it (the index of a rate, of a distance).
 //! - `slot`: the [`Profile`] (table and step timing) shared with the engine, and its
 //!   write protocol.
 
+mod scurve;
 mod search;
 mod shape;
 mod slot;
 mod table;
 
+pub use scurve::{peak, peak_slope, Leg, SCurve, FLEX_DEFAULT, FLEX_MAX, FLEX_MIN};
 pub use shape::{RampConfig, Shape};
 pub use slot::{Profile, RampSlot, RampWriteGuard};
 pub use table::{RampError, RampTable, IDX_FRAC, IDX_ONE, RAMP_LEN, SUM_ONE};

@@ -38,6 +38,7 @@ pub mod nvic;
 pub mod profile;
 pub mod pwm;
 pub mod qenc;
+pub mod ramp_half;
 mod report;
 mod stats;
 pub mod summary;

@@ -8,6 +8,7 @@
 
 use super::values::*;
 use crate::encoder;
+use crate::motion::ramp::{FLEX_MAX, FLEX_MIN};
 use crate::motion::rate::MAX_RATE_HZ;
 use crate::{AXIS_NAMES, MAX_AXES};
 
@@ -44,8 +45,8 @@ const BOOL: (f32, f32) = (0.0, 1.0);
 const MASK: (f32, f32) = (0.0, 255.0);
 const SAME: &str = "same meaning.";
 
-/// The settings below 100 and `$580`/`$581`, in numeric order.
-const LOW: [Low; 35] = [
+/// The settings below 100 and `$580`–`$582`, in numeric order.
+const LOW: [Low; 36] = [
     doc(0, "Step pulse time", "microseconds", (0.2, 100.0),
         "Length of each step pulse. In dual-edge mode (`$580=1`) the shortest time between two toggles of a step pin. \
          It also caps the step rate: `$I` prints the cap in force ([internals](internals.md#how-a-moves-speed-is-limited)). \
@@ -106,7 +107,11 @@ const LOW: [Low; 35] = [
         "Not in Grbl 1.1 (fixed at build time there); grblHAL's number."),
     doc(RAMP_START, "Ramp start rate", "steps/s", (1.0, MAX_RATE_HZ as f32),
         "Where the ramp table starts: a start speed in steps/s of the axis with the most steps/mm.", "Not in Grbl."),
-    doc(RAMP_SHAPE, "Ramp shape", "integer", (0.0, 1.0), "0: trapezoid; 1: S-curve.", "Not in Grbl (trapezoid only)."),
+    doc(RAMP_SHAPE, "Ramp shape", "integer", (0.0, 1.0),
+        "0: trapezoid; 1: S-curve: every acceleration and deceleration of every move (entry to cruise, cruise to exit, \
+         holds, overrides, homing) is its own logistic S (seeds 000/002, steepness `$582`), peaking at the move's \
+         acceleration; a ramp then takes k = 2.07 times the trapezoid's (`$582=4`); distances and G93 times stay exact.",
+        "Not in Grbl (trapezoid only)."),
     doc(AXIS_COUNT, "Axes", "integer", (3.0, MAX_AXES as f32),
         "Axes the machine has: 3 = X Y Z gantry … 7 = X Y Z A B C U. Status reports, `$#`, `$$` and G-code follow it. \
          A 4th to 7th axis takes the pins of mist, flood, spindle direction and spindle PWM ([wiring](wiring.md)).",
@@ -136,6 +141,10 @@ const LOW: [Low; 35] = [
         "TIM2 still paces every edge but DMA stores the step words and periods the engine buffered: no interrupt per \
          edge, higher rates, far less CPU per step. A feed hold or stop reaches the pins after at most the buffered \
          1.33 ms. Works with `$580`. Applied in place at rest ([internals](internals.md#dma-burst-mode-5811)).",
+        "Not in Grbl or grblHAL; listed after the axis settings."),
+    doc(S_FLEX, "S-curve steepness (Flexible)", "integer", (FLEX_MIN as f32, FLEX_MAX as f32),
+        "With `$41=1`: the seeds' logistic over ±Flexible, normalised to start and end exactly at the two speeds of a \
+         ramp; 1 gentle (a ramp takes k = 1.08 times the trapezoid's) to 12 steep (k = 6.0); 4: k = 2.07.",
         "Not in Grbl or grblHAL; listed after the axis settings."),
 ];
 

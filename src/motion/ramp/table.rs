@@ -5,9 +5,9 @@
 //! Who uses it: the settings build it; the engine's ramp walk reads it; the look-ahead's
 //! searches (`ramp/search.rs`) map speeds and distances onto its indices.
 
-use super::shape::{mean_millihz, s_curve_stretch, RampConfig, Shape};
+use super::shape::{mean_millihz, RampConfig, Shape};
 use crate::motion::rate::{period_of_millihz, Period, MAX_RATE_HZ, MIN_RATE_HZ};
-use crate::num::{div_rem_u64, f32_of_u64, u64_of};
+use crate::num::div_rem_u64;
 use crate::TIMER_HZ;
 
 const THOUSAND: core::num::NonZeroU64 = core::num::NonZeroU64::new(1000).unwrap();
@@ -68,12 +68,7 @@ impl<const L: usize> RampTable<L> {
     pub fn ramp_ms(cfg: &RampConfig) -> u64 {
         // 32-bit integers (`dv` · 1000 ≤ 10^9): the ceiling of the exact quotient, no float.
         let dv = cfg.vmax.saturating_sub(cfg.v0).min(MAX_RATE_HZ);
-        let ms = (dv * 1000).div_ceil(cfg.accel.max(1)) as u64;
-        match cfg.shape {
-            Shape::Trapezoid => ms,
-            // The logistic's steepest slope is span/2 / norm of the mean slope.
-            Shape::SCurve => u64_of(f32_of_u64(ms) * s_curve_stretch()) + 1,
-        }
+        (dv * 1000).div_ceil(cfg.accel.max(1)) as u64
     }
 
     /// Builds the table in place (no 4 KiB copy on the stack). On error the table is empty.
@@ -90,13 +85,8 @@ impl<const L: usize> RampTable<L> {
         }
         let n = Self::ramp_ms(&cfg).max(1);
         if n > L as u64 {
-            let reachable = match cfg.shape {
-                // 64-bit integers: the same whole part as the exact quotient.
-                Shape::Trapezoid => cfg.v0 as u64 + div_rem_u64(cfg.accel as u64 * L as u64, THOUSAND).0,
-                Shape::SCurve => {
-                    cfg.v0 as u64 + u64_of(cfg.accel as f32 * L as f32 / 1000.0 / s_curve_stretch())
-                }
-            };
+            // 64-bit integers: the same whole part as the exact quotient.
+            let reachable = cfg.v0 as u64 + div_rem_u64(cfg.accel as u64 * L as u64, THOUSAND).0;
             return Err(RampError::TooLong { reachable_vmax: reachable.saturating_sub(1) as u32 });
         }
         let n = n as usize;
