@@ -7,7 +7,7 @@
 
 use super::shape::{mean_millihz, s_curve_stretch, RampConfig, Shape};
 use crate::motion::rate::{period_of_millihz, Period, MAX_RATE_HZ, MIN_RATE_HZ};
-use crate::num::{f32_of_u64, u64_of};
+use crate::num::{f32_of_u64, mul_div, u64_of};
 use crate::TIMER_HZ;
 
 /// Entries (milliseconds) in the firmware's table.
@@ -75,7 +75,18 @@ impl<const L: usize> RampTable<L> {
     }
 
     /// Builds the table in place (no 4 KiB copy on the stack). On error the table is empty.
+    /// Entry `i` is the mean rate of millisecond `i` (see [`Self::build_led`]).
     pub fn build(&mut self, cfg: RampConfig) -> Result<(), RampError> {
+        self.build_led(cfg, IDX_ONE / 2)
+    }
+
+    /// Builds the table with entry `i` at the ideal profile's rate `i + lead` ms into the ramp
+    /// (`lead`: Q20 fraction of a ms, at most ½, which is [`Self::build`]'s mean of ms `i`).
+    /// Entry 0, where every move starts from rest, is `v0` plus `lead` ms of the table's
+    /// acceleration: a move that walks at least `lead` of an entry per ms jumps no higher
+    /// above `v0` than one millisecond of its own acceleration (the settings pass the slowest
+    /// move's walk rate).
+    pub fn build_led(&mut self, cfg: RampConfig, lead: u32) -> Result<(), RampError> {
         self.len = 0;
         if cfg.accel == 0 {
             return Err(RampError::ZeroAccel);
@@ -86,7 +97,19 @@ impl<const L: usize> RampTable<L> {
         if cfg.vmax < cfg.v0 {
             return Err(RampError::VmaxBelowV0);
         }
-        let n = Self::ramp_ms(&cfg).max(1);
+        // (A lead below ½ reaches `vmax` up to half a ms later: the trapezoid's end exactly,
+        // the S-curve's one more entry.)
+        let lead = lead.min(IDX_ONE / 2);
+        let n = match cfg.shape {
+            Shape::Trapezoid if lead < IDX_ONE / 2 => {
+                let dv = cfg.vmax.saturating_sub(cfg.v0).min(MAX_RATE_HZ) as u64;
+                let a = cfg.accel as u64;
+                (((dv * 1000) << IDX_FRAC) + a * (IDX_ONE / 2 - lead) as u64).div_ceil(a << IDX_FRAC)
+            }
+            Shape::SCurve if lead < IDX_ONE / 2 => Self::ramp_ms(&cfg) + 1,
+            _ => Self::ramp_ms(&cfg),
+        }
+        .max(1);
         if n > L as u64 {
             let reachable = match cfg.shape {
                 // 64-bit integers: the same whole part as the exact quotient.
@@ -99,7 +122,7 @@ impl<const L: usize> RampTable<L> {
         }
         let n = n as usize;
         for (i, p) in self.periods[..n].iter_mut().enumerate() {
-            *p = period_of_millihz(mean_millihz(&cfg, i, n));
+            *p = period_of_millihz(mean_millihz(&cfg, i, n, lead));
         }
         // Rates must never fall along the table (rounding at the top could otherwise wobble).
         for i in 1..n {
@@ -138,7 +161,12 @@ impl<const L: usize> RampTable<L> {
     }
 
     /// Period at a fractional index (Q20), interpolated between entries; `idx_q ≤ top_q()`.
-    /// Integer only (the engine calls it once per ms).
+    /// Integer only (the engine calls it once per ms). The *rate* is interpolated linearly
+    /// (as the distance sums assume), so a walk at a constant number of entries per ms
+    /// changes the rate by the same amount every ms: a period interpolated linearly would
+    /// be slow early in an entry and steep late in it, up to the entries' rate ratio (3× at
+    /// the bottom of a steep table). Period `p0·p1 / (p1 + f·(p0 − p1))`, rounded up (never
+    /// faster than the line), without a 64-bit division ([`mul_div`]).
     #[inline(always)]
     pub fn period_at(&self, idx_q: u32) -> Period {
         let i = (idx_q >> IDX_FRAC) as usize;
@@ -147,8 +175,12 @@ impl<const L: usize> RampTable<L> {
         if f == 0 || i + 1 >= self.len as usize {
             return Period::from_bits(p);
         }
-        let d = p - self.periods[i + 1].to_bits();
-        Period::from_bits(p - ((d as u64 * f as u64) >> IDX_FRAC) as u32)
+        let p1 = self.periods[i + 1].to_bits();
+        let d = p1 + ((((p - p1) as u64) * f as u64) >> IDX_FRAC) as u32;
+        if d == 0 {
+            return Period::from_bits(p);
+        }
+        Period::from_bits(mul_div(p, p1, d - 1, d))
     }
 
     /// Steps per ms at entry `idx_q >> 20` (1/256 step): the slope of [`Self::sum_at`].
