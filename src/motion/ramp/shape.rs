@@ -77,6 +77,12 @@ pub(super) fn mean_millihz(cfg: &RampConfig, i: usize, n: usize, lead: u32) -> u
             // v(t) = v0 + a·(t − ½ + lead) up to vmax (so its mean over ms 0 is v0 + a·lead);
             // the mean over [i, i+1) ms of the clamped line.
             let a = cfg.accel as u64; // milli-steps/s per ms
+            if lead < 1 << 19 {
+                // The rate at `i + lead` ms itself (a mean over a millisecond that reaches
+                // `vmax` would put entry 0 of a table that tops out within its first ms
+                // further above `v0` than `lead` ms of acceleration).
+                return (v0 + ((a * ((i as u64) << 20 | lead)) >> 20)).min(vmax);
+            }
             // The line's value at t = 0, doubled (it may be below zero: an offset keeps it
             // unsigned): 2·v0 − a·(1 − 2·lead).
             let back = (a * ((1 << 20) - 2 * lead)) >> 20;

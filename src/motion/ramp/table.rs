@@ -7,7 +7,7 @@
 
 use super::shape::{mean_millihz, s_curve_stretch, RampConfig, Shape};
 use crate::motion::rate::{period_of_millihz, Period, MAX_RATE_HZ, MIN_RATE_HZ};
-use crate::num::{f32_of_u64, mul_div, u64_of};
+use crate::num::{f32_of_u64, u64_of};
 use crate::TIMER_HZ;
 
 /// Entries (milliseconds) in the firmware's table.
@@ -161,13 +161,15 @@ impl<const L: usize> RampTable<L> {
     }
 
     /// Period at a fractional index (Q20), interpolated between entries; `idx_q ≤ top_q()`.
-    /// Integer only (the engine calls it once per ms). The *rate* is interpolated linearly
-    /// (as the distance sums assume), so a walk at a constant number of entries per ms
-    /// changes the rate by the same amount every ms: a period interpolated linearly would
-    /// be slow early in an entry and steep late in it, up to the entries' rate ratio (3× at
-    /// the bottom of a steep table). Period `p0·p1 / (p1 + f·(p0 − p1))`, rounded up (never
-    /// faster than the line), without a 64-bit division ([`mul_div`]).
-    #[inline(always)]
+    /// Integer only (the engine's ramp half calls it a few times per ms; never the step
+    /// interrupt). The *rate* is interpolated linearly (as the distance sums assume), so a
+    /// walk at a constant number of entries per ms changes the rate by the same amount every
+    /// ms: a period interpolated linearly would be slow early in an entry and steep late in
+    /// it, up to the entries' rate ratio (3× at the bottom of a steep table). Period
+    /// `p1 + (1 − f)·Δ · p1 / (p1 + f·Δ)` (Δ = p0 − p1), the ratio from one 32-bit
+    /// division (a few cycles: the 64-bit shift-subtract one cost the ramp half enough to make
+    /// DMA fills late), rounded up (never faster than the line, to a 1/16-tick step).
+    #[inline(never)]
     pub fn period_at(&self, idx_q: u32) -> Period {
         let i = (idx_q >> IDX_FRAC) as usize;
         let f = idx_q & IDX_MASK;
@@ -176,11 +178,16 @@ impl<const L: usize> RampTable<L> {
             return Period::from_bits(p);
         }
         let p1 = self.periods[i + 1].to_bits();
-        let d = p1 + ((((p - p1) as u64) * f as u64) >> IDX_FRAC) as u32;
-        if d == 0 {
-            return Period::from_bits(p);
-        }
-        Period::from_bits(mul_div(p, p1, d - 1, d))
+        let dlt = p - p1;
+        let den = p1 + ((dlt as u64 * f as u64) >> IDX_FRAC) as u32;
+        let x = ((dlt as u64 * (IDX_ONE - f) as u64 + IDX_MASK as u64) >> IDX_FRAC) as u32;
+        // p1 / den (≤ 1) in Q(a + b) with 15 bits or more: p1 shifted to the top of 32 bits,
+        // den down to 16 bits; the floors only make it larger (slower).
+        let a = p1.leading_zeros().min(31);
+        let b = (32 - den.leading_zeros()).saturating_sub(16);
+        let ratio = (p1 << a) / (den >> b).max(1) + 1;
+        let extra = ((x as u64 * ratio as u64) >> (a + b)).min(dlt as u64) as u32;
+        Period::from_bits(p1 + extra + 1).min(Period::from_bits(p))
     }
 
     /// Steps per ms at entry `idx_q >> 20` (1/256 step): the slope of [`Self::sum_at`].
@@ -256,6 +263,37 @@ pub(super) mod tests {
             r ^= r >> 7;
             r ^= r << 17;
             (r % n as u64) as u32
+        }
+    }
+
+    /// The rate is linear between entries (to the quotient's rounding, a 1/16-tick period step,
+    /// and the fraction's, relative to the faster entry's period), never above the
+    /// line, and entry 0 is `v0` plus `lead` ms of the acceleration.
+    #[test]
+    fn rate_is_interpolated_linearly_and_led() {
+        let mut next = xorshift();
+        let mut t = RampTable::<RAMP_LEN>::new();
+        for _ in 0..200 {
+            let v0 = MIN_RATE_HZ + next(3_000);
+            let accel = 1_000 + next(50_000_000);
+            let lead = next(IDX_ONE / 2 + 1);
+            let cfg = RampConfig { v0, vmax: v0 + next(100_000), accel, shape: Shape::Trapezoid };
+            if t.build_led(cfg, lead).is_err() {
+                continue;
+            }
+            let hz = |p: Period| TIMER_HZ as f64 * 16.0 / p.to_bits() as f64;
+            let e0 = v0 as f64 + accel as f64 * lead as f64 / IDX_ONE as f64 / 1000.0;
+            assert!((hz(t.period(0)) - e0.min(cfg.vmax as f64)).abs() <= 1e-3 * e0 + 0.01, "{cfg:?} {lead}: {}", hz(t.period(0)));
+            for _ in 0..50 {
+                let q = next(t.top_q() + 1);
+                let (i, f) = ((q >> IDX_FRAC) as usize, (q & IDX_MASK) as f64 / IDX_ONE as f64);
+                let (r0, r1) = (hz(t.period(i)), hz(t.period((i + 1).min(t.len() - 1))));
+                let line = r0 + f * (r1 - r0);
+                let got = hz(t.period_at(q));
+                let p1b = t.period((i + 1).min(t.len() - 1)).to_bits() as f64;
+                let step = got * got / (TIMER_HZ as f64 * 16.0);
+                assert!(got <= line * (1.0 + 1e-9) && got >= line - line * (2.0 / p1b + 4e-5) - 2.0 * step - 1e-6, "{cfg:?} q {q}: {got} vs {line}");
+            }
         }
     }
 
