@@ -63,33 +63,50 @@ fn s_curve(u: f32) -> f32 {
     (logistic(-S_CURVE_SPAN + 2.0 * S_CURVE_SPAN * u) - lo) / (hi - lo)
 }
 
-/// Mean rate in ms `i` of an `n`-entry ramp, in milli-steps/s.
-pub(super) fn mean_millihz(cfg: &RampConfig, i: usize, n: usize) -> u64 {
+/// Mean rate in ms `i` of an `n`-entry ramp, in milli-steps/s, for a ramp led by `lead`
+/// (Q20 fraction of a ms, at most ½): entry `i` is the ideal profile's rate at `i + lead` ms
+/// (with `lead` = ½ the mean over millisecond `i`), so entry 0 is `v0` plus `lead` ms of
+/// acceleration: the jump from rest above the start rate that a move walking the table at a
+/// fraction `lead` (or more) of an entry per ms also makes in one millisecond.
+pub(super) fn mean_millihz(cfg: &RampConfig, i: usize, n: usize, lead: u32) -> u64 {
     let v0 = cfg.v0 as u64 * 1000;
     let vmax = cfg.vmax as u64 * 1000;
+    let lead = lead.min(1 << 19) as u64;
     match cfg.shape {
         Shape::Trapezoid => {
-            // v(t) = v0 + a·t up to vmax; the mean over [i, i+1) ms of the clamped line.
+            // v(t) = v0 + a·(t − ½ + lead) up to vmax (so its mean over ms 0 is v0 + a·lead);
+            // the mean over [i, i+1) ms of the clamped line.
             let a = cfg.accel as u64; // milli-steps/s per ms
-            let end = v0 + a * (i as u64 + 1);
-            if end <= vmax {
-                v0 + a * (2 * i as u64 + 1) / 2
+            if lead < 1 << 19 {
+                // The rate at `i + lead` ms itself (a mean over a millisecond that reaches
+                // `vmax` would put entry 0 of a table that tops out within its first ms
+                // further above `v0` than `lead` ms of acceleration).
+                return (v0 + ((a * ((i as u64) << 20 | lead)) >> 20)).min(vmax);
+            }
+            // The line's value at t = 0, doubled (it may be below zero: an offset keeps it
+            // unsigned): 2·v0 − a·(1 − 2·lead).
+            let back = (a * ((1 << 20) - 2 * lead)) >> 20;
+            let end2 = 2 * v0 + a * (2 * i as u64 + 2);
+            if end2 <= 2 * vmax + back {
+                (2 * v0 + a * (2 * i as u64 + 1)).saturating_sub(back) / 2
             } else {
-                let start = v0 + a * i as u64;
-                if start >= vmax {
+                // (2·start, where the ms begins on the line.)
+                let start2 = (2 * v0 + a * 2 * i as u64).saturating_sub(back);
+                if start2 >= 2 * vmax {
                     return vmax;
                 }
                 // Ramp part of length f = (vmax-start)/a ms, then vmax for 1-f: the mean is
                 // vmax - d²/(2a) with d = vmax - start < a, whose floor is taken in integers
                 // (d² < 2^64 as d < a ≤ u32::MAX; f32 has too few bits for milli-steps/s).
-                let d = vmax - start;
+                let d = (2 * vmax - start2).div_ceil(2).min(a);
                 vmax - (d * d).div_ceil(2 * a)
             }
         }
         Shape::SCurve => {
-            // Midpoint of the millisecond on the logistic stretched over n ms (Simpson-free:
-            // the curve is smooth enough that the midpoint is within 0.1 % of the mean here).
-            let u = ((i as f32 + 0.5) / n as f32).min(1.0);
+            // The logistic stretched over n ms at `i + lead` (Simpson-free: the curve is
+            // smooth enough that the midpoint is within 0.1 % of the mean here).
+            let at = i as f32 + lead as f32 * (1.0 / (1u32 << 20) as f32);
+            let u = (at / n as f32).min(1.0);
             let v = f32_of_u64(v0) + f32_of_u64(vmax - v0) * s_curve(u);
             // max/min, not clamp: its panic message would link integer formatting.
             u64_of(v).max(v0.max(1)).min(vmax.max(1))
