@@ -5,9 +5,15 @@
 //! built for the fastest acceleration serves every slower move), interpolating between
 //! entries; the look-ahead maps path speeds and distances onto its indices.
 //!
-//! Invariant: entry `i` holds the period (timer ticks, 1/16 resolution, [`Period`]) of the mean
-//! rate of the ideal profile during millisecond `i`: `v0 + a·(i+½) ms` for the trapezoid,
-//! clamped at `vmax` in its last entry (the S-curve's table too, at `a / k`: see `scurve`).
+//! Invariant: entry `i` holds the period (timer ticks, 1/16 resolution, [`Period`]) of the
+//! ideal profile's rate `lead` after millisecond `i` starts: `v0 + a·(i + lead) ms` for the
+//! trapezoid (with `lead` = ½ the mean of millisecond `i`), clamped at `vmax` in its last
+//! entry (the S-curve's table too, at `a / k`: see `scurve`). The settings pass as `lead` the
+//! slowest move's walk rate (at most ½), so entry 0, where every move starts from rest and
+//! where a hold stops, is never more than one ms of a move's own acceleration above `v0`
+//! (a table built for the fastest axis once started a slow one far above it). Between entries
+//! the *rate* is interpolated linearly, so a walk at a constant fraction of an entry per ms
+//! changes the rate by the same amount each ms.
 //! Entries strictly never rise in rate past `vmax` and never fall in rate along the table. The
 //! engine decelerates by walking the same entries down, so one table serves every move that
 //! shares the acceleration, and a move's step count never depends on the table. Beside each

@@ -210,14 +210,6 @@ fn on_block(uc: &mut Unicorn<Mcu>, addr: u64, size: u32) {
     if m.fn_timer.is_some() && m.nvic.ipsr() == 0 {
         time_calls(uc, addr);
     }
-    let m = uc.get_data_mut();
-    if m.move_marks.targets.contains(&addr) {
-        let tim2 = m.nvic.ipsr() == super::nvic::IRQ0 + super::mcu::TIM2_IRQ;
-        let now = m.now;
-        if m.record_edges {
-            m.move_marks.hits.push((now, tim2));
-        }
-    }
     if !uc.get_data().blocks.contains(addr, size) {
         let mut code = vec![0u8; size as usize];
         let _ = uc.mem_read(addr as u64, &mut code);
@@ -232,6 +224,7 @@ fn on_block(uc: &mut Unicorn<Mcu>, addr: u64, size: u32) {
     m.cur = Some(addr);
     if m.armed == Some((addr, m.now)) {
         m.armed = None;
+        mark_move_end(m, addr);
         return;
     }
     let block = m.blocks.at(addr).expect("just cached");
@@ -241,6 +234,17 @@ fn on_block(uc: &mut Unicorn<Mcu>, addr: u64, size: u32) {
     if preempt || m.now >= m.deadline || (k > 0 && k < n) {
         m.stop = if preempt || m.now >= m.deadline { Stop::Event } else { Stop::Split(k) };
         let _ = uc.emu_stop();
+    } else {
+        mark_move_end(m, addr);
+    }
+}
+
+// a block that runs now at `addr`: a move end if it is `finish`'s entry (only blocks that run:
+// a block stopped before it runs is entered again, and would count the end twice)
+fn mark_move_end(m: &mut Mcu, addr: u32) {
+    if m.record_edges && m.move_marks.targets.contains(&addr) {
+        let tim2 = m.nvic.ipsr() == super::nvic::IRQ0 + super::mcu::TIM2_IRQ;
+        m.move_marks.hits.push((m.now, tim2));
     }
 }
 

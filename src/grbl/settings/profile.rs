@@ -5,7 +5,7 @@
 
 use super::values::Settings;
 use crate::board::PinMap;
-use crate::motion::ramp::{peak_slope, Profile, RampConfig, RampError, RampTable, SCurve, Shape, MAX_RATE_HZ};
+use crate::motion::ramp::{peak_slope, Profile, RampConfig, RampError, RampTable, SCurve, Shape, IDX_ONE, MAX_RATE_HZ};
 use crate::motion::timing::{ns_to_ticks, Timing};
 use crate::num::{round_u32, sqrt, u32_of};
 use crate::planning::planner::{Limits, JUNCTION_DEVIATION_MM};
@@ -194,8 +194,17 @@ impl Settings {
             Shape::SCurve => SCurve::build(self.flexible),
             Shape::Trapezoid => SCurve::OFF,
         };
+        // The slowest axis's path acceleration in table units (S mode: at a / k, as the table): no move walks the table
+        // slower (a move's is the smallest `$120+i / |unitᵢ|` over its axes, never below its
+        // slowest axis's `$120+i`).
+        #[allow(clippy::manual_clamp, reason = "clamp's panic path costs flash")]
+        let n = axes.max(1).min(MAX_AXES);
+        let slowest = self.accel.iter().take(n).fold(f32::MAX, |a, &b| a.min(b)) * profile.per_mm / self.s_slope();
         for attempt in 0..6 {
-            match profile.ramp.build(cfg) {
+            // Entry 0 at most one ms of the slowest move's acceleration above `$40` (the
+            // mean of the table's first ms when every axis accelerates alike).
+            let lead = u32_of((slowest / cfg.accel.max(1) as f32 * IDX_ONE as f32).min((IDX_ONE / 2) as f32));
+            match profile.ramp.build_led(cfg, lead) {
                 // Too long for the table: a steeper table (every move walks it at its own
                 // fraction, so no move runs faster), down to a lower top only as a last resort.
                 Err(RampError::TooLong { .. }) if attempt < 4 => {
