@@ -5,12 +5,14 @@
 //! Who uses it: the settings build it; the engine's ramp walk reads it; the look-ahead's
 //! searches (`ramp/search.rs`) map speeds and distances onto its indices.
 
+use core::num::NonZeroU64;
+
 use super::shape::{mean_millihz, RampConfig, Shape};
 use crate::motion::rate::{period_of_millihz, Period, MAX_RATE_HZ, MIN_RATE_HZ};
 use crate::num::div_rem_u64;
 use crate::TIMER_HZ;
 
-const THOUSAND: core::num::NonZeroU64 = core::num::NonZeroU64::new(1000).unwrap();
+const THOUSAND: NonZeroU64 = NonZeroU64::new(1000).unwrap();
 
 /// Entries (milliseconds) in the firmware's table.
 pub const RAMP_LEN: usize = 512;
@@ -94,17 +96,18 @@ impl<const L: usize> RampTable<L> {
         if cfg.vmax < cfg.v0 {
             return Err(RampError::VmaxBelowV0);
         }
-        // (A lead below ½ reaches `vmax` up to half a ms later: the trapezoid's end exactly,
-        // the S-curve's one more entry.)
+        // (A lead below ½ reaches `vmax` up to half a ms later. Both shapes: the S-curve's
+        // table is the trapezoid's.)
         let lead = lead.min(IDX_ONE / 2);
-        let n = match cfg.shape {
-            Shape::Trapezoid if lead < IDX_ONE / 2 => {
-                let dv = cfg.vmax.saturating_sub(cfg.v0).min(MAX_RATE_HZ) as u64;
-                let a = cfg.accel as u64;
-                (((dv * 1000) << IDX_FRAC) + a * (IDX_ONE / 2 - lead) as u64).div_ceil(a << IDX_FRAC)
-            }
-            Shape::SCurve if lead < IDX_ONE / 2 => Self::ramp_ms(&cfg) + 1,
-            _ => Self::ramp_ms(&cfg),
+        let n = if lead < IDX_ONE / 2 {
+            let dv = cfg.vmax.saturating_sub(cfg.v0).min(MAX_RATE_HZ) as u64;
+            let a = cfg.accel as u64;
+            // ⌈x / (a·2^IDX_FRAC)⌉ by the shift-and-subtract division (no runtime u64 division).
+            let den = NonZeroU64::new(a << IDX_FRAC).unwrap_or(NonZeroU64::MIN);
+            let (q, r) = div_rem_u64(((dv * 1000) << IDX_FRAC) + a * (IDX_ONE / 2 - lead) as u64, den);
+            q + (r != 0) as u64
+        } else {
+            Self::ramp_ms(&cfg)
         }
         .max(1);
         if n > L as u64 {
