@@ -76,4 +76,7 @@ pub enum Error {
     G43DynamicAxisError = 37,
     /// A value beyond its maximum (tool number > 255).
     MaxValueExceeded = 38,
+    /// The chip check at boot failed (grblHAL's code): a line that would move, unlock or
+    /// write flash on a part with too little flash (`crate::grbl::chip`).
+    SelfTestFailed = 49,
 }

@@ -1,5 +1,6 @@
-//! Number helpers: float-to-integer conversions out of line, a 64-by-32-bit [`mul_div`], a small
-//! square root, and the wrapping clock comparison.
+//! Number helpers: float-to-integer conversions out of line, 64-bit division without the
+//! runtime's routine ([`div_rem_u64`], [`mul_div`]), a small square root, and the wrapping clock
+//! comparison.
 //!
 //! Who uses it: the settings, G-code, planning, controller and report code (never the step
 //! interrupt); the feeder uses [`mul_div`].
@@ -44,10 +45,20 @@ pub fn u32_of(x: f32) -> u32 {
     x as u32
 }
 
-/// `x as u64`.
+/// `x as u64`: below 2^32 the `u32` conversion (NaN and negatives give 0, as the cast does),
+/// from 2^32 up the significand shifted into place, so the 64-bit conversion routine
+/// (`__aeabi_f2ulz`) is not linked.
 #[inline(never)]
 pub fn u64_of(x: f32) -> u64 {
-    x as u64
+    if !(x >= 4_294_967_296.0) {
+        return x as u32 as u64;
+    }
+    if x >= 18_446_744_073_709_551_616.0 {
+        return u64::MAX;
+    }
+    // x = m · 2^(exp − 150), the shift 9..=40 here (2^32 ≤ x < 2^64).
+    let bits = x.to_bits();
+    ((bits & 0x7F_FFFF | 0x80_0000) as u64) << ((bits >> 23) - 150)
 }
 
 /// `x as i32`.
@@ -68,23 +79,35 @@ pub fn round_u32(x: f32) -> u32 {
     libm::roundf(x) as u32
 }
 
-/// `(a * b + add) / d` for a quotient that fits 32 bits (`a * b + add < d * 2^32`), without a
-/// 64-bit division: shift-subtract on the 64-bit product. Saves the ~900 B `__aeabi_uldivmod`
-/// the firmware otherwise links (only status reports and the feeder's horizon call this).
+/// `(a * b + add) / d` for a quotient that fits 32 bits (`a * b + add < d * 2^32`), with
+/// [`div_rem_u64`] (status reports and the feeder's horizon call this).
 pub fn mul_div(a: u32, b: u32, add: u32, d: u32) -> u32 {
     let n = a as u64 * b as u64 + add as u64;
-    let d64 = d as u64;
-    let mut rem = n >> 32;
-    let mut q = 0u32;
-    for bit in (0..32).rev() {
-        rem = (rem << 1) | ((n >> bit) & 1);
+    div_rem_u64(n, core::num::NonZeroU64::new(d as u64).unwrap_or(core::num::NonZeroU64::MIN)).0 as u32
+}
+
+/// `(n / d, n % d)` by shift and subtract, one quotient bit a step from the highest that can be
+/// set (at most 64 steps; a 2^40 tick count over a 2^20 rate takes 21): the firmware's only
+/// 64-bit division, so compiler-builtins' `__aeabi_uldivmod` (~900 B) is not linked. Never in
+/// the step interrupt.
+#[inline(never)]
+pub fn div_rem_u64(n: u64, d: core::num::NonZeroU64) -> (u64, u64) {
+    let d = d.get();
+    if n < d {
+        return (0, n);
+    }
+    // d shifted up to n's highest bit (no overflow: d ≤ n).
+    let s = d.leading_zeros() - n.leading_zeros();
+    let (mut q, mut r, mut dd) = (0u64, n, d << s);
+    for _ in 0..=s {
         q <<= 1;
-        if rem >= d64 {
-            rem -= d64;
+        if r >= dd {
+            r -= dd;
             q |= 1;
         }
+        dd >>= 1;
     }
-    q
+    (q, r)
 }
 
 #[cfg(test)]
@@ -94,7 +117,7 @@ mod tests {
 
     #[test]
     fn same_as_the_casts() {
-        for x in [f32::NAN, f32::NEG_INFINITY, -1.5, -0.4, 0.0, 0.49, 0.5, 1.5, 2.5, 4294967040.0, 4294967296.0, 1e30, f32::INFINITY] {
+        for x in [f32::NAN, f32::NEG_INFINITY, -1.5, -0.4, 0.0, 0.49, 0.5, 1.5, 2.5, 4294967040.0, 4294967296.0, 4294967808.0, 1.844_674_3e19, 18446744073709551616.0, 1e30, f32::INFINITY] {
             assert_eq!(u32_of(x), x as u32);
             assert_eq!(u64_of(x), x as u64);
             assert_eq!(round_u32(x), libm::roundf(x) as u32);
@@ -114,6 +137,9 @@ mod tests {
             r >> (r % 64)
         });
         for x in edges.into_iter().chain(random) {
+            // The same bits read as an f32 (every sign, exponent and NaN payload).
+            let f = f32::from_bits(x as u32);
+            assert_eq!(u64_of(f), f as u64, "{f}");
             assert_eq!(f32_of_u64(x).to_bits(), (x as f32).to_bits(), "{x}");
             for y in [x as i64, (x as i64).wrapping_neg()] {
                 assert_eq!(f32_of_i64(y).to_bits(), (y as f32).to_bits(), "{y}");
@@ -133,7 +159,25 @@ mod tests {
         }
     }
 
+    #[test]
+    fn div_rem_u64_edges() {
+        let m = u64::MAX;
+        let cases = [(0, 1), (1, 1), (m, 1), (m, m), (m - 1, m), (m, 2), (m, 1 << 63), ((1 << 63) - 1, 1 << 63), (1 << 32, (1 << 32) - 1),
+            (2_304_000_000_000 + 7, 2 * 7), (999_999_999_999_999, 1_000_000_000), (1 << 50, 2_384_185_791_015_625)];
+        for (n, d) in cases {
+            assert_eq!(div_rem_u64(n, d.try_into().unwrap()), (n / d, n % d), "{n} / {d}");
+        }
+    }
+
     proptest! {
+        /// Every numerator and divisor, with both drawn from all bit lengths (a uniform u64 is
+        /// almost always 64 bits long).
+        #[test]
+        fn div_rem_u64_matches_u64(n in any::<u64>(), d in 1u64.., ns in 0u32..64, ds in 0u32..64) {
+            let (n, d) = (n >> ns, (d >> ds).max(1));
+            prop_assert_eq!(div_rem_u64(n, d.try_into().unwrap()), (n / d, n % d));
+        }
+
         #[test]
         fn mul_div_matches_u64(total in 1u32.., done in any::<u32>(), c in any::<u32>()) {
             let (done, c) = (done % (total as u64 + 1) as u32, c % (total as u64 + 1) as u32);

@@ -294,14 +294,17 @@ proptest! {
     /// The step interrupt's fast path (`Stepper::tick_quick`: plain steps with only the checks
     /// a plain step needs) gives exactly what whole ticks give, tick by tick: the same words,
     /// periods, positions and moves; with random chains on 1–7 axes, single- and dual-edge,
-    /// a feed hold, feed overrides changing mid-move and the ramp half running late.
+    /// a feed hold, feed overrides changing mid-move and the ramp half running late; in both
+    /// ramp shapes.
     #[test]
     fn the_step_interrupts_fast_path_equals_whole_ticks(
             moves in prop::collection::vec(prop::array::uniform7(-1500i64..1500), 1..8),
             axes in 1usize..=7, cruise in 1_000u32..400_000, pulse_us in 0.2f32..5.0, dual: bool,
             hold in prop::option::of((0u64..6_000, 1u64..3_000)),
-            ovr in prop::option::of((0u64..6_000, 10u8..=200)), lag in 0u32..4) {
+            ovr in prop::option::of((0u64..6_000, 10u8..=200)), lag in 0u32..4, scurve: bool) {
         let mut s = ddastep::grbl::settings::Settings::BENCH;
+        // (`$41=1`: every ramp leg an S, holds and overrides included.)
+        s.shape = if scurve { Shape::SCurve } else { Shape::Trapezoid };
         s.accel = [300_000.0; ddastep::MAX_AXES];
         s.pulse_us = pulse_us;
         s.dual_edge = dual;

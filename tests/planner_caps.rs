@@ -119,7 +119,7 @@ proptest! {
         let share = (0..N).map(|i| unit[i].abs() * c.spm[i]).fold(0.0, f64::max);
         let approx: [i64; N] = core::array::from_fn(|i| (unit[i] * c.spm[i] * 1e3).round() as i64);
         let (f, a) = expected(&s, &c, &approx);
-        let mut p: Profile = Profile { ramp: RampTable::new(), timing: Timing::UNSET, per_mm: 0.0 };
+        let mut p: Profile = Profile { ramp: RampTable::new(), timing: Timing::UNSET, per_mm: 0.0, scurve: ddastep::motion::ramp::SCurve::OFF };
         s.build_profile(N, &mut p);
         let (_, walk_q) = walk_of(share as f32, (a / share) as f32, p.per_mm, p.ramp.config().accel as f32);
         let ramp_s = (p.ramp.len() as f64 + 2.0) / (walk_q as f64 / IDX_ONE as f64) / 1000.0;

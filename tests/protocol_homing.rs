@@ -52,7 +52,17 @@ fn home(b: &mut Bench<3>, cmd: &str) -> (String, bool) {
 
 #[test]
 fn full_cycle_ends_at_minus_pulloff_and_unlocks() {
-    let mut b = rig(homing(), [12_345, 4_000, 777]);
+    full_cycle_in(homing());
+}
+
+#[test]
+fn full_cycle_in_s_mode_ends_at_minus_pulloff_and_unlocks() {
+    // `$41=1`: every pass's ramps are S legs, the stops at the switches included.
+    full_cycle_in(Settings { shape: ddastep::motion::ramp::Shape::SCurve, ..homing() });
+}
+
+fn full_cycle_in(s: Settings) {
+    let mut b = rig(s, [12_345, 4_000, 777]);
     assert_eq!(b.line("G0 X-1"), "error:9\r\n", "homing lock at power-up");
     let (out, saw) = home(&mut b, "$H");
     assert_eq!(out, "ok", "{out}");

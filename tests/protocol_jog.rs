@@ -48,7 +48,11 @@ fn jog_refused_while_a_program_moves() {
 
 /// Queues jogs, cancels mid-way with `cancel`, and checks the stop, the flush and the re-sync.
 fn cancel_with(cancel: u8) {
-    let mut b = Bench::<3>::with_defaults();
+    cancel_in(cancel, ddastep::grbl::settings::Settings::BENCH);
+}
+
+fn cancel_in(cancel: u8, s: ddastep::grbl::settings::Settings) {
+    let mut b = Bench::<3>::new(s);
     b.take();
     for _ in 0..6 {
         assert_eq!(b.line("$J=G91X20F6000"), "ok\r\n");
@@ -81,6 +85,13 @@ fn cancel_with(cancel: u8) {
 #[test]
 fn jog_cancel_0x85_decelerates_flushes_and_resyncs() {
     cancel_with(0x85);
+}
+
+#[test]
+fn jog_cancel_in_s_mode_decelerates_flushes_and_resyncs() {
+    // `$41=1`: the way down is an S from where the cancel finds the walk.
+    let s = ddastep::grbl::settings::Settings { shape: ddastep::motion::ramp::Shape::SCurve, ..ddastep::grbl::settings::Settings::BENCH };
+    cancel_in(0x85, s);
 }
 
 #[test]

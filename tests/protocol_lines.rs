@@ -142,7 +142,7 @@ fn settings_list_change_and_refuse_while_moving() {
     assert!(list.contains("$40=1000\r\n$41=0\r\n$42=3\r\n$87=0\r\n$88=1.000\r\n$89=0\r\n$97=20\r\n"));
     assert!(list.contains("$98=0\r\n$99=1.000\r\n$100=100.000\r\n"));
     assert!(list.contains("$6=0\r\n$10=1\r\n$11=0.010\r\n"));
-    assert!(list.ends_with("$132=1000.000\r\n$580=0\r\n$581=0\r\nok\r\n"), "{list}");
+    assert!(list.ends_with("$132=1000.000\r\n$580=0\r\n$581=0\r\n$582=4\r\nok\r\n"), "{list}");
     assert!(!list.contains("$103"));
     assert_eq!(replies(&list), (1, 0));
 

@@ -347,3 +347,36 @@ fn a_hold_while_an_override_ramps_ends_exactly_and_resumes_at_the_new_speed() {
     assert_walk_steps(&tr, 100.0, 1_400);
     assert_eq!(b.shared.positions(), [30_000, 0, 0]);
 }
+
+#[test]
+fn in_s_mode_a_feed_override_walks_the_running_move_to_half_as_an_s() {
+    // 1000 mm/s² peak: X's master changes by at most 100 Hz per ms, and from 20 to 10 kHz as
+    // an S lasting k = 2.075 times the trapezoid's 100 ms (`$41=1`, `$582=4`).
+    let mut s = Settings::BENCH;
+    s.accel = [1000.0; ddastep::MAX_AXES];
+    s.shape = ddastep::motion::ramp::Shape::SCurve;
+    let mut b = Bench::<3>::new(s);
+    b.take();
+    assert_eq!(b.line("G91"), "ok\r\n");
+    b.trace = Some(Vec::new());
+    assert_eq!(b.line("G1 X400 F12000"), "ok\r\n");
+    b.run_ms(600);
+    assert_eq!(b.shared.rate_hz(), 20_000);
+    let t0 = b.timer.now();
+    for _ in 0..5 {
+        b.byte(0x92); // −10 % each
+    }
+    b.run_ms(400);
+    b.run_to_idle(10_000);
+    let tr = b.trace.take().unwrap();
+    let down = reached(&tr, t0, 10_000) - t0;
+    assert!((200 * MS..=215 * MS).contains(&down), "half speed after {} ms", down as f64 / MS as f64);
+    // Gentle at the start (a tenth of the way in: s(0.1) = 2 % of the drop), half-way at half
+    // the time (the S is symmetric).
+    let early = rate_at(&tr, t0 + 21 * MS);
+    assert!(early >= 19_600, "a tenth of the way: {early} Hz");
+    let mid = rate_at(&tr, t0 + 104 * MS);
+    assert!(mid.abs_diff(15_000) <= 300, "half-way down after 104 ms: {mid} Hz");
+    assert_walk_steps(&tr, 100.0 * 1.03, 1_400);
+    assert_eq!(b.shared.positions(), [40_000, 0, 0], "counts exact");
+}

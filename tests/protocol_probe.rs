@@ -9,7 +9,11 @@ use protocol_rig::Bench;
 
 /// A 3-axis bench (defaults) with a probe switch on Z at `at_mm` (machine mm).
 fn bench(at_mm: f64) -> (Bench<3>, f64) {
-    let mut b = Bench::<3>::with_defaults();
+    bench_in(at_mm, ddastep::grbl::settings::Settings::BENCH)
+}
+
+fn bench_in(at_mm: f64, s: ddastep::grbl::settings::Settings) -> (Bench<3>, f64) {
+    let mut b = Bench::<3>::new(s);
     let spm = b.ctl.settings().steps_per_mm[2] as f64;
     b.probe = Some((2, (at_mm * spm).round() as i32));
     b.take();
@@ -22,7 +26,16 @@ fn mm(steps: i32, spm: f64) -> String {
 
 #[test]
 fn g38_2_stops_at_the_trip_and_reports_it() {
-    let (mut b, spm) = bench(-5.0);
+    g38_2_in(ddastep::grbl::settings::Settings::BENCH);
+}
+
+#[test]
+fn g38_2_in_s_mode_stops_at_the_trip_and_reports_it() {
+    g38_2_in(ddastep::grbl::settings::Settings { shape: ddastep::motion::ramp::Shape::SCurve, ..ddastep::grbl::settings::Settings::BENCH });
+}
+
+fn g38_2_in(s: ddastep::grbl::settings::Settings) {
+    let (mut b, spm) = bench_in(-5.0, s);
     b.run_ms(2);
     let r = b.line("G38.2 Z-10 F100");
     assert_eq!(b.probe_edges.len(), 1, "one contact edge: {:?}", b.probe_edges);

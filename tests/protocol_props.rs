@@ -137,7 +137,7 @@ proptest! {
     fn settings_round_trip_through_flash(
         pulse in 1.0f32..100.0,
         dir in 0.0f32..1000.0,
-        idle: u8, step_inv: u8, dir_inv: u8, flags in 0u8..=255, scurve: bool,
+        idle: u8, step_inv: u8, dir_inv: u8, flags in 0u8..=255, scurve: bool, flexible in 1u8..=12,
         start in 1u32..=1_000_000,
         arc_tol in 1e-4f32..1000.0,
         spindle in (0.0f32..1e6, 0.0f32..1e6, any::<bool>(), 1u32..=100_000),
@@ -187,6 +187,7 @@ proptest! {
             status_mask: mask,
             axes: count,
             encoder,
+            flexible,
         };
         prop_assert!(s.is_valid());
         let mut image = s.to_bytes();

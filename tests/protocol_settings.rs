@@ -38,6 +38,11 @@ fn set_follows_grbl_rules() {
     assert!(s.hard_limits);
     assert_eq!(s.set(7, 0.0, 3), Err(Error::InvalidStatement));
     assert_eq!(s.set(RAMP_SHAPE, 2.0, 3), Err(Error::InvalidStatement));
+    // `$582` Flexible: 1..=12.
+    assert_eq!(s.set(582, 0.0, 3), Err(Error::InvalidStatement));
+    assert_eq!(s.set(582, 13.0, 3), Err(Error::InvalidStatement));
+    assert_eq!(s.set(582, 12.0, 3), Ok(Change::Profile));
+    assert_eq!(s.get(582, 3), Some((12.0, 0)));
     assert_eq!(s.set(110, f32::NAN, 3), Err(Error::BadNumberFormat));
 }
 
@@ -45,12 +50,12 @@ fn set_follows_grbl_rules() {
 fn ids_cover_every_gettable_setting_once() {
     let s = Settings::DEFAULT;
     let ids: heapless::Vec<u16, 64> = Settings::ids(3).collect();
-    // ours: $29, $33, $40, $41, $42 and $10's mask; the encoder's $87-$89, $97-$99; $580, $581
-    assert_eq!(ids.len(), 7 + 14 + 6 + 6 + 2 + 12);
+    // ours: $29, $33, $40, $41, $42 and $10's mask; the encoder's $87-$89, $97-$99; $580-$582
+    assert_eq!(ids.len(), 7 + 14 + 6 + 6 + 3 + 12);
     assert!(ids.windows(2).all(|w| w[0] < w[1]), "{ids:?}");
     assert!(ids.iter().all(|&id| s.get(id, 3).is_some()));
     assert_eq!(s.get(133, 3), None);
-    assert_eq!(Settings::ids(7).count(), 7 + 14 + 6 + 6 + 2 + 28);
+    assert_eq!(Settings::ids(7).count(), 7 + 14 + 6 + 6 + 3 + 28);
 }
 
 #[test]
@@ -237,4 +242,16 @@ fn dma_burst_is_a_pin_flag_whose_cap_is_the_fill_cost() {
     // `$I` names the mode with its cap.
     let r = ddastep::grbl::settings::Ramped::wanted(&s, 3);
     assert!(r.dma && r.max_rate_hz == s.timing().max_rate_hz());
+}
+
+#[test]
+fn an_image_from_before_582_loads_with_the_default_flexible() {
+    // `$582` sits in byte 153 (after `$32`'s), which images from before it left clear.
+    let s = Settings { flexible: 9, ..Settings::DEFAULT };
+    let mut b = s.to_bytes();
+    assert_eq!(b[153], 9);
+    b[153] = 0;
+    let crc = crc32(&b[..SETTINGS_LEN - 4]);
+    b[SETTINGS_LEN - 4..].copy_from_slice(&crc.to_le_bytes());
+    assert_eq!(Settings::decode(&b), Some(Settings { flexible: 4, ..s }));
 }

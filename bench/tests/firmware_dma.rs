@@ -35,6 +35,9 @@ fn paper_532_is_exact_with_the_papers_pattern() {
     ok(&mut b, "G91");
     ok(&mut b, "G1 X50 Y30 Z20 F36986.484");
     wait_idle(&mut b, 2.0);
+    // One move, one end (the bench once counted a `finish` twice when it stopped the
+    // emulator before that block for an event and entered it again).
+    assert_eq!(b.move_ends().len(), 1, "{:?}", b.move_ends());
     let s = steps(&b);
     assert_eq!(net(&s), [5000, 3000, 2000, 0, 0, 0, 0]);
     assert_eq!(assert_paper_pattern(&s), 5000);

@@ -31,7 +31,7 @@ fn footprint() -> (u64, u64) {
     (flash, ram)
 }
 
-/// Hard budgets (bytes). The aim is flash ≤ 52 KiB; the README states the measured figure.
+/// Hard budgets (bytes). The aim is flash ≤ 52 KiB; docs/performance.md states the measured figure.
 const FLASH_BUDGET: u64 = 62 * 1024;
 const RAM_BUDGET: u64 = 16 * 1024;
 
@@ -46,7 +46,7 @@ fn release_firmware_fits_62k_flash_and_16k_static_ram() {
 
 /// The stack fits beside the statics through a session that reaches the deepest paths:
 /// boot, the connect queries, settings and coordinate writes (flash), a CAM job with arcs
-/// through the look-ahead, a jog and its cancel, a soft reset. Prints the figure for README.
+/// through the look-ahead, a jog and its cancel, a soft reset. Prints the figure for docs/performance.md.
 #[test]
 fn stack_stays_clear_of_the_statics_through_a_session() {
     let mut b = firmware_rig::boot();

@@ -2,7 +2,7 @@
 //! stream.py), over the pseudo-terminal and over TCP, in real time: streaming with character
 //! counting, realtime `?`/`!`/`~` mid-move, soft reset (0x18) while moving and while holding,
 //! reconnecting to a board that kept running, and bad use. Sequences follow the senders' own
-//! code (see README "Use your own sender with the virtual board"); jobs are a second or two.
+//! code (see docs/senders.md, "Use your own sender with the virtual board"); jobs are a second or two.
 
 mod serve_rig;
 

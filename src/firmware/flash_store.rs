@@ -1,12 +1,11 @@
 //! The persistent image (settings, offsets) in the last two 1 KiB flash pages, A/B
 //! (`ddastep::grbl::store` says which page is newest); memory.x keeps the program out of them.
 
+#[cfg(not(feature = "store-at-126k"))]
+use ddastep::grbl::store::PAGE_OFFSETS as STORE_OFFSETS;
 use ddastep::grbl::store::{Stored, IMAGE_LEN, PAGE_LEN};
 use stm32f1xx_hal::flash;
 
-/// The two pages' offsets in flash.
-#[cfg(not(feature = "store-at-126k"))]
-const STORE_OFFSETS: [u32; 2] = [62 * 1024, 63 * 1024];
 /// Bench only (`store-at-126k`): the last two pages of the C8 die's 128 KiB, above an image
 /// over the 62 KiB budget (the `usb` build's, until it fits).
 #[cfg(feature = "store-at-126k")]
@@ -23,9 +22,11 @@ fn store_page(i: usize) -> &'static [u8] {
     unsafe { core::slice::from_raw_parts((0x0800_0000 + STORE_OFFSETS[i]) as *const u8, PAGE_LEN) }
 }
 
-/// The newest valid image of the two pages (defaults when both are blank or torn).
-pub fn load() -> Stored {
-    Stored::load([store_page(0), store_page(1)]).0
+/// The newest valid image of the two pages (defaults when both are blank or torn, or when
+/// `read` is false: a part without the pages, `ddastep::grbl::chip`).
+pub fn load(read: bool) -> Stored {
+    let page = |i| if read { store_page(i) } else { &[] };
+    Stored::load([page(0), page(1)]).0
 }
 
 /// Writes the image into the page not holding the newest valid one, then reads it back (the

@@ -8,7 +8,8 @@
 //! - `limits`: the limit and probe EXTIs; `watchdog`: the IWDG and the reset cause;
 //! - `usb`: USB CDC ACM on PA11/PA12, the second port to the same protocol (cargo feature
 //!   `usb`, off until the image fits 62 KiB with it);
-//! - `flash_store`: the settings pages; `dwt`: the cycle counter; `panic`, `mem`;
+//! - `flash_store`: the settings pages; `chip`: the flash size, unique ID and CPUID;
+//! - `dwt`: the cycle counter; `panic`, `mem`;
 //! - `axes`: the axis count (a leaf, so the app and the handlers do not import each other).
 
 // Every unsafe block says why it is sound (CI: bench/tests/firmware_clippy.rs).
@@ -17,6 +18,7 @@
 mod axes;
 mod boot;
 mod burst;
+mod chip;
 mod dwt;
 mod encoder;
 mod flash_store;
@@ -55,7 +57,7 @@ mod app {
 
     use super::axes::AXES;
     use super::setup::Board;
-    use super::{dwt, encoder, flash_store, gpio, limits, output, pulse, tim1_pwm, tim2, watchdog};
+    use super::{chip, dwt, encoder, flash_store, gpio, limits, output, pulse, tim1_pwm, tim2, watchdog};
     #[cfg(feature = "usb")]
     use super::usb;
 
@@ -129,7 +131,10 @@ mod app {
         let usb = usb::Usb::init(cx.local.usb_slot, board.usb);
         #[cfg(not(feature = "usb"))]
         let usb = ();
-        let stored = flash_store::load();
+        // A part with too little flash for the settings pages (`ddastep::grbl::chip`): they
+        // are not read, and the controller refuses motion.
+        let chip = chip::read();
+        let stored = flash_store::load(chip.fits());
         let settings = stored.settings;
         let (mv_in, mv_out) = cx.local.moves.split();
         let (rx_in, rx_out) = cx.local.rxq.split();
@@ -150,6 +155,10 @@ mod app {
         gpio::set_enable(!settings.enable_invert);
         if by_watchdog {
             controller.watchdog_reset();
+        }
+        controller.chip_check(chip);
+        if !chip.fits() {
+            defmt::error!("chip: flash {=u16} KiB, needs {=u16} KiB: motion refused", chip.flash_kib, ddastep::grbl::chip::NEEDED_KIB);
         }
         limits::setup();
         output::install(engine, &SHARED, &out, &mut core.NVIC);

@@ -19,7 +19,8 @@
 //!
 //! This file holds the controller's state (the struct, the types of its fields, its in-place
 //! construction); each mechanism is a file of its own that works on it: `lines.rs` (bytes and
-//! lines in, jobs out), `poll.rs` (carrying jobs on, drivers, profile), `reset.rs` (banner, Ctrl-X),
+//! lines in, jobs out), `poll.rs` (carrying jobs on, drivers, profile), `reset.rs` (banner, Ctrl-X,
+//! the chip check),
 //! `access.rs` (what the shell reads and sets), and `door.rs`, `homing.rs`, `jogging.rs`, `probe.rs`,
 //! `soft_limits.rs`, `status.rs`, `system.rs` (`$` commands), `tool.rs` (spindle, coolant),
 //! `encoder.rs` (step-loss checks). They name this file's items; this file names none of theirs.
@@ -88,6 +89,8 @@ pub struct Actions {
 enum Listing {
     Settings(u8),
     Params(u8),
+    /// `$I`'s chip and step-interrupt lines, after its build info.
+    Info,
 }
 
 /// Jogging, as the status report and 0x85 see it.
@@ -293,6 +296,8 @@ pub struct Controller<'a, const N: usize> {
     door: Door,
     door_pin: bool,
     door_event: bool,
+    /// The part's device registers, once the shell has read them (`reset.rs`, `$I`).
+    chip: Option<crate::grbl::chip::Chip>,
 }
 
 impl<'a, const N: usize> Controller<'a, N> {
@@ -376,6 +381,7 @@ impl<'a, const N: usize> Controller<'a, N> {
             addr_of_mut!((*p).door).write(Door::Off);
             addr_of_mut!((*p).door_pin).write(false);
             addr_of_mut!((*p).door_event).write(false);
+            addr_of_mut!((*p).chip).write(None);
             at.assume_init_mut()
         };
         c.startup_next = c.next_startup(0);
@@ -397,7 +403,7 @@ impl<'a, const N: usize> Controller<'a, N> {
             feed_ring: _, startup_next: _, wco_count: _, ovr_count: _, ov_seen: _, rx_free: _,
             power_ring: _, tool: _, pwm_hz: _, reset_after: _, resync: _, soft_limit: _,
             watchdog_note: _, limit_pins: _, enc: _, probe_pin: _, homing: _, door: _,
-            door_pin: _, door_event: _,
+            door_pin: _, door_event: _, chip: _,
         } = c;
     }
 

@@ -1,6 +1,8 @@
 //! The Grbl 1.1 front end: the serial line protocol, G-code, `$` settings, reports and the
-//! controller that ties them to the planner, and the shell's realtime dispatch and idle step.
+//! controller that ties them to the planner, the shell's realtime dispatch and idle step, and
+//! the chip check at boot.
 
+pub mod chip;
 pub mod controller;
 pub mod coords;
 pub mod gcode;

@@ -5,6 +5,7 @@
 //! and the host rigs' buffers implement it.
 
 use crate::error::Error;
+use crate::num::div_rem_u64;
 
 /// Where replies go: a bounded buffer that drops what does not fit (never blocks, never
 /// panics). Replies are short, so a full TX ring only truncates a report.
@@ -67,6 +68,14 @@ pub fn put_u32(out: &mut impl Out, v: u32) {
     put_padded(out, v, 1);
 }
 
+/// Writes `v` as eight upper-case hex digits.
+pub fn put_hex(out: &mut impl Out, v: u32) {
+    for i in (0..8).rev() {
+        let n = (v >> (4 * i) & 0xF) as usize;
+        out.put(&b"0123456789ABCDEF"[n..n + 1]);
+    }
+}
+
 /// Writes `v` in decimal with at least `width` digits (leading zeros; at most 10).
 fn put_padded(out: &mut impl Out, mut v: u32, width: usize) {
     let mut buf = [b'0'; 10];
@@ -108,8 +117,8 @@ pub fn put_fixed(out: &mut impl Out, x: f32, decimals: u32) {
     if scaled != 0 && bits >> 31 != 0 {
         out.put(b"-");
     }
-    let hi = (scaled / 1_000_000_000) as u32;
-    let lo = (scaled % 1_000_000_000) as u32;
+    let (hi, lo) = div_rem_u64(scaled, core::num::NonZeroU64::new(1_000_000_000).unwrap_or(core::num::NonZeroU64::MIN));
+    let (hi, lo) = (hi as u32, lo as u32);
     if hi > 0 {
         put_u32(out, hi);
         put_padded(out, lo / scale, 9 - decimals as usize);

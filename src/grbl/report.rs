@@ -42,6 +42,9 @@ pub const ALARM_HOMING_DOOR: u8 = 7;
 pub const ALARM_PULLOFF: u8 = 8;
 /// Homing: the approach found no switch.
 pub const ALARM_APPROACH: u8 = 9;
+/// The chip check at boot failed (grblHAL's "self-test failed"): the part has too little
+/// flash (`crate::grbl::chip`); nothing unlocks it.
+pub const ALARM_SELF_TEST: u8 = 16;
 /// Step loss with `$98=1` (grblHAL's "motor fault"), then the critical-event message: nothing
 /// is read until Ctrl-X.
 pub const ALARM_STEP_LOSS: u8 = 17;
@@ -305,10 +308,14 @@ pub fn build_info(out: &mut impl Out, info: &[u8], queue_moves: usize, r: &Rampe
     put_u32(out, r.cfg.accel);
     out.put(match r.cfg.shape {
         Shape::Trapezoid => b" Hz/s trapezoid",
-        Shape::SCurve => b" Hz/s S-curve",
+        Shape::SCurve => b" Hz/s S-curve per move (table at a/k)",
     });
     out.put(if r.table_limited { b" (table-limited)]\r\n" } else { b"]\r\n" });
 }
+
+/// Longest [`step_time`] line.
+pub const STEP_TIME_LEN: usize =
+    b"[MSG:step fill 4294967295/4294967295.0/4294967295 cycles min/mean/max, load 100.0 % peak 100.0 %, late 4294967295]\r\n".len();
 
 /// `$I`'s step-interrupt line: the firmware's own DWT timing of the step path since the last
 /// `$I` (`steptime`): body cycles min/mean/max, average and peak 1 ms load.
@@ -429,7 +436,9 @@ mod tests {
         let r = Ramped { table_limited: true, dual: true, dma: true, junction_hz: 1_000_000, ..r };
         let all = text(|o| {
             build_info(o, &[b'x'; crate::grbl::store::TEXT_LEN], 15, &r);
+            let info_len = o.len();
             step_time(o, &worst, true);
+            assert!(o.len() <= STEP_TIME_LEN + info_len, "step time line");
             o.put(b"ok\r\n");
         });
         assert!(all.len() <= crate::grbl::reply::REPLY_ROOM, "{}", all.len());
@@ -456,7 +465,7 @@ mod tests {
             junction_hz: 5,
         };
         let all = text(|o| build_info(o, b"i", 5, &r));
-        assert!(all.ends_with("[MSG:max step rate 4 Hz dual-edge DMA]\r\n[MSG:max junction rate 5 Hz]\r\n[MSG:ramp 1-2 Hz 3 Hz/s S-curve (table-limited)]\r\n"), "{all}");
+        assert!(all.ends_with("[MSG:max step rate 4 Hz dual-edge DMA]\r\n[MSG:max junction rate 5 Hz]\r\n[MSG:ramp 1-2 Hz 3 Hz/s S-curve per move (table at a/k) (table-limited)]\r\n"), "{all}");
     }
 
     #[test]

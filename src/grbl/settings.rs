@@ -13,9 +13,12 @@
 //!
 //! Files: [`values`] (the struct, defaults, setting numbers), [`table`] (`$$` and `$N=`: ranges,
 //! decimals, image offsets), [`profile`] (timing, ramp table, planner limits), [`image`] (the
-//! flash image), [`layout`] (the image's offsets, byte helpers, CRC). This file re-exports
+//! flash image), [`layout`] (the image's offsets, byte helpers, CRC); host-only, [`docs`] (each
+//! setting's name, unit, range and text for docs/settings.md, none of it in the firmware). This file re-exports
 //! their public items (`settings::Settings`, …); they name nothing of it.
 
+#[cfg(not(target_os = "none"))]
+pub mod docs;
 pub mod image;
 pub mod layout;
 pub mod profile;

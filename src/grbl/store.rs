@@ -28,6 +28,9 @@ const TEXTS: usize = STARTUP_LINES + 1;
 pub const IMAGE_LEN: usize = TEXT_AT + TEXTS * (TEXT_LEN + 1) + 4;
 /// Flash page size.
 pub const PAGE_LEN: usize = 1024;
+/// The two pages' offsets from the start of flash: fixed, the last two pages of a 64 KiB
+/// part (memory.x ends the program below them; a larger part keeps them here too).
+pub const PAGE_OFFSETS: [u32; 2] = [62 * 1024, 63 * 1024];
 const _: () = assert!(IMAGE_LEN <= PAGE_LEN && IMAGE_LEN.is_multiple_of(4));
 
 /// A short stored text (a startup line or the build info), upper case as lines arrive.

@@ -5,9 +5,15 @@
 //! built for the fastest acceleration serves every slower move), interpolating between
 //! entries; the look-ahead maps path speeds and distances onto its indices.
 //!
-//! Invariant: entry `i` holds the period (timer ticks, 1/16 resolution, [`Period`]) of the mean
-//! rate of the ideal profile during millisecond `i`: `v0 + a·(i+½) ms` for the trapezoid,
-//! clamped at `vmax` in its last entry; the S-curve uses the same mean of a normalized logistic.
+//! Invariant: entry `i` holds the period (timer ticks, 1/16 resolution, [`Period`]) of the
+//! ideal profile's rate `lead` after millisecond `i` starts: `v0 + a·(i + lead) ms` for the
+//! trapezoid (with `lead` = ½ the mean of millisecond `i`), clamped at `vmax` in its last
+//! entry (the S-curve's table too, at `a / k`: see `scurve`). The settings pass as `lead` the
+//! slowest move's walk rate (at most ½), so entry 0, where every move starts from rest and
+//! where a hold stops, is never more than one ms of a move's own acceleration above `v0`
+//! (a table built for the fastest axis once started a slow one far above it). Between entries
+//! the *rate* is interpolated linearly, so a walk at a constant fraction of an entry per ms
+//! changes the rate by the same amount each ms.
 //! Entries strictly never rise in rate past `vmax` and never fall in rate along the table. The
 //! engine decelerates by walking the same entries down, so one table serves every move that
 //! shares the acceleration, and a move's step count never depends on the table. Beside each
@@ -18,17 +24,21 @@
 //! that fits (the settings code then builds a steeper table instead, which slower moves walk at
 //! a smaller fraction: see `Settings::build_profile`).
 //!
-//! - `shape`: the ideal profiles (trapezoid, S-curve) the entries take their mean rates from.
+//! - `shape`: the ideal profile (the trapezoid, for both shapes) the entries take their mean
+//!   rates from.
+//! - `scurve`: the S-curve (`$41=1`): each ramp leg mapped through the seeds' logistic.
 //! - `table`: the table, its build and the engine's interpolated lookups.
 //! - `search`: the look-ahead's searches on it (the index of a rate, of a distance).
 //! - `slot`: the [`Profile`] (table and step timing) shared with the engine, and its
 //!   write protocol.
 
+mod scurve;
 mod search;
 mod shape;
 mod slot;
 mod table;
 
+pub use scurve::{peak, peak_slope, Leg, SCurve, FLEX_DEFAULT, FLEX_MAX, FLEX_MIN};
 pub use shape::{RampConfig, Shape};
 pub use slot::{Profile, RampSlot, RampWriteGuard};
 pub use table::{RampError, RampTable, IDX_FRAC, IDX_ONE, RAMP_LEN, SUM_ONE};

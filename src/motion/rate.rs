@@ -2,10 +2,13 @@
 //! obeys, and the conversions between the two.
 //!
 //! Who uses it: the ramp tables, the driver timing, moves and the planner (a leaf: it imports
-//! nothing from the library but the timer clock).
+//! nothing from the library but the timer clock and the number helpers).
+
+use core::num::NonZeroU64;
 
 use fixed::types::U28F4;
 
+use crate::num::div_rem_u64;
 use crate::TIMER_HZ;
 
 /// A timer period in ticks with four fractional bits: the engine dithers the fraction so the
@@ -22,10 +25,9 @@ pub const MAX_RATE_HZ: u32 = 1_000_000;
 /// (64-bit integers, exact: `f32` has too few bits for the tick count of a slow rate.)
 #[inline(never)]
 pub fn period_of_millihz(milli_hz: u64) -> Period {
-    let m = milli_hz.max(1);
-    // (⌊⌊x/2⌋/m⌋ = ⌊x/2m⌋, and `m` ≥ 1: no divide-by-zero panic path, whose location
-    // string would cost flash.)
-    let q4 = (TIMER_HZ as u64 * 32_000 + m) / 2 / m;
+    let m = NonZeroU64::new(milli_hz).unwrap_or(NonZeroU64::MIN);
+    // (⌊⌊x/2⌋/m⌋ = ⌊x/2m⌋.)
+    let q4 = div_rem_u64((TIMER_HZ as u64 * 32_000 + m.get()) / 2, m).0;
     Period::from_bits(q4.min(u32::MAX as u64) as u32)
 }
 
@@ -37,4 +39,22 @@ pub fn period_of_hz(hz: u32) -> Period {
 /// Rate in steps/s of a period (for reports and tests).
 pub fn hz_of_period(p: Period) -> f32 {
     TIMER_HZ as f32 * 16.0 / p.to_bits().max(1) as f32
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// The same periods as the runtime's 64-bit division, for every rate that cannot
+        /// overflow the sum (rates from 1 mHz, every bit length).
+        #[test]
+        fn period_of_millihz_matches_u64_division(m in any::<u64>(), shift in 0u32..64) {
+            let m = (m >> shift).min(u64::MAX / 2);
+            let m1 = m.max(1);
+            let q4 = (TIMER_HZ as u64 * 32_000 + m1) / 2 / m1;
+            prop_assert_eq!(period_of_millihz(m).to_bits(), q4.min(u32::MAX as u64) as u32);
+        }
+    }
 }

@@ -132,7 +132,9 @@ impl Walk {
     /// Master steps walking down from `idx` to `decel_for` (samples at idx − walk, …, target, one
     /// per ms: the table distance less half the end slopes, plus [`DECEL_MARGIN`]), with the
     /// target's end cached; none when `idx` is not above the target.
-    #[inline(always)]
+    // Out of line (in the DMA fill's block): three callers (trigger, walk up, priming).
+    #[inline(never)]
+    #[cfg_attr(target_os = "none", link_section = ".fill.decel_from")]
     fn decel_from<const L: usize>(&self, idx: u32, plan: &RampPlan, table: &RampTable<L>) -> u32 {
         if idx <= self.decel_for {
             return DECEL_MARGIN;
@@ -158,7 +160,11 @@ impl Walk {
 
     /// Pending trigger work: the trigger for the current index and `target` (only when
     /// [`TRIGGER`] is pending).
-    #[inline(always)]
+    // Out of line (in the DMA fill's block): the ramp half runs it from `settle` and from
+    // priming a successor; inlined in both it cost ~300 B of flash for no cycle saved that
+    // matters (once per trigger change, not per step).
+    #[inline(never)]
+    #[cfg_attr(target_os = "none", link_section = ".fill.settle_trigger")]
     pub fn settle_trigger<const L: usize>(&mut self, plan: &RampPlan, target: u32, table: &RampTable<L>) {
         self.aim(target, table);
         self.decel_at = self.decel_from(self.idx, plan, table);
@@ -206,6 +212,15 @@ pub fn base_at<const L: usize>(idx: u32, table: &RampTable<L>) -> u32 {
     } else {
         table.period_at(idx).to_bits()
     }
+}
+
+/// [`scaled`] of [`base_at`]: a move's master period (bits) at index `idx`. Out of line (in
+/// the DMA fill's block): the ramp half's three callers (its period, the period one walk down,
+/// a successor's) share one copy.
+#[inline(never)]
+#[cfg_attr(target_os = "none", link_section = ".fill.period_bits")]
+pub fn period_bits<const L: usize>(idx: u32, table: &RampTable<L>, plan: &RampPlan, min: Period) -> u32 {
+    scaled(base_at(idx, table), idx, plan, min).to_bits()
 }
 
 /// A move's master period from the table's period `base` (bits) at index `idx`: scaled by its

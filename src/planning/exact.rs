@@ -105,7 +105,7 @@ impl Decimal {
         let p = mag * m;
         // NonZero: dividing by it has no panic path.
         let q = match core::num::NonZeroU64::new(d) {
-            Some(d) if d.get() >= 1 << 16 => p / d,
+            Some(d) if d.get() >= 1 << 16 => crate::num::div_rem_u64(p, d).0,
             _ => div_by_u16(p, d as u32),
         };
         // ÷ 2^t, rounded half up (t ≥ 1 as exp < 150).

@@ -6,10 +6,13 @@
 //!
 //! Just in time: a move leaves the look-ahead (where later moves can still raise its speeds)
 //! only when the engine needs it: when the engine has less than [`HORIZON_US`] of motion
-//! prepared, or fewer than two moves, or the buffer is full. When it hands a move over, it
-//! first raises the exit of the last prepared move to the new move's entry, then publishes the
-//! new move; until then the engine plans that last move's exit as a stop. So the engine never
-//! runs out of moves at speed: at worst it slows to rest at the end of what it has.
+//! prepared before the stop it plans at the end of what it has (the last move's stopping
+//! distance from the highest index it can reach does not count: inside it the engine would
+//! already hold or lose speed, a dip at the junction), or fewer than two moves, or the buffer
+//! is full. When it hands a move over, it first raises the exit of the last prepared move to
+//! the new move's entry, then publishes the new move; until then the engine plans that last
+//! move's exit as a stop. So the engine never runs out of moves at speed: at worst it slows to
+//! rest at the end of what it has.
 //!
 //! Overrides (Grbl's feed and rapid): when one changes, every queued move gets its new cruise
 //! (as Grbl recomputes its plan). A prepared move gets its new cruise index and floor in its
@@ -19,7 +22,7 @@
 //! cruise is below its exit leaves at its cruise).
 
 use crate::board::PinMap;
-use crate::planning::lookahead::{cruise_for, replan, Block, Buffer, Tail, LOOKAHEAD};
+use crate::planning::lookahead::{cruise_for, reach, replan, Block, Buffer, Tail, LOOKAHEAD};
 use crate::motion::prepared::{DirState, Prepared};
 use crate::motion::moves::{Move, Overrides};
 use crate::motion::shared::{Shared, State};
@@ -223,15 +226,25 @@ impl<'a, const N: usize> Feeder<'a, N> {
         self.replan();
     }
 
-    /// Estimated motion the engine has left at cruise, µs (counted only up to [`HORIZON_US`]).
+    /// Estimated motion the engine has left at cruise before it must start to stop at the end
+    /// of what it has, µs (counted only up to [`HORIZON_US`]): the last move's stopping
+    /// distance from the highest index it can reach does not count (the engine plans its exit
+    /// as a stop, and inside that distance neither accelerates nor holds its speed; the moves
+    /// before it have their exits).
     fn horizon_us(&self) -> u32 {
         let made = self.shared.mv_done.load(Relaxed);
+        let last = self.ring.len().wrapping_sub(1);
         let mut us = 0u32;
         for (k, p) in self.ring.slots().enumerate() {
             // SAFETY: as in `sync_overrides`.
-            let (total, bits) = unsafe { ((*p).total, (*p).cruise_bits.load(Relaxed).max((*p).min_period.to_bits())) };
+            let (total, bits, dist_q) = unsafe { ((*p).total, (*p).cruise_bits.load(Relaxed).max((*p).min_period.to_bits()), (*p).ramp.dist_q) };
             // The running move (the oldest) counts what it has left.
-            let left = if k == 0 { total.saturating_sub(made) } else { total };
+            let mut left = if k == 0 { total.saturating_sub(made) } else { total };
+            if let (true, Some(t)) = (k == last, self.tail) {
+                let table = &self.slot.producer_view().ramp;
+                let top = reach(table, t.entry_q, t.budget).min(t.cruise_q);
+                left = left.saturating_sub(((table.sum_at(top) as u64 * dist_q as u64) >> 24) as u32);
+            }
             us = us.saturating_add(crate::num::u32_of(left as f32 * bits as f32 * (1e6 / 16.0 / crate::TIMER_HZ as f32)));
             if us >= HORIZON_US {
                 break;

@@ -17,12 +17,12 @@
 //! then clamps it to the axes' max rates and the table's top, as Grbl clamps a G93 rate to
 //! the axes' maximum rates (so the move takes longer than asked).
 //!
-//! The S-curve table (`$41=1`) is treated as the trapezoid with its mean acceleration
-//! `(vmax - v0) / ramp time`: exact for moves that reach the table's top, approximate (the
-//! logistic's slow start) for moves that turn back earlier.
+//! The S-curve (`$41=1`) needs nothing of its own: each of its legs covers, in the same time,
+//! what the trapezoid at `a / k` that the table and the walk run covers (`ramp/scurve.rs`),
+//! so the closed form holds as it is (seed 002's "N pulses in time T", with S ramps).
 
 use crate::planning::lookahead::walk_of;
-use crate::motion::ramp::{RampConfig, RampTable, Shape, IDX_ONE};
+use crate::motion::ramp::{RampConfig, IDX_ONE};
 use crate::num::sqrt;
 
 /// The ramp a move's master runs on, in master steps: start rate (steps/s) and acceleration
@@ -45,13 +45,9 @@ impl MasterRamp {
     /// `s·(v0 + A·(1 − r)/2 ms)` at `s·r·A`.
     pub fn new(share: f32, accel: f32, per_mm: f32, cfg: &RampConfig) -> Self {
         let v0 = cfg.v0 as f32;
-        let a = match cfg.shape {
-            Shape::Trapezoid => cfg.accel as f32,
-            Shape::SCurve => {
-                let ms = crate::num::f32_of_u64(RampTable::<1>::ramp_ms(cfg).max(1));
-                (cfg.vmax as f32 - v0).max(1.0) * 1000.0 / ms
-            }
-        };
+        // (Both shapes: the S-curve's legs cover what the trapezoid at a / k covers in the same
+        // time, and its table and walks are that trapezoid's.)
+        let a = cfg.accel as f32;
         let (s, r) = if per_mm > 0.0 {
             let (s, walk_q) = walk_of(share, accel, per_mm, cfg.accel.max(1) as f32);
             (s, walk_q as f32 * (1.0 / IDX_ONE as f32))

@@ -163,7 +163,7 @@ fn usable(total: u32) -> f32 {
 }
 
 /// Index reached from `from_q` walking `budget` of table distance up (or down) the table.
-fn reach<const L: usize>(table: &RampTable<L>, from_q: u32, budget: u32) -> u32 {
+pub(crate) fn reach<const L: usize>(table: &RampTable<L>, from_q: u32, budget: u32) -> u32 {
     table.index_of_sum(table.sum_at(from_q).saturating_add(budget))
 }
 

@@ -38,6 +38,9 @@ pub struct Limits<const N: usize> {
     pub max_rate: [f32; N],
     /// `$120+i`, mm/s².
     pub accel: [f32; N],
+    /// What a move's path acceleration is walked at, as a fraction of it (`1 / k` in S-curve
+    /// mode, whose legs peak at the full acceleration: `ramp/scurve.rs`; junctions use `accel`).
+    pub ramp_accel: f32,
     /// Top of the ramp table (table rate = path speed × `per_mm`).
     pub vmax_hz: u32,
     /// Table rate per mm/s of path speed (`Settings::per_mm`: the largest `$100+i`, or less
@@ -201,7 +204,7 @@ impl<const N: usize> Planner<N> {
         self.prev = Some((unit, share, slaves));
         let path = Path {
             share: share as f32,
-            accel: accel.min(1e12),
+            accel: (accel * lim.ramp_accel).min(1e12),
             asked_hz: (asked * share) as f32,
             cap_hz: (vmax * share).min(top) as f32,
             junction: junction as f32,

@@ -40,6 +40,10 @@ impl<const N: usize> Rig<N> {
         Self::with_profile(|p| {
             p.ramp.build(cfg).expect("ramp builds");
             p.timing = timing;
+            // `$41=1`: every leg through the curve (`$582`'s default).
+            if cfg.shape == Shape::SCurve {
+                p.scurve = ddastep::motion::ramp::SCurve::build(ddastep::motion::ramp::FLEX_DEFAULT);
+            }
         })
     }
 

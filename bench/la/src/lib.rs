@@ -62,11 +62,14 @@ mod deviation;
 mod glitch;
 mod levels;
 pub mod map;
+pub mod path;
 pub mod plot;
+pub mod pulses;
 mod rate;
 mod ratio;
 mod report;
 pub mod synth;
+pub mod trace;
 mod vcd;
 
 pub use analysis::{Analyzer, AxisChannels, Config, CRUISE_FRACTION};

@@ -12,7 +12,7 @@ use plotters::style::{register_font, FontStyle};
 use super::Report;
 
 static FONT: &[u8] = include_bytes!("../fixtures/font/DejaVuSans-ascii.ttf");
-const PALETTE: [RGBColor; 8] = [
+pub(crate) const PALETTE: [RGBColor; 8] = [
     RGBColor(31, 119, 180),
     RGBColor(255, 127, 14),
     RGBColor(44, 160, 44),
@@ -24,7 +24,7 @@ const PALETTE: [RGBColor; 8] = [
 ];
 
 // make the embedded font plotters' "sans-serif"
-fn register() {
+pub(crate) fn register() {
     static ONCE: Once = Once::new();
     ONCE.call_once(|| {
         // The font is compiled in and known good; a failure would only lose the labels.

@@ -274,3 +274,37 @@ fn axes_that_never_step_do_not_count_against_expect() {
     assert_eq!(out.status.code(), Some(0), "{}", text(&out).0);
     let _ = std::fs::remove_file(vcd);
 }
+
+#[test]
+fn pulses_and_path_pictures_count_what_they_show() {
+    let (pulses, path) = (temp("pulses.png"), temp("path.png"));
+    // 50 kHz 5:3:2 Bresenham: five master periods hold 5, 3 and 2 rising edges
+    let out = la(&[
+        &fixture("bresenham_532.vcd"),
+        "--pulses",
+        pulses.to_str().unwrap(),
+        "--pulses-us",
+        "100",
+        "--path",
+        path.to_str().unwrap(),
+        "--per-mm",
+        "100",
+    ]);
+    let (stdout, stderr) = text(&out);
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    assert!(stdout.contains("pulses: X 5, Y 3, Z 2 rising edges in 100 us"), "{stdout}");
+    // 50 and 30 kHz at 100 steps/mm: 583 mm/s = 34 986 mm/min, within a step (600 mm/min) over
+    // the 1 ms capture
+    let top: f64 = stdout.split("path: top XY speed ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
+    assert!((top - 34_986.0).abs() < 600.0, "{stdout}");
+    for png in [&pulses, &path] {
+        let bytes = std::fs::read(png).unwrap();
+        assert!(bytes.starts_with(b"\x89PNG\r\n\x1a\n") && bytes.len() > 5_000, "{} bytes", bytes.len());
+        let _ = std::fs::remove_file(png);
+    }
+    // bad windows and scales exit 2
+    for bad in [["--pulses-us", "0"], ["--pulses-at", "-1"], ["--per-mm", "0"]] {
+        let out = la(&[&fixture("bresenham_532.vcd"), "--pulses", pulses.to_str().unwrap(), "--path", path.to_str().unwrap(), bad[0], bad[1]]);
+        assert_eq!(out.status.code(), Some(2), "{bad:?}: {}", text(&out).1);
+    }
+}

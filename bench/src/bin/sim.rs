@@ -68,7 +68,7 @@ struct Args {
     /// With --sweep: write bench/RESULTS.md-style results to this file.
     #[arg(long)]
     results: Option<PathBuf>,
-    /// With --sweep: rewrite the measured rows of this README's "Figures" table.
+    /// With --sweep: rewrite the measured rows of this page's "Figures" table (docs/performance.md).
     #[arg(long)]
     readme: Option<PathBuf>,
     /// With --sweep: axis counts, e.g. 1,3,7 (default 1..=7).
@@ -92,6 +92,16 @@ struct Args {
     /// With --results the sweep runs every mode and the file shows them side by side.
     #[arg(long)]
     dual_edge: bool,
+    /// The emulated part's flash size register (F_SIZE, KiB; default 64; 65535 reads as
+    /// unknown): the chip check at boot refuses motion below 64.
+    #[arg(long, value_name = "KIB", conflicts_with_all = ["sweep", "point", "floor"])]
+    flash_kib: Option<u16>,
+    /// The emulated part's 96-bit unique ID, 24 hex digits (the words in address order).
+    #[arg(long, value_name = "HEX", conflicts_with_all = ["sweep", "point", "floor"])]
+    uid: Option<String>,
+    /// The emulated part's CPUID, hex (default 411FC231: Cortex-M3 r1p1).
+    #[arg(long, value_name = "HEX", conflicts_with_all = ["sweep", "point", "floor"])]
+    cpuid: Option<String>,
     /// With --sweep or --point: DMA burst step output (`$581=1`; the step path is the buffer
     /// fill, DMA1 channel 1's interrupt).
     #[arg(long)]
@@ -111,6 +121,27 @@ fn parse_pin(s: &str) -> Result<InputFlip> {
     let n: u8 = pin[2..].parse()?;
     let t: f64 = t.parse()?;
     Ok(InputFlip { cycle: (t * HZ as f64) as u64, port, pin: n, level: level == "1" })
+}
+
+// the emulated part: the Blue Pill's registers with the arguments' changes
+fn chip(args: &Args) -> Result<ddastep::grbl::chip::Chip> {
+    let mut c = ddastep_bench::emu::BLUE_PILL;
+    if let Some(k) = args.flash_kib {
+        c.flash_kib = k;
+    }
+    if let Some(u) = &args.uid {
+        let u = u.replace('-', "");
+        if u.len() != 24 || !u.is_ascii() {
+            bail!("--uid: expected 24 hex digits, got {}", u.len());
+        }
+        for (i, w) in c.uid.iter_mut().enumerate() {
+            *w = u32::from_str_radix(&u[8 * i..8 * i + 8], 16).context("--uid: not hex")?;
+        }
+    }
+    if let Some(v) = &args.cpuid {
+        c.cpuid = u32::from_str_radix(v.trim_start_matches("0x"), 16).context("--cpuid: not hex")?;
+    }
+    Ok(c)
 }
 
 // run, and on failure say why in one line (exit 1); usage errors exit 2 (clap)
@@ -138,6 +169,7 @@ fn run(args: Args) -> Result<()> {
         return run_sweep(&args, &elf);
     }
     let machine = args.machine.as_deref().map(MachineSpec::load).transpose()?;
+    let part = chip(&args)?;
     if args.serve {
         let opts = serve::Options {
             elf,
@@ -149,6 +181,7 @@ fn run(args: Args) -> Result<()> {
             inputs: args.pin.iter().map(|p| parse_pin(p)).collect::<Result<_>>()?,
             machine,
             usb: args.usb,
+            chip: Some(part),
         };
         let s = serve::run(&opts)?;
         println!(
@@ -182,6 +215,7 @@ fn run(args: Args) -> Result<()> {
     let gcode_path = args.gcode.unwrap_or_else(|| ddastep_bench::emu::repo_root().join("bench/demo/paper_532.gcode"));
     let gcode = std::fs::read_to_string(&gcode_path).with_context(|| format!("reading {}", gcode_path.display()))?;
     let mut board = Board::load(&elf)?;
+    board.set_chip(&part)?;
     if let Some(m) = &machine {
         board.attach_plant(Box::new(VirtualMachine::new(m)));
     }
@@ -248,7 +282,7 @@ fn run(args: Args) -> Result<()> {
     println!("{report}");
     // The firmware's own DWT timing of its step path over the run (what `$I` gives on a board).
     if let Ok(info) = board.send_line_wait_ok("$I") {
-        info.lines().filter(|l| l.contains("step isr")).for_each(|l| println!("firmware self-report: {l}"));
+        info.lines().filter(|l| l.contains("step isr") || l.contains("chip flash")).for_each(|l| println!("firmware self-report: {l}"));
     }
     if let Some(vm) = VirtualMachine::of(&board) {
         println!("{}", vm.summary());

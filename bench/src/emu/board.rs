@@ -388,6 +388,12 @@ impl Board {
         self.stats.step_isr = Default::default();
     }
 
+    // make the emulated part `c` (flash size, unique ID, CPUID; default `cpu::BLUE_PILL`):
+    // before the first run, as the firmware reads them at boot
+    pub fn set_chip(&mut self, c: &ddastep::grbl::chip::Chip) -> Result<()> {
+        cpu::write_chip(&mut self.cpu, c)
+    }
+
     // write memory (e.g. a flash page before boot, as a reset keeps flash)
     pub fn write_mem(&mut self, addr: u32, bytes: &[u8]) -> Result<()> {
         self.cpu.mem_write(addr as u64, bytes).map_err(|e| anyhow::anyhow!("writing {addr:#x}: {e:?}"))?;

@@ -3,7 +3,7 @@
 //! is due) and MMIO callbacks into `mcu::Mcu`. For `board.rs`.
 //!
 //! Memory map: flash 128 KiB at 0x0800_0000 (copied to the boot alias at 0), RAM 20 KiB at
-//! 0x2000_0000, system memory (flash size, UID) at 0x1FFF_F000, peripherals 0x4000_0000–
+//! 0x2000_0000, system memory (flash size, UID: [`write_chip`]) at 0x1FFF_F000, peripherals 0x4000_0000–
 //! 0x4002_FFFF, their bit-band alias at 0x4200_0000, SRAM bit-band at 0x2200_0000 and the
 //! private peripheral bus at 0xE000_0000.
 
@@ -11,6 +11,8 @@ use anyhow::{anyhow, Context, Result};
 use object::{Object, ObjectSegment, ObjectSymbol};
 use unicorn_engine::unicorn_const::{Arch, Mode, Prot};
 use unicorn_engine::{ArmCpuModel, RegisterARM, Unicorn};
+
+use ddastep::grbl::chip::{Chip, FLASH_SIZE_ADDR, UID_ADDR};
 
 use super::mcu::{Mcu, Stop};
 use super::profile::Symbols;
@@ -25,6 +27,15 @@ pub const RAM_SIZE: u32 = 20 * 1024;
 /// Byte RAM holds at power-up in the emulator, so the deepest stack use shows as the lowest
 /// byte that no longer holds it ([`Image::stack_end`] up to the top of RAM).
 pub const STACK_PAINT: u8 = 0xA5;
+/// System memory (read-only: the device registers the chip check reads).
+const SYSTEM_BASE: u32 = 0x1FFF_F000;
+/// The part the emulator is unless told otherwise: a genuine STM32F103C8 (64 KiB; the ID
+/// spells `ddastep-emu!`; a Cortex-M3 r1p1).
+pub const BLUE_PILL: Chip = Chip {
+    flash_kib: 64,
+    uid: [u32::from_le_bytes(*b"ddas"), u32::from_le_bytes(*b"tep-"), u32::from_le_bytes(*b"emu!")],
+    cpuid: super::mcu::CPUID_M3_R1P1,
+};
 
 /// The loaded program: entry state and symbols the bench uses.
 pub struct Image {
@@ -47,11 +58,8 @@ pub fn build(elf: &[u8]) -> Result<(Cpu, Image)> {
     uc.mem_map(FLASH_BASE as u64, FLASH_SIZE as u64, Prot::ALL).map_err(e)?;
     uc.mem_map(RAM_BASE as u64, RAM_SIZE as u64, Prot::ALL).map_err(e)?;
     uc.mem_write(RAM_BASE as u64, &[STACK_PAINT; RAM_SIZE as usize]).map_err(e)?;
-    uc.mem_map(0x1FFF_F000, 0x1000, Prot::READ).map_err(e)?;
-    let mut sys = vec![0u8; 0x1000];
-    sys[0x7E0..0x7E2].copy_from_slice(&64u16.to_le_bytes()); // F_SIZE: 64 KiB
-    sys[0x7E8..0x7F4].copy_from_slice(b"ddastep-emu!");
-    uc.mem_write(0x1FFF_F000, &sys).map_err(e)?;
+    uc.mem_map(SYSTEM_BASE as u64, 0x1000, Prot::READ).map_err(e)?;
+    write_chip(&mut uc, &BLUE_PILL)?;
     map_mmio(&mut uc, 0x4000_0000, 0x3_0000, 0).map_err(e)?;
     map_mmio(&mut uc, 0xE000_0000, 0x10_0000, 0).map_err(e)?;
     map_bitband(&mut uc, 0x4200_0000, 0x4000_0000, 0x3_0000).map_err(e)?;
@@ -60,6 +68,17 @@ pub fn build(elf: &[u8]) -> Result<(Cpu, Image)> {
     let image = load_elf(&mut uc, elf)?;
     uc.reg_write(RegisterARM::SP, image.initial_sp as u64).map_err(e)?;
     Ok((uc, image))
+}
+
+/// Makes the emulated part `c`: its flash size and unique ID in system memory, its CPUID (the
+/// firmware reads them at boot: set before the first run).
+pub fn write_chip(uc: &mut Cpu, c: &Chip) -> Result<()> {
+    let e = |err| anyhow!("unicorn: {err:?}");
+    uc.mem_write(FLASH_SIZE_ADDR as u64, &c.flash_kib.to_le_bytes()).map_err(e)?;
+    let uid: Vec<u8> = c.uid.iter().flat_map(|w| w.to_le_bytes()).collect();
+    uc.mem_write(UID_ADDR as u64, &uid).map_err(e)?;
+    uc.get_data_mut().cpuid = c.cpuid;
+    Ok(())
 }
 
 fn map_mmio(uc: &mut Cpu, base: u64, size: u64, _: u32) -> Result<(), unicorn_engine::unicorn_const::uc_error> {
@@ -194,14 +213,6 @@ fn on_block(uc: &mut Unicorn<Mcu>, addr: u64, size: u32) {
     if m.fn_timer.is_some() && m.nvic.ipsr() == 0 {
         time_calls(uc, addr);
     }
-    let m = uc.get_data_mut();
-    if m.move_marks.targets.contains(&addr) {
-        let tim2 = m.nvic.ipsr() == super::nvic::IRQ0 + super::mcu::TIM2_IRQ;
-        let now = m.now;
-        if m.record_edges {
-            m.move_marks.hits.push((now, tim2));
-        }
-    }
     if !uc.get_data().blocks.contains(addr, size) {
         let mut code = vec![0u8; size as usize];
         let _ = uc.mem_read(addr as u64, &mut code);
@@ -216,6 +227,7 @@ fn on_block(uc: &mut Unicorn<Mcu>, addr: u64, size: u32) {
     m.cur = Some(addr);
     if m.armed == Some((addr, m.now)) {
         m.armed = None;
+        mark_move_end(m, addr);
         return;
     }
     let block = m.blocks.at(addr).expect("just cached");
@@ -225,6 +237,17 @@ fn on_block(uc: &mut Unicorn<Mcu>, addr: u64, size: u32) {
     if preempt || m.now >= m.deadline || (k > 0 && k < n) {
         m.stop = if preempt || m.now >= m.deadline { Stop::Event } else { Stop::Split(k) };
         let _ = uc.emu_stop();
+    } else {
+        mark_move_end(m, addr);
+    }
+}
+
+// a block that runs now at `addr`: a move end if it is `finish`'s entry (only blocks that run:
+// a block stopped before it runs is entered again, and would count the end twice)
+fn mark_move_end(m: &mut Mcu, addr: u32) {
+    if m.record_edges && m.move_marks.targets.contains(&addr) {
+        let tim2 = m.nvic.ipsr() == super::nvic::IRQ0 + super::mcu::TIM2_IRQ;
+        m.move_marks.hits.push((m.now, tim2));
     }
 }
 

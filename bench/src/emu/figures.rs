@@ -1,13 +1,13 @@
-//! README figures from a sweep: the rows of README.md's "Figures" table that the sweep
+//! Figures from a sweep: the rows of docs/performance.md's "Figures" table that the sweep
 //! measures are rewritten in place (matched by their first cell), so one command
-//! (`bench/figures`) brings README.md, bench/RESULTS.md and the golden trace up to date.
-//! For the `sim` CLI (`--sweep --readme README.md`).
+//! (`bench/figures`) brings docs/performance.md, bench/RESULTS.md and the golden trace up to
+//! date. For the `sim` CLI (`--sweep --readme docs/performance.md`).
 
 use std::path::Path;
 
 use anyhow::{bail, Context, Result};
 
-use super::sweep::{isr_cost_fit, Bracket, Sweep, Verdict};
+use super::sweep::{image_sizes, isr_cost_fit, Bracket, Sweep, Verdict};
 
 // "327 kHz", or "≥ 327 kHz (the `$I` cap)" when the cap itself passed
 fn rate(b: &Bracket) -> String {
@@ -20,7 +20,7 @@ fn rate(b: &Bracket) -> String {
 /// First cell of the size row: only its leading figures are rewritten (see [`rewrite_rows`]).
 const SIZE_ROW: &str = "release flash / static RAM";
 
-// 63280 -> "63 280", as README writes numbers
+// 63280 -> "63 280", as the docs write numbers
 fn grouped(n: u64) -> String {
     let d = n.to_string();
     let mut out = String::new();
@@ -33,7 +33,7 @@ fn grouped(n: u64) -> String {
     out
 }
 
-// the README rows (first cell, whole row) this sweep measures
+// the figures rows (first cell, whole row) this sweep measures
 pub fn readme_rows(s: &Sweep, flash_bytes: u64, ram_bytes: u64) -> Vec<(String, String)> {
     let mut rows = Vec::new();
     let mut push = |key: &str, value: String, how: &str| rows.push((key.to_string(), format!("| {key} | {value} | {how} |")));
@@ -80,7 +80,7 @@ pub fn rewrite_rows(readme: &str, rows: &[(String, String)]) -> Result<String> {
         match out.iter_mut().find(|l| l.starts_with(&prefix)) {
             Some(l) if key == SIZE_ROW => *l = keep_size_details(l, row),
             Some(l) => *l = row.clone(),
-            None => bail!("README has no figures row starting with {prefix:?}"),
+            None => bail!("the figures page has no row starting with {prefix:?}"),
         }
     }
     Ok(out.join("\n") + "\n")
@@ -99,35 +99,12 @@ fn keep_size_details(old: &str, new: &str) -> String {
     format!("| {} | {}{sep}{tail} | {} |", n[0], n[1].trim_end(), o[2].trim())
 }
 
-// rewrite the figures rows of the README at `path`
+// rewrite the figures rows of the page at `path` (docs/performance.md)
 pub fn update_readme(path: &Path, s: &Sweep, elf: &Path) -> Result<()> {
     let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
     let (flash, ram) = image_sizes(elf);
     std::fs::write(path, rewrite_rows(&text, &readme_rows(s, flash, ram))?)?;
     Ok(())
-}
-
-// (flash, static RAM) bytes of the ELF, as `arm-none-eabi-size` counts them (text + data, data + bss)
-pub fn image_sizes(elf: &Path) -> (u64, u64) {
-    use object::{Object, ObjectSection, SectionFlags};
-    let Ok(bytes) = std::fs::read(elf) else { return (0, 0) };
-    let Ok(file) = object::File::parse(&*bytes) else { return (0, 0) };
-    let (mut flash, mut ram) = (0, 0);
-    for sec in file.sections() {
-        let SectionFlags::Elf { sh_flags } = sec.flags() else { continue };
-        if sh_flags & u64::from(object::elf::SHF_ALLOC) == 0 {
-            continue;
-        }
-        let in_ram = (0x2000_0000..0x2000_5000).contains(&sec.address());
-        let nobits = sec.kind() == object::SectionKind::UninitializedData;
-        if !in_ram || !nobits {
-            flash += if nobits { 0 } else { sec.size() };
-        }
-        if in_ram {
-            ram += sec.size();
-        }
-    }
-    (flash, ram)
 }
 
 #[cfg(test)]

@@ -34,6 +34,8 @@ mod mmio;
 pub const TIM2_IRQ: u32 = 28;
 /// USART1 global interrupt (IRQ 37).
 pub const USART1_IRQ: u32 = 37;
+/// CPUID of the STM32F103's core, a Cortex-M3 r1p1 (the default part's).
+pub const CPUID_M3_R1P1: u32 = 0x411F_C231;
 
 /// Why the block hook stopped the CPU.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -111,6 +113,8 @@ pub struct Mcu {
     /// The machine wired to the pins, and the input changes it scheduled (board applies them).
     pub plant: Option<Box<dyn super::plant::Plant>>,
     pub plant_flips: Vec<super::input::InputFlip>,
+    /// SCB CPUID as the part reads it (`Board::set_chip`; a reset keeps it).
+    pub cpuid: u32,
 }
 
 impl Mcu {
@@ -162,6 +166,7 @@ impl Mcu {
             exti: Exti::default(),
             plant: None,
             plant_flips: Vec::new(),
+            cpuid: CPUID_M3_R1P1,
         }
     }
 
@@ -186,6 +191,7 @@ impl Mcu {
         self.tim1.changes = old.tim1.changes;
         self.plant = old.plant;
         self.plant_flips = old.plant_flips;
+        self.cpuid = old.cpuid;
         let u = old.usart1;
         self.usart1.transcript = u.transcript;
         self.usart1.tx_times = u.tx_times;

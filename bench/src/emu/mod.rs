@@ -38,6 +38,7 @@ pub mod nvic;
 pub mod profile;
 pub mod pwm;
 pub mod qenc;
+pub mod ramp_half;
 mod report;
 mod stats;
 pub mod summary;
@@ -52,6 +53,7 @@ pub mod usb_host;
 pub mod vcd_out;
 
 pub use board::Board;
+pub use cpu::BLUE_PILL;
 pub use clock::HZ;
 pub use input::{InputFlip, Port};
 pub use stats::IsrRun;

@@ -158,7 +158,6 @@ impl Nvic {
                 let first = (offset - 0x400) as usize + 16;
                 (0..4).fold(0, |v, i| v | (*self.priority.get(first + i).unwrap_or(&0) as u32) << (8 * i))
             }
-            0xD00 => 0x411F_C231, // CPUID: Cortex-M3 r1p1
             0xD04 => self.icsr(),
             0xD08 => self.vtor,
             0xD0C => 0xFA05_0000 | self.aircr_prigroup << 8,

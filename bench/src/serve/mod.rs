@@ -53,6 +53,9 @@ pub struct Options {
     /// Serve the board's USB port instead of USART1 (`--usb`: a modeled host enumerates it
     /// and holds the port open; the firmware must be the `usb` build).
     pub usb: bool,
+    /// The emulated part's device registers (`--flash-kib`, `--uid`, `--cpuid`; default
+    /// `emu::BLUE_PILL`).
+    pub chip: Option<ddastep::grbl::chip::Chip>,
 }
 
 /// What a finished run did.
@@ -124,6 +127,9 @@ pub fn run(opts: &Options) -> Result<Summary> {
     let mut pty = Pty::open(opts.pty_link.as_deref())?;
     let mut tcp = opts.tcp.as_deref().map(Tcp::bind).transpose()?;
     let mut board = Board::load(&opts.elf)?;
+    if let Some(c) = &opts.chip {
+        board.set_chip(c)?;
+    }
     if let Some(m) = &opts.machine {
         board.attach_plant(Box::new(crate::machine::VirtualMachine::new(m)));
     }

@@ -17,8 +17,14 @@ pub fn boot() -> Board {
 
 /// A booted board with `stored` in flash (`None`: blank flash, the firmware's defaults).
 pub fn boot_with(stored: Option<Stored>) -> Board {
+    boot_part(stored, &ddastep_bench::emu::BLUE_PILL)
+}
+
+/// A booted board that is part `chip` (flash size, unique ID, CPUID), with `stored` in flash.
+pub fn boot_part(stored: Option<Stored>, chip: &ddastep::grbl::chip::Chip) -> Board {
     let elf = firmware_elf().expect("firmware builds");
     let mut b = Board::load(elf).expect("ELF loads");
+    b.set_chip(chip).expect("chip registers");
     if let Some(s) = stored {
         b.write_mem(STORE_ADDR, &s.to_bytes()).expect("flash preload");
     }

@@ -36,8 +36,12 @@ impl<const N: usize> Controller<'_, N> {
                 let r = match line.first() {
                     _ if n == 0 => Ok(()),
                     Some(b'$') => self.system(&line[1..n], out),
-                    // G-code is locked out in alarm, and while jogging (Grbl's error:9).
-                    _ if self.alarm || self.jogging() => Err(Error::AlarmLock),
+                    // G-code is locked out in alarm, and while jogging (Grbl's error:9); a
+                    // part that failed the chip check says why first.
+                    _ if self.alarm || self.jogging() => {
+                        self.refuse(out);
+                        Err(Error::AlarmLock)
+                    }
                     _ => self.gcode(&line[..n], out),
                 };
                 match r {

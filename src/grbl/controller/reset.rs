@@ -1,9 +1,10 @@
-//! Start-up and soft reset: the banner, Ctrl-X, and the alarm state after a watchdog reset or
-//! a lost position.
+//! Start-up and soft reset: the banner, Ctrl-X, and the alarm state after a watchdog reset, a
+//! lost position or a failed chip check.
 //!
 //! Who uses it: the firmware shell (boot and Ctrl-X), the controller's own `$C`/`$RST`.
 
 use super::{Controller, Door, Jogging, SoftLimit};
+use crate::grbl::chip::{self, Chip};
 use crate::grbl::coords::Offsets;
 use crate::grbl::gcode::Modal;
 use crate::grbl::reply::Out;
@@ -19,8 +20,34 @@ impl<const N: usize> Controller<'_, N> {
         if core::mem::take(&mut self.watchdog_note) {
             out.put(report::WATCHDOG_RESET);
         }
-        if self.alarm {
+        if self.chip.as_ref().is_some_and(|c| !c.fits()) {
+            report::alarm(out, report::ALARM_SELF_TEST);
+            self.refuse(out);
+        } else if self.alarm {
             out.put(report::UNLOCK_HINT);
+        }
+    }
+
+    /// The part's device registers (call before [`Self::welcome`]); `$I` reports them. A part
+    /// that fails [`Chip::fits`] stays in the alarm state with the drivers off: every line that
+    /// would move, unlock or write flash is refused with [`chip::refusal`]'s reason, until a
+    /// part that fits runs the firmware.
+    pub fn chip_check(&mut self, c: Chip) {
+        self.chip = Some(c);
+        if !c.fits() {
+            self.drivers_on = false;
+            self.position_lost();
+        }
+    }
+
+    /// On a part that failed the chip check: writes why (a line is being refused), true.
+    pub(super) fn refuse(&self, out: &mut impl Out) -> bool {
+        match &self.chip {
+            Some(c) if !c.fits() => {
+                chip::refusal(out, c);
+                true
+            }
+            _ => false,
         }
     }
 

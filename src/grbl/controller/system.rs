@@ -3,6 +3,7 @@
 //! at a time as TX room appears.
 
 use super::{Controller, Job, Listing};
+use crate::grbl::chip;
 use crate::grbl::coords::Coords;
 use crate::grbl::gcode;
 use crate::num::u32_of;
@@ -19,6 +20,11 @@ impl<const N: usize> Controller<'_, N> {
         // Grbl: `$$`, `$#`, `$I`, `$N`, `$RST`, settings need Idle or Alarm (not Check).
         let idle = self.drained() && !self.check && !self.jogging();
         let need_idle = |ok: bool| if ok { Ok(()) } else { Err(Error::NotIdle) };
+        // A part that failed the chip check answers only the reports (`$`, `$$`, `$#`, `$G`,
+        // `$I`, `$N`, `$ENC`): a line that would move, unlock or write is grblHAL's error:49.
+        if !matches!(cmd, [] | [b'$' | b'#' | b'G' | b'I' | b'N'] | b"ENC") && self.refuse(out) {
+            return Err(Error::SelfTestFailed);
+        }
         match cmd {
             b"" => out.put(report::HELP),
             b"G" => report::modes(out, &self.modal),
@@ -52,9 +58,7 @@ impl<const N: usize> Controller<'_, N> {
             b"I" => {
                 need_idle(idle)?;
                 report::build_info(out, self.stored.build_info.as_bytes(), self.feeder.capacity(), &self.ramped);
-                if let Some(t) = crate::steptime::STEP_TIME.take() {
-                    report::step_time(out, &t, self.ramped.dma);
-                }
+                self.start_listing(Listing::Info, out);
             }
             [b'I', b'=', text @ ..] => {
                 need_idle(idle)?;
@@ -121,7 +125,7 @@ impl<const N: usize> Controller<'_, N> {
         Ok(())
     }
 
-    /// Starts a long listing (`$$`, `$#`).
+    /// Starts a long listing (`$$`, `$#`, the end of `$I`).
     fn start_listing(&mut self, l: Listing, out: &mut impl Out) {
         let mut job = Job::none();
         job.listing = Some(l);
@@ -199,6 +203,18 @@ impl<const N: usize> Controller<'_, N> {
                     }
                     report::param::<N>(out, i as usize, &self.offsets, self.axes);
                     l = Listing::Params(i + 1);
+                }
+                Listing::Info => {
+                    if out.room() < chip::REPORT_LEN + report::STEP_TIME_LEN + 4 {
+                        return Some(l);
+                    }
+                    if let Some(c) = &self.chip {
+                        chip::report(out, c);
+                    }
+                    if let Some(t) = crate::steptime::STEP_TIME.take() {
+                        report::step_time(out, &t, self.ramped.dma);
+                    }
+                    return None;
                 }
             }
         }

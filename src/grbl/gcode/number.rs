@@ -91,7 +91,7 @@ fn decimal_f32(sig: u64, frac: u32) -> f32 {
     // NonZero: dividing by it has no panic path.
     let d = core::num::NonZeroU64::new(5u64.pow(frac)).unwrap_or(core::num::NonZeroU64::MIN);
     // sig / d = (q + r/d) · 2^-shift, q brought to 26 bits (r < d < 2^52: 2r fits).
-    let (mut q, mut r, mut shift) = (sig / d, sig % d, 0i32);
+    let ((mut q, mut r), mut shift) = (crate::num::div_rem_u64(sig, d), 0i32);
     let d = d.get();
     while q < 1 << 25 {
         r <<= 1;

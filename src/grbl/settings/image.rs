@@ -70,6 +70,10 @@ impl Settings {
             }
         }
         s.encoder = EncoderSettings::from_bytes(&b[TAIL + 20..]);
+        // An image from before `$582` has its byte clear: the default.
+        if s.flexible == 0 {
+            s.flexible = crate::motion::ramp::FLEX_DEFAULT;
+        }
         s.is_valid().then_some(s)
     }
 

@@ -11,7 +11,7 @@ pub const SETTINGS_LEN: usize = 200;
 pub(super) const MAGIC: u8 = 0xD5;
 pub(super) const VERSION: u8 = 5;
 /// Byte offset of the settings after the axis arrays: `$12`, `$30`, `$31`, `$33` (f32, u32),
-/// `$32` (flag byte), the encoder's `$87`-`$99` from `TAIL + 20`, the homing `$24`, `$25`,
+/// `$32` (flag byte), `$582` (byte `TAIL + 17`; 0 in an image from before it), the encoder's `$87`-`$99` from `TAIL + 20`, the homing `$24`, `$25`,
 /// `$27` (f32) and `$26` (u32) from [`HOME`] (`$23` is byte 23); CRC last.
 pub(super) const TAIL: usize = 24 + 4 * 4 * MAX_AXES;
 /// Byte offset of the homing settings, after the encoder's.

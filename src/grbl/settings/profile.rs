@@ -5,7 +5,7 @@
 
 use super::values::Settings;
 use crate::board::PinMap;
-use crate::motion::ramp::{Profile, RampConfig, RampError, RampTable, MAX_RATE_HZ};
+use crate::motion::ramp::{peak_slope, Profile, RampConfig, RampError, RampTable, SCurve, Shape, IDX_ONE, MAX_RATE_HZ};
 use crate::motion::timing::{ns_to_ticks, Timing};
 use crate::num::{round_u32, sqrt, u32_of};
 use crate::planning::planner::{Limits, JUNCTION_DEVIATION_MM};
@@ -120,6 +120,7 @@ impl Settings {
             steps_per_mm: core::array::from_fn(|i| self.steps_per_mm[i]),
             max_rate: core::array::from_fn(|i| self.max_rate[i]),
             accel: core::array::from_fn(|i| self.accel[i]),
+            ramp_accel: 1.0 / self.s_slope(),
             vmax_hz: vmax_hz.max(1),
             // The table's own path units: the axes in use ($42), as `Settings::build_profile`.
             per_mm: self.per_mm(self.axis_count(N)),
@@ -128,9 +129,18 @@ impl Settings {
         }
     }
 
+    /// The S-curve's peak slope `k` (`$41=1`, from `$582`), 1 for the trapezoid: moves are
+    /// planned and walked at their acceleration over it.
+    pub fn s_slope(&self) -> f32 {
+        match self.shape {
+            Shape::SCurve => peak_slope(self.flexible),
+            Shape::Trapezoid => 1.0,
+        }
+    }
+
     /// The ramp table's top on `axes` axes once built (what the planner's limits take).
     pub fn wanted_vmax(s: &Settings, axes: usize) -> u32 {
-        let mut p: Profile = Profile { ramp: crate::motion::ramp::RampTable::new(), timing: Timing::UNSET, per_mm: 0.0 };
+        let mut p: Profile = Profile { ramp: crate::motion::ramp::RampTable::new(), timing: Timing::UNSET, per_mm: 0.0, scurve: crate::motion::ramp::SCurve::OFF };
         s.build_profile(axes, &mut p).cfg.vmax
     }
 
@@ -155,7 +165,9 @@ impl Settings {
             let v = self.max_rate[i] / 60.0;
             top2 += v * v;
         }
-        let accel = accel * c;
+        // S-curve: the table and every move's walk are the trapezoid's at a / k (the legs'
+        // S then peaks at a: `ramp/scurve.rs`).
+        let accel = accel * c / self.s_slope();
         #[allow(clippy::manual_clamp, reason = "clamp's panic path costs flash")]
         let vmax = u32_of(sqrt(top2) * c).max(1).min(MAX_RATE_HZ);
         // `$40` in steps/s of the finest axis: the same path speed in the table's units.
@@ -178,8 +190,21 @@ impl Settings {
         let mut table_limited = false;
         profile.timing = timing;
         profile.per_mm = self.per_mm(axes);
+        profile.scurve = match self.shape {
+            Shape::SCurve => SCurve::build(self.flexible),
+            Shape::Trapezoid => SCurve::OFF,
+        };
+        // The slowest axis's path acceleration in table units (S mode: at a / k, as the table): no move walks the table
+        // slower (a move's is the smallest `$120+i / |unitᵢ|` over its axes, never below its
+        // slowest axis's `$120+i`).
+        #[allow(clippy::manual_clamp, reason = "clamp's panic path costs flash")]
+        let n = axes.max(1).min(MAX_AXES);
+        let slowest = self.accel.iter().take(n).fold(f32::MAX, |a, &b| a.min(b)) * profile.per_mm / self.s_slope();
         for attempt in 0..6 {
-            match profile.ramp.build(cfg) {
+            // Entry 0 at most one ms of the slowest move's acceleration above `$40` (the
+            // mean of the table's first ms when every axis accelerates alike).
+            let lead = u32_of((slowest / cfg.accel.max(1) as f32 * IDX_ONE as f32).min((IDX_ONE / 2) as f32));
+            match profile.ramp.build_led(cfg, lead) {
                 // Too long for the table: a steeper table (every move walks it at its own
                 // fraction, so no move runs faster), down to a lower top only as a last resort.
                 Err(RampError::TooLong { .. }) if attempt < 4 => {

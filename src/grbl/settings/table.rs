@@ -8,7 +8,7 @@ use super::layout::{FLAGS, HOME, TAIL};
 use super::values::*;
 use crate::encoder;
 use crate::error::Error;
-use crate::motion::ramp::{Shape, MAX_RATE_HZ};
+use crate::motion::ramp::{Shape, FLEX_MAX, FLEX_MIN, MAX_RATE_HZ};
 use crate::num::u32_of;
 use crate::MAX_AXES;
 
@@ -55,7 +55,7 @@ const fn spec(id: u16, range: u8, decimals: u8, change: Change, at: usize, bit: 
 }
 
 /// Settings below 100 in `$$` order: Grbl's, ours and the [`FIXED`] ones.
-const LOW: [Spec; 35] = {
+const LOW: [Spec; 36] = {
     use Change::{None as Fixed, Pins, Profile, Shell};
     [
         spec(0, 1, 3, Profile, 4, 0),
@@ -95,6 +95,7 @@ const LOW: [Spec; 35] = {
         // Listed after the axis settings (`Settings::id`).
         spec(DUAL_EDGE, 0, 0, Pins, FLAGS, 6),
         spec(DMA_BURST, 0, 0, Pins, FLAGS, 7),
+        spec(S_FLEX, 0, 0, Profile, TAIL + 17, 0),
     ]
 };
 
@@ -111,13 +112,14 @@ impl Settings {
     /// Setting number `i` of the `$$` listing for `axes` axes (`None` past the end).
     pub fn id(i: usize, axes: usize) -> Option<u16> {
         let axes = axes.min(MAX_AXES);
-        // [`LOW`]'s last two entries, `$580` and `$581`, come after the axis settings: numeric
+        // [`LOW`]'s last three entries, `$580` to `$582`, come after the axis settings: numeric
         // order.
-        match i.checked_sub(LOW.len() - 2) {
+        match i.checked_sub(LOW.len() - 3) {
             None => LOW.get(i).map(|s| s.id),
             Some(j) if j < 4 * axes => Some(100 + 10 * (j / axes) as u16 + (j % axes) as u16),
             Some(j) if j == 4 * axes => Some(DUAL_EDGE),
             Some(j) if j == 4 * axes + 1 => Some(DMA_BURST),
+            Some(j) if j == 4 * axes + 2 => Some(S_FLEX),
             Some(_) => None,
         }
     }
@@ -176,6 +178,7 @@ impl Settings {
             32 => Flag(&mut self.laser_mode),
             DUAL_EDGE => Flag(&mut self.dual_edge),
             DMA_BURST => Flag(&mut self.dma_burst),
+            S_FLEX => Byte(&mut self.flexible),
             SPINDLE_PWM_HZ => Whole(&mut self.spindle_pwm_hz),
             RAMP_START => Whole(&mut self.ramp_start_hz),
             RAMP_SHAPE => Shape(&mut self.shape),
@@ -238,6 +241,9 @@ impl Settings {
         if id == AXIS_COUNT && !(3.0..=axes.min(MAX_AXES) as f32).contains(&int) {
             return bad;
         }
+        if id == S_FLEX && !(FLEX_MIN as f32..=FLEX_MAX as f32).contains(&int) {
+            return bad;
+        }
         let (lo, hi) = RANGES.get(spec.range as usize).copied().unwrap_or_default();
         let in_range = (lo..=hi).contains(&value);
         match self.slot(id) {
@@ -289,7 +295,7 @@ mod tests {
     fn low_ids_are_ours_and_every_fixed_one() {
         let ours = [
             0, 1, 2, 3, 4, 5, 6, STATUS_MASK, 12, 20, 21, 22, 23, 24, 25, 26, 27, 30, 31, 32, SPINDLE_PWM_HZ, DIR_SETUP,
-            RAMP_START, RAMP_SHAPE, AXIS_COUNT, 87, 88, 89, 97, 98, 99, DUAL_EDGE, DMA_BURST,
+            RAMP_START, RAMP_SHAPE, AXIS_COUNT, 87, 88, 89, 97, 98, 99, DUAL_EDGE, DMA_BURST, S_FLEX,
         ];
         assert_eq!(LOW.len(), ours.len() + FIXED.len());
         assert!(ours.iter().chain(FIXED.iter().map(|f| &f.0)).all(|id| LOW.iter().any(|s| s.id == *id)));

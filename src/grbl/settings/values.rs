@@ -23,6 +23,9 @@ pub const DUAL_EDGE: u16 = 580;
 /// DMA burst step output (TIM2 paces every edge, DMA stores the precomputed words; no interrupt
 /// per edge): next to `$580`.
 pub const DMA_BURST: u16 = 581;
+/// The S-curve's `Flexible` (`$41=1`: the seeds' logistic over `±Flexible`, 1..=12): next to
+/// `$581`, also free in grblHAL (whose 580-589 are unused).
+pub const S_FLEX: u16 = 582;
 
 /// Persistent settings. Axis arrays are indexed X Y Z A B C U; only the firmware's first N
 /// axes are reported and used.
@@ -94,6 +97,9 @@ pub struct Settings {
     /// `$581` DMA burst step output: TIM2's events have DMA store the step words and periods
     /// the engine buffered (`crate::motion::burst`); a change rebuilds the step output at rest.
     pub dma_burst: bool,
+    /// `$582` the S-curve's `Flexible` (1..=12): its steepness; the S lasts
+    /// `ramp::peak_slope(flexible)` times the trapezoid with the same peak acceleration.
+    pub flexible: u8,
 }
 
 impl Default for Settings {
@@ -153,6 +159,7 @@ impl Settings {
         encoder: EncoderSettings::DEFAULT,
         dual_edge: false,
         dma_burst: false,
+        flexible: crate::motion::ramp::FLEX_DEFAULT,
     };
 
     /// The seed paper's bench (the settings before the safe defaults, which the demos and

@@ -11,14 +11,19 @@
 //! walk up) at once, and it publishes the running move's period and trigger in its slot and
 //! primes its successor's period at the walk's index. The step interrupt preempts it at every
 //! edge; it loops until the counters stand still.
+//!
+//! S mode (`$41=1`, `ramp/scurve.rs`): the walk stays linear (at the move's a / k) and the index
+//! in use is its leg's S of it; each ramp millisecond first checks what the walk heads for
+//! (`steer`: a new leg from the index in use when that changed), and the trigger,
+//! a hold's way down and the successor's priming all start from the index in use.
 
 use core::sync::atomic::Ordering::Relaxed;
 
 use crate::motion::prepared::{Prepared, RampPlan};
 use crate::motion::shared::Shared;
-use crate::motion::ramp::{Period, RampSlot, RAMP_LEN};
+use crate::motion::ramp::{peak, Leg, Period, RampSlot, RAMP_LEN};
 use crate::motion::ring::RingPeek;
-use crate::motion::walk::{base_at, scaled, Step as WalkStep, Walk, TRIGGER};
+use crate::motion::walk::{period_bits, Step as WalkStep, Walk, TRIGGER};
 
 /// The ramp half for `N` axes.
 pub struct Ramper<'a, const N: usize, const L: usize = RAMP_LEN> {
@@ -32,6 +37,14 @@ pub struct Ramper<'a, const N: usize, const L: usize = RAMP_LEN> {
     /// The running move's period at the walk's index (bits).
     period: u32,
     walk: Walk,
+    /// S mode: the leg the walk is on (the index in use is [`Leg::at`] the walk's linear
+    /// index), what it was started for (down, its end or the cruise, the target), and whether
+    /// a new move's own leg is still to start.
+    leg: Leg,
+    leg_key: (bool, u32, u32),
+    leg_due: bool,
+    /// S mode (`$41=1`), as the profile was when the walk's move was entered.
+    s_on: bool,
     hold: bool,
     /// A hold brought the walk to rest (the running move's period is 0 until the resume).
     resting: bool,
@@ -71,6 +84,10 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
             min_period: Period::ZERO,
             period: 0,
             walk: Walk::REST,
+            leg: Leg::new(0, 0),
+            leg_key: (false, 0, 0),
+            leg_due: false,
+            s_on: false,
             hold: link.hold.load(Relaxed),
             resting: false,
             published_at: 0,
@@ -88,7 +105,7 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
 
     /// (index Q20, decelerating, trigger) for tests.
     pub(super) fn walk_state(&self) -> (u32, bool, u32) {
-        (self.walk.idx, self.walk.decel, self.walk.decel_at)
+        (self.idx(), self.walk.decel, self.walk.decel_at)
     }
 
     /// Does what the step half asked for since the last run (see the module).
@@ -115,7 +132,7 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
                 if p.is_null() {
                     self.cur = p;
                     self.primed.0 = 0;
-                    self.walk = Walk::REST;
+                    self.rest();
                     self.resting = false;
                 } else if p != self.cur {
                     self.enter(p);
@@ -124,7 +141,7 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
             if primes != self.seen_primes {
                 self.seen_primes = primes;
                 if let Some(p) = self.ring.front() {
-                    self.walk = Walk::REST;
+                    self.rest();
                     self.resting = false;
                     self.enter(p);
                 }
@@ -178,6 +195,12 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
         }
         // SAFETY: an atomic field (the trigger primed while it was the successor, or 0).
         self.published_at = unsafe { (*p).decel_at.load(Relaxed) };
+        // S mode: the move's own legs start from the index in use (linear: the same index).
+        let at = self.idx();
+        self.s_on = self.ramp.profile().scurve.on();
+        self.walk.idx = at;
+        self.leg = Leg::new(at, at);
+        self.leg_due = true;
         self.walk.decel = self.hold;
         self.walk.defer_decel();
         self.set_period();
@@ -195,7 +218,8 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
             }
         } else if self.resting {
             self.resting = false;
-            self.walk = Walk::REST;
+            self.rest();
+            self.leg_due = true;
             self.walk.defer_decel();
             self.set_period();
         } else {
@@ -208,6 +232,12 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
     #[cfg_attr(target_os = "none", link_section = ".fill.start_decel")]
     fn start_decel(&mut self) {
         let target = self.target();
+        // S mode: the way down is a leg of its own, from the index in use.
+        let at = self.idx();
+        self.walk.idx = at;
+        self.leg = Leg::new(at, target.min(at));
+        self.leg_key = (true, target, 0);
+        self.leg_due = false;
         self.walk.start_decel(&self.plan, target);
         self.set_period();
     }
@@ -234,7 +264,10 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
         let target = self.target();
         // SAFETY: a plain field of the running slot.
         let left = unsafe { (*self.cur).total }.wrapping_sub(self.shared.mv_done.load(Relaxed));
-        match self.walk.per_ms(&self.plan, target, left) {
+        if self.s_on {
+            self.steer(target, left);
+        }
+        match self.walk.per_ms(&self.walk_plan(), target, left) {
             WalkStep::Same => {}
             WalkStep::AtRest if self.hold => self.resting = true,
             _ => self.set_period(),
@@ -264,15 +297,88 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
             self.walk.settle_trigger(&self.plan, target, table);
         }
         if self.walk.unsettled() {
-            self.walk.settle_up(&self.plan, table);
+            self.walk.settle_up(&self.walk_plan(), table);
         }
+    }
+
+    /// The walk back at rest (index 0, no leg).
+    fn rest(&mut self) {
+        self.walk = Walk::REST;
+        self.leg = Leg::new(0, 0);
+    }
+
+    /// The index in use: the walk's linear index through the leg's S (itself in trapezoid
+    /// mode).
+    #[inline(never)]
+    fn idx(&self) -> u32 {
+        if self.s_on {
+            self.leg.at(self.walk.idx, &self.ramp.profile().scurve)
+        } else {
+            self.walk.idx
+        }
+    }
+
+    /// The plan the linear walk runs: in S mode an up leg's end caps the cruise (its peak).
+    #[inline(always)]
+    fn walk_plan(&self) -> RampPlan {
+        let mut plan = self.plan;
+        if self.s_on && !self.leg.down() && !self.walk.decel {
+            plan.cruise_q = plan.cruise_q.min(self.leg.to);
+        }
+        plan
+    }
+
+    /// S mode, once per ramp millisecond: a new leg from the index in use wherever the walk
+    /// now heads elsewhere (a move entered, a resume, a target or cruise that changed, a
+    /// deceleration that ended); an up leg ends at the move's peak (`ramp::peak`).
+    #[inline(never)]
+    #[cfg_attr(target_os = "none", link_section = ".fill.steer")]
+    fn steer(&mut self, target: u32, left: u32) {
+        let at = self.idx();
+        let cruise = self.plan.cruise_q;
+        let (leg, key) = if self.walk.decel || at > cruise {
+            let end = if self.walk.decel { target.min(at) } else { cruise };
+            let key = (true, end, 0);
+            if !self.leg_due && self.leg_key == key {
+                return;
+            }
+            (Leg::new(at, end), key)
+        } else {
+            let key = (false, cruise, target);
+            let table = &self.ramp.profile().ramp;
+            if !self.leg_due && self.leg_key == key {
+                // At a peak below the cruise: higher if the steps left allow (a peak found
+                // short), else wait there for the trigger.
+                if self.leg.to >= cruise || self.walk.idx < self.leg.to {
+                    return;
+                }
+                let top = peak(at, cruise, target, left, (self.plan.walk_q, self.plan.dist_q), table);
+                if top <= at {
+                    return;
+                }
+                (Leg::new(at, top), key)
+            } else {
+                // (A move's peak once the step half runs it: until then the steps left are
+                // the previous move's.)
+                if self.shared.running() != self.cur {
+                    return;
+                }
+                (Leg::new(at, peak(at, cruise, target, left, (self.plan.walk_q, self.plan.dist_q), table)), key)
+            }
+        };
+        self.leg = leg;
+        self.leg_key = key;
+        self.leg_due = false;
+        self.walk.idx = at;
+        self.walk.replan();
+        self.settle();
     }
 
     /// The running move's period for the walk's index.
     #[cfg_attr(target_os = "none", link_section = ".fill.set_period")]
     fn set_period(&mut self) {
-        let base = base_at(self.walk.idx, &self.ramp.profile().ramp);
-        self.period = scaled(base, self.walk.idx, &self.plan, self.min_period).to_bits();
+        let idx = self.idx();
+        self.period = period_bits(idx, &self.ramp.profile().ramp, &self.plan, self.min_period);
         self.shared.period_bits.store(self.period, Relaxed);
     }
 
@@ -280,9 +386,17 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
     /// `plan` and floor `min`: where a trigger puts it at once.
     #[cfg_attr(target_os = "none", link_section = ".fill.down_period")]
     fn down_period(&self, plan: &RampPlan, min: Period, target: u32) -> u32 {
-        let idx = self.walk.idx;
-        let down = if idx > target { idx.saturating_sub(plan.walk_q).max(target) } else { idx };
-        scaled(base_at(down, &self.ramp.profile().ramp), down, plan, min).to_bits()
+        let idx = self.idx();
+        // (S mode: the first millisecond of a leg from here down to `target`.)
+        let lin = idx.saturating_sub(plan.walk_q).max(target);
+        let down = if idx <= target {
+            idx
+        } else if self.s_on {
+            Leg::new(idx, target).at(lin, &self.ramp.profile().scurve)
+        } else {
+            lin
+        };
+        period_bits(down, &self.ramp.profile().ramp, plan, min)
     }
 
     /// Primes successor `n` (its exit `exit`) at the walk's index: its period, and its trigger
@@ -293,9 +407,11 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
         // writes and atomics, through the pointer (the step half may enter it meanwhile).
         let (ramp, min) = unsafe { ((*n).ramp, (*n).min_period) };
         let table = &self.ramp.profile().ramp;
+        let idx = self.idx();
         // SAFETY: as above.
-        unsafe { (*n).period.store(scaled(base_at(self.walk.idx, table), self.walk.idx, &ramp, min).to_bits(), Relaxed) };
+        unsafe { (*n).period.store(period_bits(idx, table, &ramp, min), Relaxed) };
         let mut w = self.walk;
+        w.idx = idx;
         let at = if self.hold {
             0
         } else {
@@ -339,12 +455,13 @@ impl<'a, const N: usize, const L: usize> Ramper<'a, N, L> {
                 Err(now) => now,
             };
         }
-        self.shared.link.idx.store(self.walk.idx, Relaxed);
+        let idx = self.idx();
+        self.shared.link.idx.store(idx, Relaxed);
         let next = self.succ;
         if let Some(n) = next {
             // SAFETY: a published slot after the running one; an atomic field.
             let exit = unsafe { (*n).exit_q.load(Relaxed) };
-            let key = (n as usize, self.walk.idx, self.hold, self.succ_next, exit);
+            let key = (n as usize, idx, self.hold, self.succ_next, exit);
             if key != self.primed {
                 self.primed = key;
                 self.prime(n, exit);

@@ -37,7 +37,9 @@ impl<const L: usize> RampTable<L> {
             }
         }
         let (a, b) = (bits(lo), bits(hi));
-        let f = if a > b { (a - p) / (a - b) } else { 0.0 };
+        // The rate is interpolated linearly between entries (`period_at`): the fraction of
+        // the way from rate 1/a to 1/b that 1/p is.
+        let f = if a > b { (a - p) * b / ((a - b) * p) } else { 0.0 };
         ((lo as u32) << IDX_FRAC) + u32_of(f.max(0.0).min(1.0) * IDX_ONE as f32).min(IDX_MASK)
     }
 
@@ -115,7 +117,7 @@ mod tests {
             }
         }
         let (a, b) = (t.periods[lo].to_bits() as f32, t.periods[hi].to_bits() as f32);
-        let f = if a > b { (a - p) / (a - b) } else { 0.0 };
+        let f = if a > b { (a - p) * b / ((a - b) * p) } else { 0.0 };
         ((lo as u32) << IDX_FRAC) + u32_of(f.max(0.0).min(1.0) * IDX_ONE as f32).min(IDX_MASK)
     }
 

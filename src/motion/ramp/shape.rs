@@ -1,16 +1,20 @@
-//! The acceleration's shape: the ideal profile each table entry takes its mean rate from
-//! (trapezoid, or a logistic S-curve), outside any interrupt.
+//! The acceleration's shape: the ideal profile each table entry takes its mean rate from,
+//! outside any interrupt. The table is the trapezoid's for both shapes: the S-curve
+//! (`ramp/scurve.rs`) is each ramp leg mapped through the logistic by the engine's ramp half.
 //!
 //! Who uses it: the table build (`ramp/table.rs`), for its entries and its length.
 
-use crate::num::{f32_of_u64, i32_of, u64_of};
+use core::num::NonZeroU64;
+
+use crate::num::div_rem_u64;
 
 /// Shape of the acceleration.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Shape {
     /// Constant acceleration `a` (the seed paper's trapezoid; triangle on short moves).
     Trapezoid,
-    /// Logistic (sigmoid) S-curve whose steepest acceleration is `a` (seeds 000 and 002).
+    /// Per-move logistic S-curve (seeds 000 and 002): the table is the trapezoid's at
+    /// `a / k` and the ramp half maps every leg through the curve (`ramp/scurve.rs`).
     SCurve,
 }
 
@@ -23,93 +27,74 @@ pub struct RampConfig {
     pub shape: Shape,
 }
 
-
-/// Logistic steepness: the S-curve spans the logistic on [-S_CURVE_SPAN, S_CURVE_SPAN].
-const S_CURVE_SPAN: f32 = 4.0;
-
-/// How much longer the S-curve takes than a trapezoid with the same peak acceleration.
-pub(super) fn s_curve_stretch() -> f32 {
-    let norm = logistic(S_CURVE_SPAN) - logistic(-S_CURVE_SPAN);
-    S_CURVE_SPAN / 2.0 / norm
-}
-
-fn logistic(x: f32) -> f32 {
-    1.0 / (1.0 + exp_small(-x))
-}
-
-/// e^x for |x| ≲ 87, relative error < 1e-6: 2^k · e^r with |r| ≤ ½·ln 2 (ln 2 in two parts,
-/// the high one of 16 bits so k·HI is exact) and a degree-8 Taylor series. Smaller in flash than `libm::expf` (the firmware budget is 32 KiB), and the
-/// table only needs entries good to far better than 0.5 %.
-fn exp_small(x: f32) -> f32 {
-    const LN2: f32 = core::f32::consts::LN_2;
-    let t = x / LN2;
-    let k = i32_of(if t >= 0.0 { t + 0.5 } else { t - 0.5 });
-    const LN2_HI: f32 = 0.693_145_751_953_125;
-    const LN2_LO: f32 = 1.428_606_820_3e-6;
-    let r = (x - k as f32 * LN2_HI) - k as f32 * LN2_LO;
-    let mut term = 1.0;
-    let mut sum = 1.0;
-    for n in 1..=8 {
-        term *= r / n as f32;
-        sum += term;
-    }
-    sum * f32::from_bits(((127 + k.clamp(-126, 127)) as u32) << 23)
-}
-
-/// Ideal profile's normalized progress (0..=1) at fraction `u` (0..=1) of the ramp.
-fn s_curve(u: f32) -> f32 {
-    let lo = logistic(-S_CURVE_SPAN);
-    let hi = logistic(S_CURVE_SPAN);
-    (logistic(-S_CURVE_SPAN + 2.0 * S_CURVE_SPAN * u) - lo) / (hi - lo)
-}
-
-/// Mean rate in ms `i` of an `n`-entry ramp, in milli-steps/s.
-pub(super) fn mean_millihz(cfg: &RampConfig, i: usize, n: usize) -> u64 {
+/// Mean rate in ms `i` of an `n`-entry ramp, in milli-steps/s, for a ramp led by `lead`
+/// (Q20 fraction of a ms, at most ½): entry `i` is the ideal profile's rate at `i + lead` ms
+/// (with `lead` = ½ the mean over millisecond `i`), so entry 0 is `v0` plus `lead` ms of
+/// acceleration: the jump from rest above the start rate that a move walking the table at a
+/// fraction `lead` (or more) of an entry per ms also makes in one millisecond.
+pub(super) fn mean_millihz(cfg: &RampConfig, i: usize, n: usize, lead: u32) -> u64 {
     let v0 = cfg.v0 as u64 * 1000;
     let vmax = cfg.vmax as u64 * 1000;
+    let lead = lead.min(1 << 19) as u64;
+    let _ = n;
     match cfg.shape {
-        Shape::Trapezoid => {
-            // v(t) = v0 + a·t up to vmax; the mean over [i, i+1) ms of the clamped line.
+        // Both shapes: the S-curve's table is the trapezoid's (see `ramp/scurve.rs`).
+        Shape::Trapezoid | Shape::SCurve => {
+            // v(t) = v0 + a·(t − ½ + lead) up to vmax (so its mean over ms 0 is v0 + a·lead);
+            // the mean over [i, i+1) ms of the clamped line.
             let a = cfg.accel as u64; // milli-steps/s per ms
-            let end = v0 + a * (i as u64 + 1);
-            if end <= vmax {
-                v0 + a * (2 * i as u64 + 1) / 2
+            if lead < 1 << 19 {
+                // The rate at `i + lead` ms itself (a mean over a millisecond that reaches
+                // `vmax` would put entry 0 of a table that tops out within its first ms
+                // further above `v0` than `lead` ms of acceleration).
+                return (v0 + ((a * ((i as u64) << 20 | lead)) >> 20)).min(vmax);
+            }
+            // The line's value at t = 0, doubled (it may be below zero: an offset keeps it
+            // unsigned): 2·v0 − a·(1 − 2·lead).
+            let back = (a * ((1 << 20) - 2 * lead)) >> 20;
+            let end2 = 2 * v0 + a * (2 * i as u64 + 2);
+            if end2 <= 2 * vmax + back {
+                (2 * v0 + a * (2 * i as u64 + 1)).saturating_sub(back) / 2
             } else {
-                let start = v0 + a * i as u64;
-                if start >= vmax {
+                // (2·start, where the ms begins on the line.)
+                let start2 = (2 * v0 + a * 2 * i as u64).saturating_sub(back);
+                if start2 >= 2 * vmax {
                     return vmax;
                 }
                 // Ramp part of length f = (vmax-start)/a ms, then vmax for 1-f: the mean is
                 // vmax - d²/(2a) with d = vmax - start < a, whose floor is taken in integers
                 // (d² < 2^64 as d < a ≤ u32::MAX; f32 has too few bits for milli-steps/s).
-                let d = vmax - start;
-                vmax - (d * d).div_ceil(2 * a)
+                // (⌈⌈x/a⌉/2⌉ = ⌈x/2a⌉; `a` ≥ 1 as `build` refuses a zero accel.)
+                let d = (2 * vmax - start2).div_ceil(2).min(a);
+                let (q, r) = div_rem_u64(d * d, NonZeroU64::new(a).unwrap_or(NonZeroU64::MIN));
+                vmax - (q + (r != 0) as u64).div_ceil(2)
             }
-        }
-        Shape::SCurve => {
-            // Midpoint of the millisecond on the logistic stretched over n ms (Simpson-free:
-            // the curve is smooth enough that the midpoint is within 0.1 % of the mean here).
-            let u = ((i as f32 + 0.5) / n as f32).min(1.0);
-            let v = f32_of_u64(v0) + f32_of_u64(vmax - v0) * s_curve(u);
-            // max/min, not clamp: its panic message would link integer formatting.
-            u64_of(v).max(v0.max(1)).min(vmax.max(1))
         }
     }
 }
 
 #[cfg(test)]
-mod tests {
+mod props {
     use super::*;
+    use proptest::prelude::*;
 
-    #[test]
-    fn exp_small_matches_libm() {
-        let mut x = -30.0;
-        while x < 30.0 {
-            // 1e-8 when this ran in f64; in f32 a few ulps (2^-24 = 6e-8 each): the S-curve
-            // table needs entries good to far better than 0.5 %.
-            let (a, b) = (exp_small(x) as f64, libm::exp(x as f64));
-            assert!(((a - b) / b).abs() < 1e-6, "exp({x}): {a} vs {b}");
-            x += 0.01;
+    proptest! {
+        /// The trapezoid's means as with the runtime's 64-bit `div_ceil`, over the configs a
+        /// table is built from (1 ≤ v0 ≤ vmax ≤ 10^6 steps/s, any nonzero accel), at every ms.
+        #[test]
+        fn trapezoid_means_match_u64_division(v0 in 1u32..=1_000_000, top in 0u32..=1_000_000, accel in 1u32.., ashift in 0u32..32, i in 0usize..2048) {
+            let cfg = RampConfig { v0, vmax: v0.max(top), accel: (accel >> ashift).max(1), shape: Shape::Trapezoid };
+            let (v0, vmax, a) = (cfg.v0 as u64 * 1000, cfg.vmax as u64 * 1000, cfg.accel as u64);
+            let start = v0 + a * i as u64;
+            let want = if v0 + a * (i as u64 + 1) <= vmax {
+                v0 + a * (2 * i as u64 + 1) / 2
+            } else if start >= vmax {
+                vmax
+            } else {
+                vmax - ((vmax - start) * (vmax - start)).div_ceil(2 * a)
+            };
+            // (`lead` ½: the mean over each millisecond.)
+            prop_assert_eq!(mean_millihz(&cfg, i, 2048, 1 << 19), want);
         }
     }
 }

@@ -7,6 +7,7 @@
 use core::cell::UnsafeCell;
 use core::sync::atomic::{AtomicBool, Ordering};
 
+use super::scurve::SCurve;
 use super::table::{RampTable, RAMP_LEN};
 use crate::motion::timing::Timing;
 
@@ -19,6 +20,8 @@ pub struct Profile<const L: usize = RAMP_LEN> {
     /// makes `share` steps per mm of path runs at `share / per_mm` of the table's rate. Zero
     /// (not set) means table rates are master rates.
     pub per_mm: f32,
+    /// The S-curve each ramp leg follows (`$41=1`; off: the trapezoid).
+    pub scurve: SCurve,
 }
 
 /// The profile shared between the step interrupt (reader) and the settings code (writer)
@@ -49,7 +52,7 @@ impl<const L: usize> RampSlot<L> {
     pub const fn new() -> Self {
         RampSlot {
             // Zero timing keeps the slot in .bss; the engine reads it as `Timing::DEFAULT`.
-            table: UnsafeCell::new(Profile { ramp: RampTable::new(), timing: Timing::UNSET, per_mm: 0.0 }),
+            table: UnsafeCell::new(Profile { ramp: RampTable::new(), timing: Timing::UNSET, per_mm: 0.0, scurve: SCurve::OFF }),
             writer: AtomicBool::new(false),
             reading: AtomicBool::new(false),
         }

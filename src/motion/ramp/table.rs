@@ -5,10 +5,14 @@
 //! Who uses it: the settings build it; the engine's ramp walk reads it; the look-ahead's
 //! searches (`ramp/search.rs`) map speeds and distances onto its indices.
 
-use super::shape::{mean_millihz, s_curve_stretch, RampConfig, Shape};
+use core::num::NonZeroU64;
+
+use super::shape::{mean_millihz, RampConfig, Shape};
 use crate::motion::rate::{period_of_millihz, Period, MAX_RATE_HZ, MIN_RATE_HZ};
-use crate::num::{f32_of_u64, u64_of};
+use crate::num::div_rem_u64;
 use crate::TIMER_HZ;
+
+const THOUSAND: NonZeroU64 = NonZeroU64::new(1000).unwrap();
 
 /// Entries (milliseconds) in the firmware's table.
 pub const RAMP_LEN: usize = 512;
@@ -66,16 +70,22 @@ impl<const L: usize> RampTable<L> {
     pub fn ramp_ms(cfg: &RampConfig) -> u64 {
         // 32-bit integers (`dv` · 1000 ≤ 10^9): the ceiling of the exact quotient, no float.
         let dv = cfg.vmax.saturating_sub(cfg.v0).min(MAX_RATE_HZ);
-        let ms = (dv * 1000).div_ceil(cfg.accel.max(1)) as u64;
-        match cfg.shape {
-            Shape::Trapezoid => ms,
-            // The logistic's steepest slope is span/2 / norm of the mean slope.
-            Shape::SCurve => u64_of(f32_of_u64(ms) * s_curve_stretch()) + 1,
-        }
+        (dv * 1000).div_ceil(cfg.accel.max(1)) as u64
     }
 
     /// Builds the table in place (no 4 KiB copy on the stack). On error the table is empty.
+    /// Entry `i` is the mean rate of millisecond `i` (see [`Self::build_led`]).
     pub fn build(&mut self, cfg: RampConfig) -> Result<(), RampError> {
+        self.build_led(cfg, IDX_ONE / 2)
+    }
+
+    /// Builds the table with entry `i` at the ideal profile's rate `i + lead` ms into the ramp
+    /// (`lead`: Q20 fraction of a ms, at most ½, which is [`Self::build`]'s mean of ms `i`).
+    /// Entry 0, where every move starts from rest, is `v0` plus `lead` ms of the table's
+    /// acceleration: a move that walks at least `lead` of an entry per ms jumps no higher
+    /// above `v0` than one millisecond of its own acceleration (the settings pass the slowest
+    /// move's walk rate).
+    pub fn build_led(&mut self, cfg: RampConfig, lead: u32) -> Result<(), RampError> {
         self.len = 0;
         if cfg.accel == 0 {
             return Err(RampError::ZeroAccel);
@@ -86,20 +96,28 @@ impl<const L: usize> RampTable<L> {
         if cfg.vmax < cfg.v0 {
             return Err(RampError::VmaxBelowV0);
         }
-        let n = Self::ramp_ms(&cfg).max(1);
+        // (A lead below ½ reaches `vmax` up to half a ms later. Both shapes: the S-curve's
+        // table is the trapezoid's.)
+        let lead = lead.min(IDX_ONE / 2);
+        let n = if lead < IDX_ONE / 2 {
+            let dv = cfg.vmax.saturating_sub(cfg.v0).min(MAX_RATE_HZ) as u64;
+            let a = cfg.accel as u64;
+            // ⌈x / (a·2^IDX_FRAC)⌉ by the shift-and-subtract division (no runtime u64 division).
+            let den = NonZeroU64::new(a << IDX_FRAC).unwrap_or(NonZeroU64::MIN);
+            let (q, r) = div_rem_u64(((dv * 1000) << IDX_FRAC) + a * (IDX_ONE / 2 - lead) as u64, den);
+            q + (r != 0) as u64
+        } else {
+            Self::ramp_ms(&cfg)
+        }
+        .max(1);
         if n > L as u64 {
-            let reachable = match cfg.shape {
-                // 64-bit integers: the same whole part as the exact quotient.
-                Shape::Trapezoid => cfg.v0 as u64 + cfg.accel as u64 * L as u64 / 1000,
-                Shape::SCurve => {
-                    cfg.v0 as u64 + u64_of(cfg.accel as f32 * L as f32 / 1000.0 / s_curve_stretch())
-                }
-            };
+            // 64-bit integers: the same whole part as the exact quotient.
+            let reachable = cfg.v0 as u64 + div_rem_u64(cfg.accel as u64 * L as u64, THOUSAND).0;
             return Err(RampError::TooLong { reachable_vmax: reachable.saturating_sub(1) as u32 });
         }
         let n = n as usize;
         for (i, p) in self.periods[..n].iter_mut().enumerate() {
-            *p = period_of_millihz(mean_millihz(&cfg, i, n));
+            *p = period_of_millihz(mean_millihz(&cfg, i, n, lead));
         }
         // Rates must never fall along the table (rounding at the top could otherwise wobble).
         for i in 1..n {
@@ -138,8 +156,15 @@ impl<const L: usize> RampTable<L> {
     }
 
     /// Period at a fractional index (Q20), interpolated between entries; `idx_q ≤ top_q()`.
-    /// Integer only (the engine calls it once per ms).
-    #[inline(always)]
+    /// Integer only (the engine's ramp half calls it a few times per ms; never the step
+    /// interrupt). The *rate* is interpolated linearly (as the distance sums assume), so a
+    /// walk at a constant number of entries per ms changes the rate by the same amount every
+    /// ms: a period interpolated linearly would be slow early in an entry and steep late in
+    /// it, up to the entries' rate ratio (3× at the bottom of a steep table). Period
+    /// `p1 + (1 − f)·Δ · p1 / (p1 + f·Δ)` (Δ = p0 − p1), the ratio from one 32-bit
+    /// division (a few cycles: the 64-bit shift-subtract one cost the ramp half enough to make
+    /// DMA fills late), rounded up (never faster than the line, to a 1/16-tick step).
+    #[inline(never)]
     pub fn period_at(&self, idx_q: u32) -> Period {
         let i = (idx_q >> IDX_FRAC) as usize;
         let f = idx_q & IDX_MASK;
@@ -147,8 +172,17 @@ impl<const L: usize> RampTable<L> {
         if f == 0 || i + 1 >= self.len as usize {
             return Period::from_bits(p);
         }
-        let d = p - self.periods[i + 1].to_bits();
-        Period::from_bits(p - ((d as u64 * f as u64) >> IDX_FRAC) as u32)
+        let p1 = self.periods[i + 1].to_bits();
+        let dlt = p - p1;
+        let den = p1 + ((dlt as u64 * f as u64) >> IDX_FRAC) as u32;
+        let x = ((dlt as u64 * (IDX_ONE - f) as u64 + IDX_MASK as u64) >> IDX_FRAC) as u32;
+        // p1 / den (≤ 1) in Q(a + b) with 15 bits or more: p1 shifted to the top of 32 bits,
+        // den down to 16 bits; the floors only make it larger (slower).
+        let a = p1.leading_zeros().min(31);
+        let b = (32 - den.leading_zeros()).saturating_sub(16);
+        let ratio = (p1 << a) / (den >> b).max(1) + 1;
+        let extra = ((x as u64 * ratio as u64) >> (a + b)).min(dlt as u64) as u32;
+        Period::from_bits(p1 + extra + 1).min(Period::from_bits(p))
     }
 
     /// Steps per ms at entry `idx_q >> 20` (1/256 step): the slope of [`Self::sum_at`].
@@ -224,6 +258,37 @@ pub(super) mod tests {
             r ^= r >> 7;
             r ^= r << 17;
             (r % n as u64) as u32
+        }
+    }
+
+    /// The rate is linear between entries (to the quotient's rounding, a 1/16-tick period step,
+    /// and the fraction's, relative to the faster entry's period), never above the
+    /// line, and entry 0 is `v0` plus `lead` ms of the acceleration.
+    #[test]
+    fn rate_is_interpolated_linearly_and_led() {
+        let mut next = xorshift();
+        let mut t = RampTable::<RAMP_LEN>::new();
+        for _ in 0..200 {
+            let v0 = MIN_RATE_HZ + next(3_000);
+            let accel = 1_000 + next(50_000_000);
+            let lead = next(IDX_ONE / 2 + 1);
+            let cfg = RampConfig { v0, vmax: v0 + next(100_000), accel, shape: Shape::Trapezoid };
+            if t.build_led(cfg, lead).is_err() {
+                continue;
+            }
+            let hz = |p: Period| TIMER_HZ as f64 * 16.0 / p.to_bits() as f64;
+            let e0 = v0 as f64 + accel as f64 * lead as f64 / IDX_ONE as f64 / 1000.0;
+            assert!((hz(t.period(0)) - e0.min(cfg.vmax as f64)).abs() <= 1e-3 * e0 + 0.01, "{cfg:?} {lead}: {}", hz(t.period(0)));
+            for _ in 0..50 {
+                let q = next(t.top_q() + 1);
+                let (i, f) = ((q >> IDX_FRAC) as usize, (q & IDX_MASK) as f64 / IDX_ONE as f64);
+                let (r0, r1) = (hz(t.period(i)), hz(t.period((i + 1).min(t.len() - 1))));
+                let line = r0 + f * (r1 - r0);
+                let got = hz(t.period_at(q));
+                let p1b = t.period((i + 1).min(t.len() - 1)).to_bits() as f64;
+                let step = got * got / (TIMER_HZ as f64 * 16.0);
+                assert!(got <= line * (1.0 + 1e-9) && got >= line - line * (2.0 / p1b + 4e-5) - 2.0 * step - 1e-6, "{cfg:?} q {q}: {got} vs {line}");
+            }
         }
     }
 

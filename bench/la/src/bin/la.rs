@@ -45,6 +45,22 @@ struct Args {
     /// Write a PNG of step rate and slave deviation over time.
     #[arg(long, value_name = "PNG")]
     plot: Option<PathBuf>,
+    /// Write a PNG of the step lines of the axes that step, as a logic analyzer shows them,
+    /// over a short window (see --pulses-at, --pulses-us).
+    #[arg(long, value_name = "PNG")]
+    pulses: Option<PathBuf>,
+    /// With --pulses: the window starts this long after the first rising step edge.
+    #[arg(long, value_name = "MS", default_value_t = 0.0)]
+    pulses_at: f64,
+    /// With --pulses: the window's length.
+    #[arg(long, value_name = "US", default_value_t = 100.0)]
+    pulses_us: f64,
+    /// Write a PNG of the XY path of the first two axes that step, coloured by path speed.
+    #[arg(long, value_name = "PNG")]
+    path: Option<PathBuf>,
+    /// With --path: steps per mm (the same on both axes); positions and speed in mm, not steps.
+    #[arg(long, value_name = "STEPS")]
+    per_mm: Option<f64>,
     /// Print the report as JSON instead, or write it to FILE as well.
     #[arg(long, value_name = "FILE", num_args = 0..=1, default_missing_value = "-")]
     json: Option<PathBuf>,
@@ -154,7 +170,50 @@ fn run(args: &Args) -> Result<bool> {
         );
         la::plot::write_png(&report, &title, path)?;
     }
+    if args.pulses.is_some() || args.path.is_some() {
+        pictures(args, &axes, &file_name(&args.capture))?;
+    }
     Ok(report.passed())
+}
+
+// the capture's file name, for titles
+fn file_name(path: &Path) -> String {
+    path.file_name().map_or("capture".into(), |n| n.to_string_lossy().into_owned())
+}
+
+// --pulses and --path: a second pass keeps the mapped lines in memory and draws them
+fn pictures(args: &Args, axes: &[AxisChannels], name: &str) -> Result<()> {
+    let ok = |v: f64| v.is_finite() && v >= 0.0;
+    if !ok(args.pulses_at) || !ok(args.pulses_us) || args.pulses_us == 0.0 {
+        return Err(anyhow!("--pulses-at must be 0 or more and --pulses-us more than 0"));
+    }
+    if args.per_mm.is_some_and(|p| !(p.is_finite() && p > 0.0)) {
+        return Err(anyhow!("--per-mm must be more than 0"));
+    }
+    let rate = args.samplerate.as_deref().map(parse_rate).transpose()?;
+    let mut capture = la::open(&args.capture, args.format, rate)?;
+    let mut trace = la::trace::Trace::new(axes, args.dir_invert);
+    capture
+        .stream(&mut trace)
+        .with_context(|| format!("cannot read {}", args.capture.display()))?;
+    if let Some(path) = &args.pulses {
+        let first = trace.first_step_ps().ok_or_else(|| anyhow!("--pulses: no step edges"))?;
+        let from = first + (args.pulses_at * 1e9).round() as u64;
+        let title = format!("{name} at {} ms, {} us", args.pulses_at, args.pulses_us);
+        let len = (args.pulses_us * 1e6).round() as u64;
+        la::pulses::write_png(&trace, from, len, &title, path)?;
+        let counts: Vec<String> = (0..trace.axes.len())
+            .filter(|&i| !trace.axes[i].steps.is_empty())
+            .map(|i| format!("{} {}", trace.axes[i].name, la::pulses::rising_in(&trace, i, from, from + len)))
+            .collect();
+        println!("pulses: {} rising edges in {} us from {} ms after the first ({})", counts.join(", "), args.pulses_us, args.pulses_at, path.display());
+    }
+    if let Some(path) = &args.path {
+        let (per, unit) = args.per_mm.map_or((1.0, "steps"), |p| (p, "mm"));
+        let top = la::path::write_png(&trace, per, unit, name, path)?;
+        println!("path: top XY speed {top:.0} {unit}/min over 5 ms ({})", path.display());
+    }
+    Ok(())
 }
 
 // channel names of one axis

@@ -20,3 +20,4 @@ pub(super) const SCS: u32 = 0xE000_E000;
 pub(super) const DWT_CTRL: u32 = 0xE000_1000;
 pub(super) const DWT_CYCCNT: u32 = 0xE000_1004;
 pub(super) const DEMCR: u32 = 0xE000_EDFC;
+pub(super) const CPUID: u32 = ddastep::grbl::chip::CPUID_ADDR;

@@ -58,6 +58,7 @@ impl Mcu {
             0xE000_E010..=0xE000_E01F => self.systick.read(word - 0xE000_E010, t),
             DWT_CTRL => self.dwt.ctrl | DWT_NUMCOMP_4,
             DWT_CYCCNT => self.dwt.cyccnt(t),
+            CPUID => self.cpuid,
             SCS..=0xE000_EFFF if self.nvic.read(word - SCS).is_some() => self.nvic.read(word - SCS).unwrap(),
             _ => self.plain_read(word),
         }

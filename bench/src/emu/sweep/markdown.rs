@@ -121,6 +121,22 @@ pub fn results_markdown(s: &Sweep, others: &[Sweep], command: &str, firmware: &s
         writeln!(m, "At this feed (5 kHz master) most step ticks are far apart; the max is a start from rest or")?;
         writeln!(m, "the end of a chain. Moves changing at the rate cap are measured below.\n")?;
     }
+    writeln!(m, "### Ramp half: trapezoid and S-curve\n")?;
+    {
+        writeln!(m, "The engine's ramp half (the TIM4 vector the step interrupt pends at each ramp millisecond,")?;
+        writeln!(m, "trigger and move start) on a ramp-heavy job: {}; `cargo bench -p ddastep-bench --target", crate::emu::ramp_half::JOB)?;
+        writeln!(m, "host-tuple --bench ramp_half` prints the same. S-curve mode maps every ramp leg through the")?;
+        writeln!(m, "logistic there (and finds each move's peak once), the step interrupt is the same.\n")?;
+        writeln!(m, "| `$41` | motion | ramp half, modeled cycles per ms of motion (share of the CPU) |")?;
+        writeln!(m, "|---|---:|---:|")?;
+        for shape in [0, 1] {
+            let mut b = Board::load(elf)?;
+            let r = crate::emu::ramp_half::measure(&mut b, shape)?;
+            let name = if shape == 0 { "0 (trapezoid)" } else { "1 (S-curve)" };
+            writeln!(m, "| {name} | {:.0} ms | {:.0} ({:.2} %) |", r.ms, r.per_ms(), r.per_ms() / (HZ / 1000) as f64 * 100.0)?;
+        }
+        writeln!(m)?;
+    }
     writeln!(m, "### Moves changing at the rate cap\n")?;
     writeln!(m, "`ddastep_bench::emu::changes::back_to_back`, as `bench/tests/firmware_lookahead.rs` runs it: the")?;
     writeln!(m, "sweep's settings, one long move, then {} short ones (200 master steps each) queued behind it,", crate::emu::changes::MOVES)?;

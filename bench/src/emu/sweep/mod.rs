@@ -30,4 +30,4 @@ pub use measure::{boot, run_point};
 pub use point::{point_line, point_text, verdict_text, Point, Verdict};
 pub use search::{sweep, Bracket, Options, Row, Sweep};
 pub use setup::{settings_lines, Mode, PULSE_US, RATIO};
-pub use stamp::firmware_commit;
+pub use stamp::{firmware_commit, image_sizes};

@@ -36,16 +36,31 @@ pub fn firmware_commit() -> String {
     }
 }
 
-// bytes the ELF puts in flash
+// bytes the ELF puts in flash, counted as everywhere else (`image_sizes`: text + data)
 pub(super) fn flash_bytes(elf: &Path) -> u64 {
-    use object::read::elf::{FileHeader, ProgramHeader};
-    let Ok(bytes) = std::fs::read(elf) else { return 0 };
-    let Ok(h) = object::elf::FileHeader32::<object::Endianness>::parse(&*bytes) else { return 0 };
-    let Ok(endian) = h.endian() else { return 0 };
-    h.program_headers(endian, &*bytes).map_or(0, |phs| {
-        phs.iter()
-            .filter(|ph| ph.p_type(endian) == object::elf::PT_LOAD && (0x0800_0000..0x0801_0000).contains(&ph.p_paddr(endian)))
-            .map(|ph| ph.p_filesz(endian) as u64)
-            .sum()
-    })
+    image_sizes(elf).0
+}
+
+/// (flash, static RAM) bytes of the ELF, as `arm-none-eabi-size` counts them (text + data,
+/// data + bss): the one count RESULTS.md and docs/performance.md print.
+pub fn image_sizes(elf: &Path) -> (u64, u64) {
+    use object::{Object, ObjectSection, SectionFlags};
+    let Ok(bytes) = std::fs::read(elf) else { return (0, 0) };
+    let Ok(file) = object::File::parse(&*bytes) else { return (0, 0) };
+    let (mut flash, mut ram) = (0, 0);
+    for sec in file.sections() {
+        let SectionFlags::Elf { sh_flags } = sec.flags() else { continue };
+        if sh_flags & u64::from(object::elf::SHF_ALLOC) == 0 {
+            continue;
+        }
+        let in_ram = (0x2000_0000..0x2000_5000).contains(&sec.address());
+        let nobits = sec.kind() == object::SectionKind::UninitializedData;
+        if !in_ram || !nobits {
+            flash += if nobits { 0 } else { sec.size() };
+        }
+        if in_ram {
+            ram += sec.size();
+        }
+    }
+    (flash, ram)
 }

@@ -3,6 +3,9 @@
 //!
 //! Who uses it: the step path (on a control change, a rest, a held tick) and a move change
 //! that finds nothing queued.
+//!
+//! Each function has a section of its own (in flash's `.text`): the machine outliner leaves
+//! functions with an explicit section alone, so no step-path code becomes a call.
 
 use core::sync::atomic::Ordering::Relaxed;
 
@@ -16,6 +19,7 @@ use crate::TICKS_PER_MS;
 impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
     /// The control word changed: an immediate stop, or a feed hold on or off.
     #[inline(never)]
+    #[cfg_attr(target_os = "none", link_section = ".text.step.control")]
     pub(super) fn control(&mut self, ctl: Ctl) {
         let old = core::mem::replace(&mut self.ctl_seen, ctl);
         if ctl.stopped_since(old) && self.phase != Phase::Idle {
@@ -42,6 +46,7 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
 
     /// A hold came to rest: no more steps until it is released.
     #[inline(never)]
+    #[cfg_attr(target_os = "none", link_section = ".text.step.halt")]
     pub(super) fn halt(&mut self) -> (u32, u32) {
         self.phase = Phase::Held;
         self.publish(State::Held);
@@ -64,6 +69,7 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
 
     /// An immediate stop: the running move ends where it is, each axis at the steps it made.
     #[inline(never)]
+    #[cfg_attr(target_os = "none", link_section = ".text.step.stop_move")]
     pub(super) fn stop_move(&mut self) {
         // SAFETY: the running slot; a plain field.
         let total = unsafe { (*self.cur).total };
