@@ -98,6 +98,9 @@ fn plan(cmd: &str) -> Option<Plan> {
         "cargo bench -p ddastep-bench --target host-tuple --bench plan_line" => {
             Skip("a benchmark: numbers only, a minute of the emulator")
         }
+        "cargo bench -p ddastep-bench --target host-tuple --bench ramp_half" => {
+            Skip("a benchmark: numbers only, the emulator on two moves in both ramp shapes")
+        }
         "cargo build --release && arm-none-eabi-size target/thumbv7m-none-eabi/release/ddastep" => {
             Skip("run from the repository root by bench/tests/firmware_size.rs (the same size check)")
         }
