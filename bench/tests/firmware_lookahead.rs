@@ -19,20 +19,8 @@ fn speeds(s: &[Step], from: u64, to: u64) -> Vec<f64> {
 #[test]
 fn circle_of_360_segments_runs_near_its_feed() {
     let mut b = boot();
-    let g = std::fs::read_to_string(ddastep_bench::emu::repo_root().join("bench/demo/circle360.gcode")).unwrap();
-    let lines: Vec<String> = gcode_lines(&g);
-    // Settings and the move to the start point, then wait, so the circle starts from rest.
-    let start = lines.iter().position(|l| l.starts_with("G1")).unwrap();
-    for l in &lines[..=start] {
-        ok(&mut b, l);
-    }
-    wait_idle(&mut b, 2.0);
-    let t0 = b.cycles();
-    for l in &lines[start + 1..] {
-        ok(&mut b, l);
-    }
-    wait_idle(&mut b, 10.0);
-    let s: Vec<Step> = steps(&b).into_iter().filter(|s| s.cycle >= t0).collect();
+    // (From rest: the settings and the move to the start point come first.)
+    let s = circle360_steps(&mut b);
     let (first, last) = (s[0].cycle, s[s.len() - 1].cycle);
     let took = (last - first) as f64 / HZ as f64;
     // Ideal: the polygon's length at F3000 plus one acceleration and one deceleration at 500 mm/s².

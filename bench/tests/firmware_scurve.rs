@@ -3,7 +3,7 @@
 
 mod firmware_rig;
 
-use ddastep_bench::emu::{gcode_lines, HZ};
+use ddastep_bench::emu::HZ;
 use firmware_rig::*;
 
 /// X's step times (cycles) for `G91 G1 X60 F3000` at `$120=2000` with `$41` = `shape`.
@@ -71,19 +71,7 @@ fn one_move_ramps_up_as_an_s_at_its_own_acceleration() {
 fn circle_of_360_segments_runs_near_its_feed_in_s_mode() {
     let mut b = boot();
     ok(&mut b, "$41=1");
-    let g = std::fs::read_to_string(ddastep_bench::emu::repo_root().join("bench/demo/circle360.gcode")).unwrap();
-    let lines: Vec<String> = gcode_lines(&g);
-    let start = lines.iter().position(|l| l.starts_with("G1")).unwrap();
-    for l in &lines[..=start] {
-        ok(&mut b, l);
-    }
-    wait_idle(&mut b, 2.0);
-    let t0 = b.cycles();
-    for l in &lines[start + 1..] {
-        ok(&mut b, l);
-    }
-    wait_idle(&mut b, 10.0);
-    let s: Vec<Step> = steps(&b).into_iter().filter(|s| s.cycle >= t0).collect();
+    let s = circle360_steps(&mut b);
     let took = (s[s.len() - 1].cycle - s[0].cycle) as f64 / HZ as f64;
     // Ideal: the polygon's length at F3000 plus one S up and one S down peaking at 500 mm/s²
     // (each as long as the trapezoid at 500 / k, k = 2.075 for `$582=4`).

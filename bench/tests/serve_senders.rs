@@ -143,6 +143,22 @@ fn wait_state(c: &mut Client, want: &str, timeout: Duration) -> String {
     }
 }
 
+/// A short job streamed as stream.py does, 35 lines of 4 to 30 bytes (more than 128 bytes in
+/// flight without counting): every reply `ok`, the board idle at the summed X, no error.
+fn short_job_ends_where_it_should(c: &mut Client) {
+    let mut job = vec!["G91", "G21"];
+    let moves: Vec<String> = (0..32).map(|i| format!("G1 X{}.25 Y-0.125 F{}", i % 3, 3000 + 60 * i)).collect();
+    job.extend(moves.iter().map(String::as_str));
+    job.push("G90");
+    let replies = stream_py(c, &job);
+    assert_eq!(replies.len(), job.len());
+    assert!(replies.iter().all(|r| r == "ok"), "{replies:?}");
+    let s = wait_state(c, "Idle", Duration::from_secs(10));
+    let x: f64 = (0..32).map(|i| (i % 3) as f64 + 0.25).sum();
+    assert!((mpos_x(&s) - x).abs() < 0.006, "{s}: X should be {x}");
+    assert!(c.errors().is_empty(), "{:?}", c.errors());
+}
+
 #[test]
 fn ugs_then_stream_py_over_the_pty_symlink() {
     let link = std::env::temp_dir().join(format!("ttyBLUEPILL-{}", std::process::id()));
@@ -152,18 +168,7 @@ fn ugs_then_stream_py_over_the_pty_symlink() {
     let mut c = Client::pty(link.to_str().unwrap());
     ugs_connect(&mut c);
     bench_settings(&mut c);
-    // A short job, 35 lines of 4 to 30 bytes: more than 128 bytes in flight without counting.
-    let mut job = vec!["G91", "G21"];
-    let moves: Vec<String> = (0..32).map(|i| format!("G1 X{}.25 Y-0.125 F{}", i % 3, 3000 + 60 * i)).collect();
-    job.extend(moves.iter().map(String::as_str));
-    job.push("G90");
-    let replies = stream_py(&mut c, &job);
-    assert_eq!(replies.len(), job.len());
-    assert!(replies.iter().all(|r| r == "ok"), "{replies:?}");
-    let s = wait_state(&mut c, "Idle", Duration::from_secs(10));
-    let x: f64 = (0..32).map(|i| (i % 3) as f64 + 0.25).sum();
-    assert!((mpos_x(&s) - x).abs() < 0.006, "{s}: X should be {x}");
-    assert!(c.errors().is_empty(), "{:?}", c.errors());
+    short_job_ends_where_it_should(&mut c);
     drop(c);
     let err = server.stop();
     assert!(err.contains("stopped (Ctrl-C)"), "{err}");
@@ -336,17 +341,7 @@ fn ugs_then_stream_py_over_usb() {
     let mut c = Client::pty(link.to_str().unwrap());
     ugs_connect(&mut c);
     bench_settings(&mut c);
-    let mut job = vec!["G91", "G21"];
-    let moves: Vec<String> = (0..32).map(|i| format!("G1 X{}.25 Y-0.125 F{}", i % 3, 3000 + 60 * i)).collect();
-    job.extend(moves.iter().map(String::as_str));
-    job.push("G90");
-    let replies = stream_py(&mut c, &job);
-    assert_eq!(replies.len(), job.len());
-    assert!(replies.iter().all(|r| r == "ok"), "{replies:?}");
-    let s = wait_state(&mut c, "Idle", Duration::from_secs(10));
-    let x: f64 = (0..32).map(|i| (i % 3) as f64 + 0.25).sum();
-    assert!((mpos_x(&s) - x).abs() < 0.006, "{s}: X should be {x}");
-    assert!(c.errors().is_empty(), "{:?}", c.errors());
+    short_job_ends_where_it_should(&mut c);
     drop(c);
     let err = server.stop();
     assert!(err.contains("stopped (Ctrl-C)"), "{err}");

@@ -198,3 +198,21 @@ pub fn assert_paper_cruise(b: &Board, s: &[Step], min_ns: f64) -> ddastep_bench:
     }
     r
 }
+
+/// Runs `bench/demo/circle360.gcode` from rest (its settings and the move to the start point
+/// first, then a wait) and returns the circle's steps.
+pub fn circle360_steps(b: &mut Board) -> Vec<Step> {
+    let g = std::fs::read_to_string(ddastep_bench::emu::repo_root().join("bench/demo/circle360.gcode")).unwrap();
+    let lines: Vec<String> = ddastep_bench::emu::gcode_lines(&g);
+    let start = lines.iter().position(|l| l.starts_with("G1")).unwrap();
+    for l in &lines[..=start] {
+        ok(b, l);
+    }
+    wait_idle(b, 2.0);
+    let t0 = b.cycles();
+    for l in &lines[start + 1..] {
+        ok(b, l);
+    }
+    wait_idle(b, 10.0);
+    steps(b).into_iter().filter(|s| s.cycle >= t0).collect()
+}
