@@ -122,7 +122,7 @@ impl<const L: usize> RampTable<L> {
         }
         let n = n as usize;
         for (i, p) in self.periods[..n].iter_mut().enumerate() {
-            *p = period_of_millihz(mean_millihz(&cfg, i, n, lead));
+            *p = period_of_millihz(mean_millihz(&cfg, i, lead));
         }
         // Rates must never fall along the table (rounding at the top could otherwise wobble).
         for i in 1..n {
