@@ -50,6 +50,7 @@ mod timer;
 mod usart;
 pub mod usb;
 pub mod usb_host;
+pub mod usb_splits;
 pub mod vcd_out;
 
 pub use board::Board;
