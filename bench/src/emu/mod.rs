@@ -39,6 +39,7 @@ pub mod profile;
 pub mod pwm;
 pub mod qenc;
 pub mod ramp_half;
+pub mod raster;
 mod report;
 mod stats;
 pub mod summary;
