@@ -311,9 +311,9 @@ fn position(b: &mut Board) -> [i64; 7] {
     std::array::from_fn(|a| v[a])
 }
 
-/// 10⁵ lines, the count (about 78 s modeled, 65 to 80 s of host time: the emulator
-/// spends it running the firmware's parse and plan of each line, which no fast-forward can
-/// skip).
+/// 10⁵ lines, the count: about 78 s modeled with the CPU 99 % busy (some 56 000
+/// modeled cycles a line, nearly all parse and plan, which no fast-forward can skip), 65 to
+/// 80 s of host CPU. A cheaper parse and plan makes it shorter.
 #[test]
 fn usb_stream_of_1e5_lines_with_random_packet_splits_loses_or_doubles_no_byte() {
     no_byte_lost_or_doubled(100_000);
