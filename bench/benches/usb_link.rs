@@ -5,20 +5,23 @@
 //! port's interrupts run: stm32-usbd masks every interrupt (PRIMASK) around its register and
 //! packet-memory accesses, which the step interrupt sees as latency.
 //!
-//! Then the LaserGRBL-style raster of issue 27 (`M4`, one `X… S…` line per 0.1 mm pixel at
-//! F6000, rows alternating: 1 000 lines/s of motion), streamed with character counting over
-//! each port on the bench settings (100 steps/mm; preloaded in flash, at 126 K in the `usb`
-//! build), against the same path sent as one line per row: lines/s, the time ratio, and the
-//! 1 ms windows without a step while the raster runs.
+//! Then the LaserGRBL-style raster of issue 27 (`emu::raster`; `M4`, one `X… S…` line per pixel at F6000,
+//! rows alternating: 0.1 mm pixels are 1 000 lines/s of motion, 0.05 mm pixels 2 000), streamed
+//! with character counting over each port on the bench settings (100 steps/mm; preloaded in
+//! flash, at 126 K in the `usb` build), against the same path sent as one line per row:
+//! lines/s, the time ratio, the 1 ms windows without a step between the first and the last
+//! step (step-less ms, for the raster and for one line per row), and the planner fill while
+//! lines are still being sent. The fill comes from a third run that polls `?` every 10 ms
+//! with `Bf:` on (`$10=3`), as senders poll; the other two do not poll, so the poll does not
+//! touch their figures (its own line rate is printed beside the fill).
 //!
 //! `cargo bench -p ddastep-bench --target host-tuple --bench usb_link` (a few minutes; the
 //! first run builds the USB firmware in target/usb).
 
 use ddastep_bench::emu::nvic::IRQ0;
+use ddastep_bench::emu::raster;
 use ddastep_bench::emu::sender::{stream_char_count, Link};
-use ddastep::grbl::settings::Settings;
-use ddastep::grbl::store::Stored;
-use ddastep_bench::emu::{firmware_elf, firmware_usb_elf, Board, HZ, STEP_PINS, TIM2_IRQ, USART1_IRQ, USB_STORE_ADDR};
+use ddastep_bench::emu::{firmware_elf, firmware_usb_elf, Board, HZ, TIM2_IRQ, USART1_IRQ};
 
 /// USB_LP_CAN1_RX0.
 const USB_IRQ: u32 = 20;
@@ -69,97 +72,34 @@ fn run(link: Link) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Rows of `pixels` 0.1 mm pixels, alternating, one `G1 X… S…` line each (LaserGRBL's raster).
-fn raster(rows: usize, pixels: usize) -> Vec<String> {
-    let mut v = vec!["G90 G21".to_string(), "M4 S0".to_string(), "G0 X0 Y0".to_string(), "G1 F6000".to_string()];
-    for r in 0..rows {
-        v.push(format!("Y{:.1}", r as f64 * 0.1));
-        for p in 1..=pixels {
-            let x = if r % 2 == 0 { p } else { pixels - p };
-            // (Issue 27's line, `G1 X12.345 S123`: 720 lines/s at most at 115200 baud.)
-            v.push(format!("G1 X{:.3} S{}", x as f64 * 0.1, 100 + (x * 37 + r * 11) % 900));
-        }
-    }
-    v.push("M5".to_string());
-    v
-}
-
-/// The same path as one line per row.
-fn rows_only(rows: usize, pixels: usize) -> Vec<String> {
-    let mut v = vec!["G90 G21".to_string(), "M4 S0".to_string(), "G0 X0 Y0".to_string(), "G1 F6000".to_string()];
-    for r in 0..rows {
-        v.push(format!("Y{:.1}", r as f64 * 0.1));
-        v.push(format!("X{:.1} S500", if r % 2 == 0 { pixels as f64 * 0.1 } else { 0.0 }));
-    }
-    v.push("M5".to_string());
-    v
-}
-
-/// Streams `lines` over `link` on a fresh board with the bench settings and laser mode;
-/// returns (lines/s from the first line to the last reply, first to last step in s, 1 ms
-/// windows without a step between them).
-fn stream_job(link: Link, lines: &[String]) -> anyhow::Result<(f64, f64, usize)> {
-    let settings = Settings { laser_mode: true, ..Settings::BENCH };
-    let mut b = match link {
-        Link::Usart => {
-            let mut b = Board::load(firmware_elf()?)?;
-            b.write_mem(0x0800_0000 + 62 * 1024, &Stored::from(settings).to_bytes())?;
-            b
-        }
-        Link::Usb => {
-            let mut b = Board::load(firmware_usb_elf()?)?;
-            b.write_mem(USB_STORE_ADDR, &Stored::from(settings).to_bytes())?;
-            b
-        }
-    };
-    b.run_until(HZ / 2, |b| b.serial_output().contains("Grbl"))?;
-    if link == Link::Usb {
-        b.usb_connect(2 * HZ)?;
-        b.run_until(HZ / 10, |b| b.usb_output().contains("Grbl"))?;
-    }
-    let t0 = b.cycles();
-    // (The closing M5 waits for the motion to finish before its `ok`.)
-    stream_char_count(&mut b, link, lines, 30 * HZ)?;
-    let t1 = b.cycles();
-    b.run_seconds(0.5)?;
-    let steps: Vec<u64> = b
-        .edges()
-        .iter()
-        .filter(|e| e.port == 1 && e.level && STEP_PINS[..2].contains(&e.pin))
-        .map(|e| e.cycle)
-        .collect();
-    let (first, last) = (steps[0], *steps.last().unwrap());
-    let ms = HZ / 1000;
-    let mut idle = 0;
-    let mut i = 0;
-    for w in (first / ms)..(last / ms) {
-        while i < steps.len() && steps[i] < w * ms {
-            i += 1;
-        }
-        if i >= steps.len() || steps[i] >= (w + 1) * ms {
-            idle += 1;
-        }
-    }
-    Ok((lines.len() as f64 / ((t1 - t0) as f64 / HZ as f64), (last - first) as f64 / HZ as f64, idle))
-}
-
 fn main() -> anyhow::Result<()> {
     if !std::env::args().any(|a| a == "--bench") {
         return Ok(());
     }
     run(Link::Usart)?;
     run(Link::Usb)?;
-    let (rows, pixels) = (20, 200);
-    let r = raster(rows, pixels);
-    let whole = rows_only(rows, pixels);
-    for link in [Link::Usart, Link::Usb] {
-        let (rate, t, idle) = stream_job(link, &r)?;
-        let (_, t_rows, _) = stream_job(link, &whole)?;
-        println!(
-            "raster {rows} rows x {pixels} pixels of 0.1 mm at F6000 over {link:?}: {} lines at {rate:.0} lines/s; steps {t:.3} s, one line per row {t_rows:.3} s (x{:.2}); {idle} ms without a step",
-            r.len(),
-            t / t_rows
-        );
+    let mut table = vec![raster::TABLE_HEAD.to_string()];
+    for (pixels, pitch) in raster::PIXELS {
+        for link in [Link::Usart, Link::Usb] {
+            let f = raster::measure(link, pixels, pitch)?;
+            table.push(f.table_row());
+            let (mean, min) = f.polled.fill_mean_min();
+            println!(
+                "raster {} rows x {pixels} pixels of {pitch} mm at F6000 over {link:?}: {} lines at {:.0} lines/s; steps {:.3} s, one line per row {:.3} s (x{:.2}); step-less {} ms (1 ms windows without a step; one line per row: {} ms); planner fill while streaming mean {mean:.1}, min {min} of {} blocks ({} status reports, `?` every 10 ms with $10=3: that run {:.0} lines/s)",
+                raster::ROWS,
+                f.lines,
+                f.raster.lines_per_s,
+                f.raster.steps_s,
+                f.rows.steps_s,
+                f.raster.steps_s / f.rows.steps_s,
+                f.raster.stepless_ms,
+                f.rows.stepless_ms,
+                f.polled.blocks,
+                f.polled.fill.len(),
+                f.polled.lines_per_s,
+            );
+        }
     }
+    println!("As in bench/RESULTS.md (\"Streaming a LaserGRBL raster\"):\n{}", table.join("\n"));
     Ok(())
 }

@@ -39,6 +39,7 @@ pub mod profile;
 pub mod pwm;
 pub mod qenc;
 pub mod ramp_half;
+pub mod raster;
 mod report;
 mod stats;
 pub mod summary;
@@ -50,6 +51,7 @@ mod timer;
 mod usart;
 pub mod usb;
 pub mod usb_host;
+pub mod usb_splits;
 pub mod vcd_out;
 
 pub use board::Board;

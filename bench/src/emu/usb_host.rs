@@ -13,6 +13,7 @@
 use std::collections::VecDeque;
 
 use super::usb::{Handshake, UsbPeripheral};
+use super::usb_splits::Splits;
 
 /// One transaction slot (50 µs at 72 MHz).
 pub const SLOT_CYCLES: u64 = 3_600;
@@ -132,6 +133,10 @@ pub struct UsbHost {
     /// Writes not yet sent (each write is sent as 64-byte packets, the last one short).
     pub writes: VecDeque<Vec<u8>>,
     sending: Option<(Vec<u8>, usize)>,
+    /// Random OUT packet lengths across writes (else 64-byte packets, each write's last short).
+    pub splits: Option<Splits>,
+    /// The length of the OUT packet the device NAKed: its retry sends the same bytes.
+    out_len: Option<usize>,
     /// Last slot handled (absolute slot number).
     slot: u64,
     frame: u64,
@@ -164,6 +169,8 @@ impl Default for UsbHost {
             in_toggle: false,
             writes: VecDeque::new(),
             sending: None,
+            splits: None,
+            out_len: None,
             slot: 0,
             frame: 0,
             received: Vec::new(),
@@ -233,6 +240,7 @@ impl UsbHost {
         self.addr = 0;
         self.line_state = false;
         self.sending = None;
+        self.out_len = None;
         self.idle_since = Some(now);
     }
 
@@ -392,20 +400,38 @@ impl UsbHost {
             self.sending = self.writes.pop_front().map(|w| (w, 0));
         }
         let Some((data, at)) = &self.sending else { return };
-        let end = (*at + BULK_MAX).min(data.len());
-        let packet = data[*at..end].to_vec();
+        let packet: Vec<u8> = match &mut self.splits {
+            None => data[*at..(*at + BULK_MAX).min(data.len())].to_vec(),
+            Some(s) => {
+                let len = *self.out_len.get_or_insert_with(|| s.next_len(BULK_MAX));
+                let p: Vec<u8> = data[*at..].iter().chain(self.writes.iter().flatten()).take(len).copied().collect();
+                self.out_len = Some(p.len());
+                p
+            }
+        };
         match dev.out(self.addr, ep, self.out_toggle, &packet) {
             Handshake::Ack => {
                 self.out_toggle = !self.out_toggle;
+                self.out_len = None;
                 self.stats.bytes_out += packet.len() as u64;
-                let (data, _) = self.sending.take().unwrap();
-                // A write ending on a full packet ends there (cdc-acm sends no zero-length one).
-                if end < data.len() {
-                    self.sending = Some((data, end));
-                }
+                self.consume(packet.len());
             }
             Handshake::Nak => self.stats.naked_out += 1,
             other => self.stats.errors.push(format!("bulk OUT: {other:?}")),
+        }
+    }
+
+    // drop `n` bytes the device took from the front of the writes (a write ending on a full
+    // packet ends there: cdc-acm sends no zero-length one)
+    fn consume(&mut self, mut n: usize) {
+        while n > 0 {
+            let Some((data, at)) = &mut self.sending else { return };
+            let k = n.min(data.len() - *at);
+            *at += k;
+            n -= k;
+            if *at == data.len() {
+                self.sending = self.writes.pop_front().map(|w| (w, 0));
+            }
         }
     }
 

@@ -40,6 +40,12 @@ impl Board {
         self.cpu.get_data_mut().usb_host.write(bytes);
     }
 
+    // send the bytes written in OUT packets of random lengths (1..=64, across writes) drawn
+    // from `seed`, instead of 64-byte packets that end with each write
+    pub fn usb_random_splits(&mut self, seed: u64) {
+        self.cpu.get_data_mut().usb_host.splits = Some(crate::emu::usb_splits::Splits::new(seed));
+    }
+
     // bytes written to the tty and not yet taken by the board
     pub fn usb_pending(&self) -> usize {
         self.cpu.get_data().usb_host.pending()

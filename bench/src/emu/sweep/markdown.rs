@@ -154,6 +154,7 @@ pub fn results_markdown(s: &Sweep, others: &[Sweep], command: &str, firmware: &s
         writeln!(m, "| {axes} | {:.1} kHz | {:.1} / {} ({:.2}) | {} / {} | {} / {} |", hz / 1000.0, r.mean, r.max, r.ratio(), r.max_last, r.max_first, r.max_start, r.max_end)?;
     }
     writeln!(m)?;
+    raster_section(&mut m)?;
     writeln!(m, "## Results\n")?;
     m += &s.table();
     writeln!(m, "\nLoad cells: busiest measured window, CPU / step ISR; ¹ sustained except the CPU load (over 95 %),")?;
@@ -277,6 +278,31 @@ pub fn results_markdown(s: &Sweep, others: &[Sweep], command: &str, firmware: &s
     }
     writeln!(m, "```\n</details>")?;
     Ok(m)
+}
+
+// issue 27's raster over USART1 and the modeled USB (the `usb` build), as the usb_link
+// benchmark prints it
+fn raster_section(m: &mut String) -> Result<()> {
+    use crate::emu::raster;
+    use std::fmt::Write as _;
+    writeln!(m, "### Streaming a LaserGRBL raster: USART1 against USB\n")?;
+    writeln!(m, "`ddastep_bench::emu::raster`: {} rows of 20 mm at F6000 (`M4`, one `G1 X… S…` line per pixel, rows", raster::ROWS)?;
+    writeln!(m, "alternating), bench settings with laser mode, streamed with character counting over USART1 at")?;
+    writeln!(m, "115 200 baud and over the modeled USB (the `usb` build, `firmware_usb_elf`; the host of")?;
+    writeln!(m, "`emu/usb_host.rs`), against the same path sent as one line per row. Lines/s: first line")?;
+    writeln!(m, "written to the last reply. Steps: first to last step. Step-less ms: 1 ms windows without a")?;
+    writeln!(m, "step between the first and the last step. Planner fill: blocks queued in `Bf:` while lines")?;
+    writeln!(m, "are still being sent, from a third run that asks `?` every 10 ms with `$10=3` (the other two")?;
+    writeln!(m, "do not poll; the polled run's own line rate is in brackets). `cargo bench -p ddastep-bench")?;
+    writeln!(m, "--target host-tuple --bench usb_link` prints the same.\n")?;
+    writeln!(m, "{}", raster::TABLE_HEAD)?;
+    for (pixels, pitch) in raster::PIXELS {
+        for link in [crate::emu::sender::Link::Usart, crate::emu::sender::Link::Usb] {
+            writeln!(m, "{}", raster::measure(link, pixels, pitch)?.table_row())?;
+        }
+    }
+    writeln!(m)?;
+    Ok(())
 }
 
 /// Step-ISR cycles per master step at 50 kHz against the slave count, least squares: (base,
