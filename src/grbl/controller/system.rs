@@ -95,7 +95,7 @@ impl<const N: usize> Controller<'_, N> {
                 if what != b'#' {
                     let old = self.settings;
                     self.settings = Settings::DEFAULT;
-                    if old.pins::<N>() != self.settings.pins::<N>() || old.dma_burst != self.settings.dma_burst {
+                    if !old.same_pins::<N>(&self.settings) || old.dma_burst != self.settings.dma_burst {
                         self.settings_changed(Change::Pins, out);
                     }
                     self.settings_changed(Change::Profile, out);
