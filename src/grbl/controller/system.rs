@@ -68,8 +68,7 @@ impl<const N: usize> Controller<'_, N> {
             b"N" => {
                 need_idle(idle)?;
                 for (i, t) in self.stored.startup.iter().enumerate() {
-                    out.put(b"$N");
-                    crate::grbl::reply::put_u32(out, i as u32);
+                    crate::grbl::reply::put_u32_after(out, b"$N", i as u32);
                     out.put(b"=");
                     out.put(t.as_bytes());
                     out.put(b"\r\n");
