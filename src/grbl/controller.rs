@@ -391,7 +391,7 @@ impl<'a, const N: usize> Controller<'a, N> {
         c.startup_next = c.next_startup(0);
         c.enc_configure();
         c.apply_profile();
-        c.planner.sync(shared.positions(), &c.limits);
+        c.sync_planner();
         c
     }
 

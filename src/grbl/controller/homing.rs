@@ -107,9 +107,7 @@ impl<const N: usize> Controller<'_, N> {
                 h.start_at = self.now.wrapping_add(self.settings.homing_debounce_ms);
             }
             // Stopped at a switch or at the target: the engine's position is exact.
-            self.feeder.abort();
-            self.pushed = self.shared.moves_done();
-            self.planner.sync(self.shared.positions(), &self.limits);
+            self.flush_to_engine();
             h.moving = false;
         }
         if wrapping_diff(self.now, h.start_at) < 0 {

@@ -71,7 +71,7 @@ impl<const N: usize> Controller<'_, N> {
                     crate::grbl::reply::put_ok(out);
                 }
                 self.pushed = self.shared.moves_done();
-                self.planner.sync(self.shared.positions(), &self.limits);
+                self.sync_planner();
                 self.jog = Jogging::Stopping;
             }
             Jogging::Stopping => {

@@ -58,9 +58,24 @@ impl<const N: usize> Controller<'_, N> {
     /// After a soft reset: once the engine has stopped, its position is the planner's.
     pub(super) fn take_position(&mut self) {
         if self.resync && self.shared.state() == State::Idle {
-            self.planner.sync(self.shared.positions(), &self.limits);
+            self.sync_planner();
             self.resync = false;
         }
+    }
+
+    /// Drops the queue and takes the engine's position, which must stand still (a switch,
+    /// a hard limit), as the planner's.
+    #[inline(never)]
+    pub(super) fn flush_to_engine(&mut self) {
+        self.feeder.abort();
+        self.pushed = self.shared.moves_done();
+        self.sync_planner();
+    }
+
+    /// The engine's position as the planner's.
+    #[inline(never)]
+    pub(super) fn sync_planner(&mut self) {
+        self.planner.sync(self.shared.positions(), &self.limits);
     }
 
     /// Queue empty and engine idle (not held): G4, flash writes, `$` settings may act.

@@ -71,6 +71,6 @@ impl<const N: usize> Controller<'_, N> {
     fn probe_done(&mut self) {
         self.feeder.abort();
         self.pushed = self.shared.moves_done();
-        self.planner.sync(self.shared.positions(), &self.limits);
+        self.sync_planner();
     }
 }

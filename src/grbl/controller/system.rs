@@ -172,7 +172,7 @@ impl<const N: usize> Controller<'_, N> {
                 self.axes = self.settings.axis_count(N);
                 self.limits = self.settings.planner_limits(self.ramped.cfg.vmax);
                 self.apply_profile();
-                self.planner.sync(self.shared.positions(), &self.limits);
+                self.sync_planner();
             }
         }
         // Any change re-zeroes the encoder check (settings change only at rest).
