@@ -161,7 +161,7 @@ impl<const N: usize> Controller<'_, N> {
         h.epoch = self.shared.epoch();
         match planner.line(&mm, Some(feed), &self.limits) {
             Ok(Some(pl)) => {
-                if !self.push(pl, false, Power::default()) {
+                if !self.push(&pl, false, Power::default()) {
                     self.homing = Some(h);
                     return; // drivers settling or queue busy: next poll
                 }

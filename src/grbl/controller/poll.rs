@@ -64,7 +64,7 @@ impl<const N: usize> Controller<'_, N> {
     }
 
     /// Drops the queue and takes the engine's position, which must stand still (a switch,
-    /// a hard limit), as the planner's.
+    /// a hard limit, the end of a probe cycle), as the planner's.
     #[inline(never)]
     pub(super) fn flush_to_engine(&mut self) {
         self.feeder.abort();
@@ -122,7 +122,7 @@ impl<const N: usize> Controller<'_, N> {
     }
 
     /// Pushes one planned move; false while it does not fit (or the drivers are settling).
-    pub(super) fn push(&mut self, pl: Planned<N>, jog: bool, power: Power) -> bool {
+    pub(super) fn push(&mut self, pl: &Planned<N>, jog: bool, power: Power) -> bool {
         if !self.drivers_ready() {
             self.drivers_on = true;
             return false;
@@ -192,7 +192,7 @@ impl<const N: usize> Controller<'_, N> {
                 break 'run false;
             }
             for slot in [&mut job.mv, &mut job.mv2] {
-                if let Some(pl) = *slot {
+                if let Some(pl) = slot {
                     if !self.push(pl, job.jog, job.power) {
                         break 'run false;
                     }
@@ -208,7 +208,7 @@ impl<const N: usize> Controller<'_, N> {
                     break;
                 };
                 job.mv = plan(&mut self.planner, &p, &[None; N], job.rate, &self.limits, &self.ramped.cfg).unwrap_or(None);
-                if let Some(pl) = job.mv {
+                if let Some(pl) = &job.mv {
                     if !self.push(pl, false, job.power) {
                         break 'run false;
                     }
