@@ -52,9 +52,21 @@ impl Text {
     /// `None` when longer than [`TEXT_LEN`].
     pub fn new(s: &[u8]) -> Option<Text> {
         let mut t = Text::EMPTY;
-        copy_bytes(t.buf.get_mut(..s.len())?, s);
-        t.len = s.len() as u8;
-        Some(t)
+        t.set(s).then_some(t)
+    }
+
+    /// Sets the text to `s` in place (the rest of the buffer zero, as [`Self::new`] leaves
+    /// it); false, and unchanged, when `s` is longer than [`TEXT_LEN`].
+    #[inline(never)]
+    pub fn set(&mut self, s: &[u8]) -> bool {
+        if s.len() > TEXT_LEN {
+            return false;
+        }
+        for (i, b) in self.buf.iter_mut().enumerate() {
+            *b = s.get(i).copied().unwrap_or(0);
+        }
+        self.len = s.len() as u8;
+        true
     }
 
     pub fn as_bytes(&self) -> &[u8] {
@@ -139,7 +151,9 @@ impl Stored {
         s.coords = Coords::from_bytes(&b[COORDS_AT..TEXT_AT])?;
         let texts = s.startup.iter_mut().chain(core::iter::once(&mut s.build_info));
         for (w, t) in b[TEXT_AT..].chunks_exact(TEXT_LEN + 1).zip(texts) {
-            *t = Text::new(w.get(1..1 + w[0] as usize)?)?;
+            if !t.set(w.get(1..1 + w[0] as usize)?) {
+                return None;
+            }
         }
         Some(s)
     }

@@ -11,7 +11,7 @@ use crate::error::Error;
 use crate::grbl::reply::Out;
 use crate::grbl::report::{self, PARAM_LINES, SETTING_LEN};
 use crate::grbl::settings::{Change, Settings};
-use crate::grbl::store::{Text, STARTUP_LINES};
+use crate::grbl::store::{Text, STARTUP_LINES, TEXT_LEN};
 
 impl<const N: usize> Controller<'_, N> {
     /// A `$` line (without the `$`).
@@ -62,7 +62,9 @@ impl<const N: usize> Controller<'_, N> {
             }
             [b'I', b'=', text @ ..] => {
                 need_idle(idle)?;
-                self.stored.build_info = Text::new(text).ok_or(Error::LineLengthExceeded)?;
+                if !self.stored.build_info.set(text) {
+                    return Err(Error::LineLengthExceeded);
+                }
                 self.save_later(out);
             }
             b"N" => {
@@ -146,10 +148,12 @@ impl<const N: usize> Controller<'_, N> {
         if !(0.0..STARTUP_LINES as f32).contains(&slot) {
             return Err(Error::InvalidStatement);
         }
-        let text = Text::new(line).ok_or(Error::LineLengthExceeded)?;
+        if line.len() > TEXT_LEN {
+            return Err(Error::LineLengthExceeded);
+        }
         self.gcode(line, out)?;
         if let Some(s) = self.stored.startup.get_mut(u32_of(slot) as usize) {
-            *s = text;
+            s.set(line);
         }
         self.save_later(out);
         Ok(())
