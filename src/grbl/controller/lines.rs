@@ -218,9 +218,10 @@ pub(super) fn plan<const N: usize>(
     lim: &Limits<N>,
     cfg: &RampConfig,
 ) -> Result<Option<Planned<N>>, Error> {
-    let feed = match rate {
-        Rate::Rapid => return planner.line_exact(target, exact, None, lim),
-        Rate::Feed(f) => f,
+    // G93 plans from rest to rest: no junction speed on either side.
+    let (feed, rest) = match rate {
+        Rate::Rapid => (None, false),
+        Rate::Feed(f) => (Some(f), false),
         Rate::Minutes(t) => {
             // At 1 mm/min no axis limit binds: the planner's rate is exactly master / (len·60).
             let mut dry = *planner;
@@ -235,12 +236,13 @@ pub(super) fn plan<const N: usize>(
                 }
                 None => 1.0,
             };
-            // From rest to rest: no junction speed on either side.
             planner.rest();
-            let planned = planner.line_exact(target, exact, Some(feed), lim);
-            planner.rest();
-            return planned;
+            (Some(feed), true)
         }
     };
-    planner.line_exact(target, exact, Some(feed), lim)
+    let planned = planner.line_exact(target, exact, feed, lim);
+    if rest {
+        planner.rest();
+    }
+    planned
 }
