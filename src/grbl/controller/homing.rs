@@ -67,9 +67,8 @@ impl<const N: usize> Controller<'_, N> {
             start_at: self.now,
             target: [0; 3],
         });
-        let mut job = super::Job::none();
-        job.home = true;
-        self.start(job, out);
+        self.new_job().home = true;
+        self.advance(false, out);
         Ok(())
     }
 

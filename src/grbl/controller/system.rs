@@ -2,7 +2,7 @@
 //! `$H`, `$J=`, `$SLP`, `$RST=$/#/*`, and `$N=value` settings. Long listings are written a line
 //! at a time as TX room appears.
 
-use super::{Controller, Job, Listing};
+use super::{Controller, Listing};
 use crate::grbl::chip;
 use crate::grbl::coords::Coords;
 use crate::grbl::gcode;
@@ -128,9 +128,8 @@ impl<const N: usize> Controller<'_, N> {
 
     /// Starts a long listing (`$$`, `$#`, the end of `$I`).
     fn start_listing(&mut self, l: Listing, out: &mut impl Out) {
-        let mut job = Job::none();
-        job.listing = Some(l);
-        self.start(job, out);
+        self.new_job().listing = Some(l);
+        self.advance(false, out);
     }
 
     /// `$Nn=line`: the line runs (as Grbl checks it, by executing it) and is stored if valid.
