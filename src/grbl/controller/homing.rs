@@ -177,6 +177,7 @@ impl<const N: usize> Controller<'_, N> {
     }
 
     /// A pass ended well: pause `$26` ms, then the next pass, group, or the end.
+    #[inline(never)]
     fn homing_pass_done(&mut self, mut h: Homing) {
         h.pass += 1;
         h.found = 0;
