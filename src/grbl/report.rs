@@ -306,14 +306,15 @@ pub fn step_time(out: &mut impl Out, t: &crate::steptime::StepTimeReport, dma: b
 
 /// Lines `$#` prints: G54..G59, G28, G30, G92, TLO, PRB.
 pub const PARAM_LINES: usize = 11;
+// (`param`'s G-number table follows the stored positions' order.)
+const _: () = assert!(G28 == 6 && G30 == 7);
 
 /// Line `i` of `$#` (machine millimetres; `[PRB:…:1]` after a probe made contact).
 pub fn param<const N: usize>(out: &mut impl Out, i: usize, off: &Offsets<N>, axes_used: usize) {
     let n = axes_used.min(N);
     let (g, v): (u32, [f32; N]) = match i {
-        0..=5 => (54 + i as u32, off.wcs(i as u8)),
-        G28 => (28, off.stored.get(i)),
-        G30 => (30, off.stored.get(i)),
+        // G54..G59, G28, G30: the stored positions in that order.
+        0..=G30 => ([54, 55, 56, 57, 58, 59, 28, 30][i], off.stored.get(i)),
         8 => (92, off.g92),
         9 => {
             put_fixed_after(out, b"[TLO:", off.tlo, 3);
