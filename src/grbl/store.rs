@@ -128,7 +128,9 @@ impl Stored {
         let mut b = [0u8; IMAGE_LEN];
         put4(&mut b, 0, MAGIC);
         put4(&mut b, 4, self.seq.to_le_bytes());
-        copy_bytes(&mut b[SETTINGS_AT..COORDS_AT], &self.settings.to_bytes());
+        if let Some(w) = b.get_mut(SETTINGS_AT..COORDS_AT).and_then(|w| w.try_into().ok()) {
+            self.settings.write_image(w);
+        }
         copy_bytes(&mut b[COORDS_AT..TEXT_AT], &self.coords.to_bytes());
         let texts = self.startup.iter().chain(core::iter::once(&self.build_info));
         for (w, t) in b[TEXT_AT..].chunks_exact_mut(TEXT_LEN + 1).zip(texts) {

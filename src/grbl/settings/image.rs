@@ -14,7 +14,13 @@ impl Settings {
     /// (`table.rs`) puts them), CRC-32.
     pub fn to_bytes(&self) -> [u8; SETTINGS_LEN] {
         let mut b = [0u8; SETTINGS_LEN];
-        copy_bytes(&mut b, &[MAGIC, VERSION, SETTINGS_LEN as u8, (SETTINGS_LEN >> 8) as u8]);
+        self.write_image(&mut b);
+        b
+    }
+
+    /// [`Self::to_bytes`] written into `b` (zeroed; the store's image holds it in place).
+    pub(crate) fn write_image(&self, b: &mut [u8; SETTINGS_LEN]) {
+        copy_bytes(b, &[MAGIC, VERSION, SETTINGS_LEN as u8, (SETTINGS_LEN >> 8) as u8]);
         let mut s = *self;
         for id in Self::ids(MAX_AXES) {
             let (Some(spec), Some(slot)) = (Self::spec(id, MAX_AXES), s.slot(id)) else { continue };
@@ -33,11 +39,10 @@ impl Settings {
             }
         }
         for (k, v) in self.encoder.0.into_iter().enumerate() {
-            put4(&mut b, TAIL + 20 + 4 * k, v.to_le_bytes());
+            put4(b, TAIL + 20 + 4 * k, v.to_le_bytes());
         }
         let crc = crc32(&b[..SETTINGS_LEN - 4]);
-        put4(&mut b, SETTINGS_LEN - 4, crc.to_le_bytes());
-        b
+        put4(b, SETTINGS_LEN - 4, crc.to_le_bytes());
     }
 
     /// Settings from a flash image, or `None` if it is not one (erased, other version, bad
