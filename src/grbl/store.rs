@@ -151,7 +151,9 @@ impl Stored {
         }
         let mut s = Stored::defaults();
         s.seq = u32::from_le_bytes(b[4..8].try_into().ok()?);
-        s.settings = Settings::decode(&b[SETTINGS_AT..COORDS_AT])?;
+        if !s.settings.read_image(&b[SETTINGS_AT..COORDS_AT]) {
+            return None;
+        }
         s.coords = Coords::from_bytes(&b[COORDS_AT..TEXT_AT])?;
         let texts = s.startup.iter_mut().chain(core::iter::once(&mut s.build_info));
         for (w, t) in b[TEXT_AT..].chunks_exact(TEXT_LEN + 1).zip(texts) {
