@@ -131,7 +131,7 @@ impl Stored {
         if let Some(w) = b.get_mut(SETTINGS_AT..COORDS_AT).and_then(|w| w.try_into().ok()) {
             self.settings.write_image(w);
         }
-        copy_bytes(&mut b[COORDS_AT..TEXT_AT], &self.coords.to_bytes());
+        self.coords.write_image(&mut b[COORDS_AT..TEXT_AT]);
         let texts = self.startup.iter().chain(core::iter::once(&self.build_info));
         for (w, t) in b[TEXT_AT..].chunks_exact_mut(TEXT_LEN + 1).zip(texts) {
             w[0] = t.len;
@@ -154,7 +154,9 @@ impl Stored {
         if !s.settings.read_image(&b[SETTINGS_AT..COORDS_AT]) {
             return None;
         }
-        s.coords = Coords::from_bytes(&b[COORDS_AT..TEXT_AT])?;
+        if !s.coords.read_image(&b[COORDS_AT..TEXT_AT]) {
+            return None;
+        }
         let texts = s.startup.iter_mut().chain(core::iter::once(&mut s.build_info));
         for (w, t) in b[TEXT_AT..].chunks_exact(TEXT_LEN + 1).zip(texts) {
             if !t.set(w.get(1..1 + w[0] as usize)?) {
