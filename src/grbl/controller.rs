@@ -331,6 +331,8 @@ impl<'a, const N: usize> Controller<'a, N> {
         let p = at.as_mut_ptr();
         // SAFETY: `p` is valid for writes; every field is written once below (the list is
         // the struct's, checked by `Self::fields`) before the slot is used as initialised.
+        // The two rings are written as zero bytes: `f32` 0.0, and `Power`'s derived default
+        // (0.0, false, 0.0), valid values.
         let c = unsafe {
             addr_of_mut!((*p).feeder).write(feeder);
             addr_of_mut!((*p).shared).write(shared);
@@ -361,13 +363,15 @@ impl<'a, const N: usize> Controller<'a, N> {
             addr_of_mut!((*p).reinit).write(false);
             addr_of_mut!((*p).pulse_changed).write(true);
             addr_of_mut!((*p).pushed).write(shared.moves_done());
-            addr_of_mut!((*p).feed_ring).write([0.0; FEED_RING]);
+            // (Zeroed: one memclr each, where the arrays would be built on the stack and
+            // copied in.)
+            addr_of_mut!((*p).feed_ring).write_bytes(0, 1);
             addr_of_mut!((*p).startup_next).write(0);
             addr_of_mut!((*p).wco_count).write(0);
             addr_of_mut!((*p).ovr_count).write(0);
             addr_of_mut!((*p).ov_seen).write(Overrides::NONE);
             addr_of_mut!((*p).rx_free).write(RX_BUFFER_LEN as u32);
-            addr_of_mut!((*p).power_ring).write([Power::default(); FEED_RING]);
+            addr_of_mut!((*p).power_ring).write_bytes(0, 1);
             addr_of_mut!((*p).tool).write((SpindleDir::Off, 0.0, 0));
             addr_of_mut!((*p).pwm_hz).write(0);
             addr_of_mut!((*p).reset_after).write(false);
@@ -387,7 +391,7 @@ impl<'a, const N: usize> Controller<'a, N> {
         c.startup_next = c.next_startup(0);
         c.enc_configure();
         c.apply_profile();
-        c.planner.sync(shared.positions(), &c.limits);
+        c.sync_planner();
         c
     }
 

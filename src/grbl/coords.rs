@@ -55,23 +55,34 @@ impl Coords {
     /// Little-endian image.
     pub fn to_bytes(&self) -> [u8; COORDS_LEN] {
         let mut b = [0u8; COORDS_LEN];
+        self.write_image(&mut b);
+        b
+    }
+
+    /// [`Self::to_bytes`] written into the start of `b` (the store's image holds it in place).
+    pub fn write_image(&self, b: &mut [u8]) {
         for (w, v) in b.chunks_exact_mut(4).zip(self.slots.iter().flatten()) {
             crate::grbl::settings::put4(w, 0, v.to_le_bytes());
         }
-        b
     }
 
     /// From an image; `None` if a value is not a finite number.
     pub fn from_bytes(b: &[u8]) -> Option<Coords> {
         let mut c = Coords::ZERO;
-        let b = b.get(..COORDS_LEN)?;
-        for (w, v) in b.chunks_exact(4).zip(c.slots.iter_mut().flatten()) {
+        c.read_image(b).then_some(c)
+    }
+
+    /// [`Self::from_bytes`] into `self` (the store's image decodes in place): false if `b` is
+    /// short or a value is not a finite number, leaving `self` partly written.
+    pub fn read_image(&mut self, b: &[u8]) -> bool {
+        let Some(b) = b.get(..COORDS_LEN) else { return false };
+        for (w, v) in b.chunks_exact(4).zip(self.slots.iter_mut().flatten()) {
             *v = f32::from_le_bytes([w[0], w[1], w[2], w[3]]);
             if !v.is_finite() {
-                return None;
+                return false;
             }
         }
-        Some(c)
+        true
     }
 }
 

@@ -58,14 +58,27 @@ pub fn put_ok(out: &mut impl Out) {
 
 /// Writes `error:N`.
 pub fn put_error(out: &mut impl Out, e: Error) {
-    out.put(b"error:");
-    put_u32(out, e as u32);
+    put_u32_after(out, b"error:", e as u32);
     out.put(b"\r\n");
 }
 
 /// Writes an unsigned decimal.
 pub fn put_u32(out: &mut impl Out, v: u32) {
     put_padded(out, v, 1);
+}
+
+/// Writes `head`, then `v` in decimal: one call for the pair most report fields are.
+#[inline(never)]
+pub fn put_u32_after(out: &mut impl Out, head: &[u8], v: u32) {
+    out.put(head);
+    put_u32(out, v);
+}
+
+/// Writes `head`, then `x` as [`put_fixed`] does.
+#[inline(never)]
+pub fn put_fixed_after(out: &mut impl Out, head: &[u8], x: f32, decimals: u32) {
+    out.put(head);
+    put_fixed(out, x, decimals);
 }
 
 /// Writes `v` as eight upper-case hex digits.

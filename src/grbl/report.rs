@@ -8,7 +8,7 @@ use crate::grbl::coords::{Offsets, G28, G30};
 use crate::grbl::gcode::{Modal, Motion};
 use crate::grbl::spindle::{SpindleDir, FLOOD, MIST};
 use crate::grbl::protocol::RX_BUFFER_LEN;
-use crate::grbl::reply::{put_fixed, put_u32, Out};
+use crate::grbl::reply::{put_fixed_after, put_u32_after, Out};
 use crate::motion::moves::Overrides;
 use crate::motion::ramp::Shape;
 use crate::grbl::settings::Ramped;
@@ -68,8 +68,7 @@ pub const fn alarm_len(code: u8) -> usize {
 /// for every alarm).
 #[inline(never)]
 pub fn alarm(out: &mut impl Out, code: u8) {
-    out.put(b"ALARM:");
-    put_u32(out, code as u32);
+    put_u32_after(out, b"ALARM:", code as u32);
     out.put(b"\r\n");
     out.put(alarm_tail(code));
 }
@@ -134,15 +133,11 @@ pub fn status(out: &mut impl Out, s: &Status) {
     out.put(if s.mpos { b"|MPos:" } else { b"|WPos:" });
     axes(out, s.pos);
     if let Some((blocks, rx)) = s.bf {
-        out.put(b"|Bf:");
-        put_u32(out, blocks);
-        out.put(b",");
-        put_u32(out, rx);
+        put_u32_after(out, b"|Bf:", blocks);
+        put_u32_after(out, b",", rx);
     }
-    out.put(b"|FS:");
-    put_fixed(out, s.feed, 0);
-    out.put(b",");
-    put_fixed(out, s.speed, 0);
+    put_fixed_after(out, b"|FS:", s.feed, 0);
+    put_fixed_after(out, b",", s.speed, 0);
     if s.pins != 0 {
         out.put(b"|Pn:");
         if s.pins & PIN_PROBE != 0 {
@@ -159,22 +154,17 @@ pub fn status(out: &mut impl Out, s: &Status) {
         axes(out, w);
     }
     if let Some(o) = s.ov {
-        out.put(b"|Ov:");
-        put_u32(out, o.feed as u32);
-        out.put(b",");
-        put_u32(out, o.rapid as u32);
-        out.put(b",");
-        put_u32(out, o.spindle as u32);
+        put_u32_after(out, b"|Ov:", o.feed as u32);
+        put_u32_after(out, b",", o.rapid as u32);
+        put_u32_after(out, b",", o.spindle as u32);
         if !s.acc.is_empty() {
             out.put(b"|A:");
             out.put(s.acc);
         }
     }
     if let Some((pos, speed)) = s.enc {
-        out.put(b"|Enc:");
-        put_fixed(out, pos, 3);
-        out.put(b",");
-        put_fixed(out, speed, 0);
+        put_fixed_after(out, b"|Enc:", pos, 3);
+        put_fixed_after(out, b",", speed, 0);
     }
     out.put(b">\r\n");
 }
@@ -203,29 +193,21 @@ fn values(out: &mut impl Out, head: [&[u8]; 3], values: &[(f32, u32)], tail: &[u
         out.put(part);
     }
     for (i, &(v, d)) in values.iter().enumerate() {
-        if i > 0 {
-            out.put(b",");
-        }
-        put_fixed(out, v, d);
+        put_fixed_after(out, if i > 0 { b"," } else { b"" }, v, d);
     }
     out.put(tail);
 }
 
 fn axes(out: &mut impl Out, v: &[f32]) {
     for (i, x) in v.iter().enumerate() {
-        if i > 0 {
-            out.put(b",");
-        }
-        put_fixed(out, *x, 3);
+        put_fixed_after(out, if i > 0 { b"," } else { b"" }, *x, 3);
     }
 }
 
 /// One `$$` line: `$N=value`.
 pub fn setting(out: &mut impl Out, id: u16, value: f32, decimals: u32) {
-    out.put(b"$");
-    put_u32(out, id as u32);
-    out.put(b"=");
-    put_fixed(out, value, decimals);
+    put_u32_after(out, b"$", id as u32);
+    put_fixed_after(out, b"=", value, decimals);
     out.put(b"\r\n");
 }
 
@@ -240,14 +222,11 @@ pub fn modes(out: &mut impl Out, m: &Modal) {
         Motion::CcwArc => out.put(b"3"),
         Motion::Cancel => out.put(b"80"),
         Motion::Probe(k) => {
-            out.put(b"38.");
-            put_u32(out, if (2..=4).contains(&k) { k as u32 } else { 5 });
+            put_u32_after(out, b"38.", if (2..=4).contains(&k) { k as u32 } else { 5 });
         }
     }
-    out.put(b" G");
-    put_u32(out, 54 + m.coord as u32);
-    out.put(b" G");
-    put_u32(out, m.plane as u32);
+    put_u32_after(out, b" G", 54 + m.coord as u32);
+    put_u32_after(out, b" G", m.plane as u32);
     out.put(if m.inches { b" G20" } else { b" G21" });
     out.put(if m.relative { b" G91" } else { b" G90" });
     out.put(if m.inverse_time { b" G93" } else { b" G94" });
@@ -265,12 +244,9 @@ pub fn modes(out: &mut impl Out, m: &Modal) {
     if m.coolant & FLOOD != 0 {
         out.put(b" M8");
     }
-    out.put(b" T");
-    put_u32(out, m.tool);
-    out.put(b" F");
-    put_fixed(out, m.feed, 0);
-    out.put(b" S");
-    put_fixed(out, m.spindle, 0);
+    put_u32_after(out, b" T", m.tool);
+    put_fixed_after(out, b" F", m.feed, 0);
+    put_fixed_after(out, b" S", m.spindle, 0);
     out.put(b"]\r\n");
 }
 
@@ -282,12 +258,9 @@ pub fn build_info(out: &mut impl Out, info: &[u8], queue_moves: usize, r: &Rampe
     out.put(info);
     // Grbl's build-option letters for what we have, in its order: variable spindle, M7 mist,
     // single-axis homing (`$HX`), the safety door input. No line numbers (`N`).
-    out.put(b"]\r\n[OPT:VMH+,");
-    put_u32(out, queue_moves as u32);
-    out.put(b",");
-    put_u32(out, RX_BUFFER_LEN as u32);
-    out.put(b"]\r\n[MSG:max step rate ");
-    put_u32(out, r.max_rate_hz);
+    put_u32_after(out, b"]\r\n[OPT:VMH+,", queue_moves as u32);
+    put_u32_after(out, b",", RX_BUFFER_LEN as u32);
+    put_u32_after(out, b"]\r\n[MSG:max step rate ", r.max_rate_hz);
     out.put(b" Hz");
     if r.dual {
         out.put(b" dual-edge");
@@ -296,16 +269,12 @@ pub fn build_info(out: &mut impl Out, info: &[u8], queue_moves: usize, r: &Rampe
         out.put(b" DMA");
     }
     if r.junction_hz != 0 {
-        out.put(b"]\r\n[MSG:max junction rate ");
-        put_u32(out, r.junction_hz);
+        put_u32_after(out, b"]\r\n[MSG:max junction rate ", r.junction_hz);
         out.put(b" Hz");
     }
-    out.put(b"]\r\n[MSG:ramp ");
-    put_u32(out, r.cfg.v0);
-    out.put(b"-");
-    put_u32(out, r.cfg.vmax);
-    out.put(b" Hz ");
-    put_u32(out, r.cfg.accel);
+    put_u32_after(out, b"]\r\n[MSG:ramp ", r.cfg.v0);
+    put_u32_after(out, b"-", r.cfg.vmax);
+    put_u32_after(out, b" Hz ", r.cfg.accel);
     out.put(match r.cfg.shape {
         Shape::Trapezoid => b" Hz/s trapezoid",
         Shape::SCurve => b" Hz/s S-curve per move (table at a/k)",
@@ -321,20 +290,14 @@ pub const STEP_TIME_LEN: usize =
 /// `$I` (`steptime`): body cycles min/mean/max, average and peak 1 ms load.
 pub fn step_time(out: &mut impl Out, t: &crate::steptime::StepTimeReport, dma: bool) {
     // (DMA burst mode: the step path is the fill of one buffer half per entry.)
-    out.put(if dma { b"[MSG:step fill " as &[u8] } else { b"[MSG:step isr " });
-    put_u32(out, t.min);
-    out.put(b"/");
-    put_fixed(out, t.mean, 1);
-    out.put(b"/");
-    put_u32(out, t.max);
-    out.put(b" cycles min/mean/max, load ");
-    put_fixed(out, t.load * 100.0, 1);
-    out.put(b" % peak ");
-    put_fixed(out, t.peak_load * 100.0, 1);
+    put_u32_after(out, if dma { b"[MSG:step fill " as &[u8] } else { b"[MSG:step isr " }, t.min);
+    put_fixed_after(out, b"/", t.mean, 1);
+    put_u32_after(out, b"/", t.max);
+    put_fixed_after(out, b" cycles min/mean/max, load ", t.load * 100.0, 1);
+    put_fixed_after(out, b" % peak ", t.peak_load * 100.0, 1);
     if dma {
         // Fills that ended after DMA had entered their half (0 unless the fill fell behind).
-        out.put(b" %, late ");
-        put_u32(out, t.late);
+        put_u32_after(out, b" %, late ", t.late);
         out.put(b"]\r\n");
     } else {
         out.put(b" %]\r\n");
@@ -343,18 +306,18 @@ pub fn step_time(out: &mut impl Out, t: &crate::steptime::StepTimeReport, dma: b
 
 /// Lines `$#` prints: G54..G59, G28, G30, G92, TLO, PRB.
 pub const PARAM_LINES: usize = 11;
+// (`param`'s G-number table follows the stored positions' order.)
+const _: () = assert!(G28 == 6 && G30 == 7);
 
 /// Line `i` of `$#` (machine millimetres; `[PRB:…:1]` after a probe made contact).
 pub fn param<const N: usize>(out: &mut impl Out, i: usize, off: &Offsets<N>, axes_used: usize) {
     let n = axes_used.min(N);
     let (g, v): (u32, [f32; N]) = match i {
-        0..=5 => (54 + i as u32, off.wcs(i as u8)),
-        G28 => (28, off.stored.get(i)),
-        G30 => (30, off.stored.get(i)),
+        // G54..G59, G28, G30: the stored positions in that order.
+        0..=G30 => ([54, 55, 56, 57, 58, 59, 28, 30][i], off.stored.get(i)),
         8 => (92, off.g92),
         9 => {
-            out.put(b"[TLO:");
-            put_fixed(out, off.tlo, 3);
+            put_fixed_after(out, b"[TLO:", off.tlo, 3);
             out.put(b"]\r\n");
             return;
         }
@@ -365,8 +328,7 @@ pub fn param<const N: usize>(out: &mut impl Out, i: usize, off: &Offsets<N>, axe
             return;
         }
     };
-    out.put(b"[G");
-    put_u32(out, g);
+    put_u32_after(out, b"[G", g);
     out.put(b":");
     axes(out, v.get(..n).unwrap_or_default());
     out.put(b"]\r\n");

@@ -52,11 +52,25 @@ impl Text {
     /// `None` when longer than [`TEXT_LEN`].
     pub fn new(s: &[u8]) -> Option<Text> {
         let mut t = Text::EMPTY;
-        copy_bytes(t.buf.get_mut(..s.len())?, s);
-        t.len = s.len() as u8;
-        Some(t)
+        t.set(s).then_some(t)
     }
 
+    /// Sets the text to `s` in place (the rest of the buffer zero, as [`Self::new`] leaves
+    /// it); false, and unchanged, when `s` is longer than [`TEXT_LEN`].
+    #[inline(never)]
+    pub fn set(&mut self, s: &[u8]) -> bool {
+        if s.len() > TEXT_LEN {
+            return false;
+        }
+        for (i, b) in self.buf.iter_mut().enumerate() {
+            *b = s.get(i).copied().unwrap_or(0);
+        }
+        self.len = s.len() as u8;
+        true
+    }
+
+    /// The text's bytes. (Out of line: its bound check was inlined at three sites.)
+    #[inline(never)]
     pub fn as_bytes(&self) -> &[u8] {
         &self.buf[..(self.len as usize).min(TEXT_LEN)]
     }
@@ -114,8 +128,10 @@ impl Stored {
         let mut b = [0u8; IMAGE_LEN];
         put4(&mut b, 0, MAGIC);
         put4(&mut b, 4, self.seq.to_le_bytes());
-        copy_bytes(&mut b[SETTINGS_AT..COORDS_AT], &self.settings.to_bytes());
-        copy_bytes(&mut b[COORDS_AT..TEXT_AT], &self.coords.to_bytes());
+        if let Some(w) = b.get_mut(SETTINGS_AT..COORDS_AT).and_then(|w| w.try_into().ok()) {
+            self.settings.write_image(w);
+        }
+        self.coords.write_image(&mut b[COORDS_AT..TEXT_AT]);
         let texts = self.startup.iter().chain(core::iter::once(&self.build_info));
         for (w, t) in b[TEXT_AT..].chunks_exact_mut(TEXT_LEN + 1).zip(texts) {
             w[0] = t.len;
@@ -135,11 +151,17 @@ impl Stored {
         }
         let mut s = Stored::defaults();
         s.seq = u32::from_le_bytes(b[4..8].try_into().ok()?);
-        s.settings = Settings::decode(&b[SETTINGS_AT..COORDS_AT])?;
-        s.coords = Coords::from_bytes(&b[COORDS_AT..TEXT_AT])?;
+        if !s.settings.read_image(&b[SETTINGS_AT..COORDS_AT]) {
+            return None;
+        }
+        if !s.coords.read_image(&b[COORDS_AT..TEXT_AT]) {
+            return None;
+        }
         let texts = s.startup.iter_mut().chain(core::iter::once(&mut s.build_info));
         for (w, t) in b[TEXT_AT..].chunks_exact(TEXT_LEN + 1).zip(texts) {
-            *t = Text::new(w.get(1..1 + w[0] as usize)?)?;
+            if !t.set(w.get(1..1 + w[0] as usize)?) {
+                return None;
+            }
         }
         Some(s)
     }

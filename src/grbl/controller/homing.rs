@@ -67,9 +67,8 @@ impl<const N: usize> Controller<'_, N> {
             start_at: self.now,
             target: [0; 3],
         });
-        let mut job = super::Job::none();
-        job.home = true;
-        self.start(job, out);
+        self.new_job().home = true;
+        self.advance(false, out);
         Ok(())
     }
 
@@ -107,9 +106,7 @@ impl<const N: usize> Controller<'_, N> {
                 h.start_at = self.now.wrapping_add(self.settings.homing_debounce_ms);
             }
             // Stopped at a switch or at the target: the engine's position is exact.
-            self.feeder.abort();
-            self.pushed = self.shared.moves_done();
-            self.planner.sync(self.shared.positions(), &self.limits);
+            self.flush_to_engine();
             h.moving = false;
         }
         if wrapping_diff(self.now, h.start_at) < 0 {
@@ -163,7 +160,7 @@ impl<const N: usize> Controller<'_, N> {
         h.epoch = self.shared.epoch();
         match planner.line(&mm, Some(feed), &self.limits) {
             Ok(Some(pl)) => {
-                if !self.push(pl, false, Power::default()) {
+                if !self.push(&pl, false, Power::default()) {
                     self.homing = Some(h);
                     return; // drivers settling or queue busy: next poll
                 }
@@ -180,6 +177,7 @@ impl<const N: usize> Controller<'_, N> {
     }
 
     /// A pass ended well: pause `$26` ms, then the next pass, group, or the end.
+    #[inline(never)]
     fn homing_pass_done(&mut self, mut h: Homing) {
         h.pass += 1;
         h.found = 0;

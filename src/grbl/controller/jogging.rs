@@ -2,7 +2,7 @@
 //! decelerates with the engine's feed hold, then drops the running and queued jog moves, and
 //! the planner takes the engine's exact position.
 
-use super::{Controller, Job, Jogging};
+use super::{Controller, Jogging};
 use crate::grbl::jog;
 use crate::planning::planner::Planned;
 use crate::error::Error;
@@ -38,10 +38,10 @@ impl<const N: usize> Controller<'_, N> {
         // Overrides never scale a jog (Grbl).
         let mv = planner.line_exact(&j.target, &j.exact, Some(j.feed), &self.limits)?.map(|p| Planned { mv: p.mv.fixed(), ..p });
         self.planner = planner;
-        let mut job = Job::none();
+        let job = self.new_job();
         job.mv = mv;
         job.jog = true;
-        self.start(job, out);
+        self.advance(false, out);
         Ok(())
     }
 
@@ -71,7 +71,7 @@ impl<const N: usize> Controller<'_, N> {
                     crate::grbl::reply::put_ok(out);
                 }
                 self.pushed = self.shared.moves_done();
-                self.planner.sync(self.shared.positions(), &self.limits);
+                self.sync_planner();
                 self.jog = Jogging::Stopping;
             }
             Jogging::Stopping => {

@@ -85,10 +85,10 @@ impl<const N: usize> Controller<'_, N> {
         }
     }
 
-    /// Starts a job and carries it as far as it goes now.
-    pub(super) fn start(&mut self, job: Job<N>, out: &mut impl Out) {
-        self.job = Some(job);
-        self.advance(false, out);
+    /// A new job (`Job::none()`) in its slot, for the caller to fill in and start with
+    /// [`Self::advance`] (built in place: a job built on the stack is copied in whole).
+    pub(super) fn new_job(&mut self) -> &mut Job<N> {
+        self.job.insert(Job::none())
     }
 
     /// Marks the line being carried out (or a new job) to write the persistent image.
@@ -96,9 +96,8 @@ impl<const N: usize> Controller<'_, N> {
         match &mut self.job {
             Some(j) => j.save = true,
             None => {
-                let mut job = Job::none();
-                job.save = true;
-                self.start(job, out);
+                self.new_job().save = true;
+                self.advance(false, out);
             }
         }
     }
@@ -188,7 +187,7 @@ impl<const N: usize> Controller<'_, N> {
         }
         // (Set field by field on `Job::none()` in its slot: struct-update syntax, or a job
         // built on the stack and moved in, copies every field.)
-        let job = self.job.insert(Job::none());
+        let job = self.new_job();
         job.dwell_ms = fx.dwell_ms;
         job.mv = mv;
         job.mv2 = mv2;
@@ -218,9 +217,10 @@ pub(super) fn plan<const N: usize>(
     lim: &Limits<N>,
     cfg: &RampConfig,
 ) -> Result<Option<Planned<N>>, Error> {
-    let feed = match rate {
-        Rate::Rapid => return planner.line_exact(target, exact, None, lim),
-        Rate::Feed(f) => f,
+    // G93 plans from rest to rest: no junction speed on either side.
+    let (feed, rest) = match rate {
+        Rate::Rapid => (None, false),
+        Rate::Feed(f) => (Some(f), false),
         Rate::Minutes(t) => {
             // At 1 mm/min no axis limit binds: the planner's rate is exactly master / (len·60).
             let mut dry = *planner;
@@ -235,12 +235,13 @@ pub(super) fn plan<const N: usize>(
                 }
                 None => 1.0,
             };
-            // From rest to rest: no junction speed on either side.
             planner.rest();
-            let planned = planner.line_exact(target, exact, Some(feed), lim);
-            planner.rest();
-            return planned;
+            (Some(feed), true)
         }
     };
-    planner.line_exact(target, exact, Some(feed), lim)
+    let planned = planner.line_exact(target, exact, feed, lim);
+    if rest {
+        planner.rest();
+    }
+    planned
 }

@@ -58,9 +58,24 @@ impl<const N: usize> Controller<'_, N> {
     /// After a soft reset: once the engine has stopped, its position is the planner's.
     pub(super) fn take_position(&mut self) {
         if self.resync && self.shared.state() == State::Idle {
-            self.planner.sync(self.shared.positions(), &self.limits);
+            self.sync_planner();
             self.resync = false;
         }
+    }
+
+    /// Drops the queue and takes the engine's position, which must stand still (a switch,
+    /// a hard limit, the end of a probe cycle), as the planner's.
+    #[inline(never)]
+    pub(super) fn flush_to_engine(&mut self) {
+        self.feeder.abort();
+        self.pushed = self.shared.moves_done();
+        self.sync_planner();
+    }
+
+    /// The engine's position as the planner's.
+    #[inline(never)]
+    pub(super) fn sync_planner(&mut self) {
+        self.planner.sync(self.shared.positions(), &self.limits);
     }
 
     /// Queue empty and engine idle (not held): G4, flash writes, `$` settings may act.
@@ -107,7 +122,7 @@ impl<const N: usize> Controller<'_, N> {
     }
 
     /// Pushes one planned move; false while it does not fit (or the drivers are settling).
-    pub(super) fn push(&mut self, pl: Planned<N>, jog: bool, power: Power) -> bool {
+    pub(super) fn push(&mut self, pl: &Planned<N>, jog: bool, power: Power) -> bool {
         if !self.drivers_ready() {
             self.drivers_on = true;
             return false;
@@ -177,7 +192,7 @@ impl<const N: usize> Controller<'_, N> {
                 break 'run false;
             }
             for slot in [&mut job.mv, &mut job.mv2] {
-                if let Some(pl) = *slot {
+                if let Some(pl) = slot {
                     if !self.push(pl, job.jog, job.power) {
                         break 'run false;
                     }
@@ -193,7 +208,7 @@ impl<const N: usize> Controller<'_, N> {
                     break;
                 };
                 job.mv = plan(&mut self.planner, &p, &[None; N], job.rate, &self.limits, &self.ramped.cfg).unwrap_or(None);
-                if let Some(pl) = job.mv {
+                if let Some(pl) = &job.mv {
                     if !self.push(pl, false, job.power) {
                         break 'run false;
                     }

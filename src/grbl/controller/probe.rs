@@ -69,8 +69,6 @@ impl<const N: usize> Controller<'_, N> {
     /// The cycle is over: the rest of the move is dropped and the planner takes the position
     /// the engine reached; a failure is Grbl's (non-critical) alarm state.
     fn probe_done(&mut self) {
-        self.feeder.abort();
-        self.pushed = self.shared.moves_done();
-        self.planner.sync(self.shared.positions(), &self.limits);
+        self.flush_to_engine();
     }
 }

@@ -43,9 +43,7 @@ impl<const N: usize> Controller<'_, N> {
         self.job = None;
         self.lines.clear();
         self.alarm = true;
-        self.feeder.abort();
-        self.pushed = self.shared.moves_done();
-        self.planner.sync(self.shared.positions(), &self.limits);
+        self.flush_to_engine();
         report::alarm(out, report::ALARM_HARD_LIMIT);
         self.soft_limit = SoftLimit::Locked;
     }
@@ -67,7 +65,7 @@ impl<const N: usize> Controller<'_, N> {
         self.feeder.abort();
         self.shared.set_hold(false);
         self.pushed = self.shared.moves_done();
-        self.planner.sync(self.shared.positions(), &self.limits);
+        self.sync_planner();
         report::alarm(out, alarm);
         self.soft_limit = SoftLimit::Locked;
     }

@@ -14,22 +14,23 @@ const OVR_REFRESH: (u8, u8) = (10, 20);
 
 impl<const N: usize> Controller<'_, N> {
     /// The state word of a status report, and whether it counts as busy for the refresh
-    /// rates (all but Idle, Alarm, Check and Sleep).
+    /// rates (all but Idle, Alarm, Check and Sleep, which return at once).
     fn state_name(&self) -> (&'static [u8], bool) {
         let moving = self.feeder.pending() > 0;
-        match self.shared.state() {
-            _ if self.homing.is_some() => (b"Home", true),
-            _ if self.alarm => (b"Alarm", false),
-            _ if self.sleep => (b"Sleep", false),
-            _ if self.check => (b"Check", false),
-            _ if self.door_active() => (self.door_state(), true),
-            _ if self.jog != Jogging::Off && (moving || self.shared.state() != State::Idle) => (b"Jog", true),
-            State::Run => (b"Run", true),
-            State::Holding => (b"Hold:1", true),
-            State::Held => (b"Hold:0", true),
-            State::Idle if moving => (b"Run", true),
-            State::Idle => (b"Idle", false),
-        }
+        let name: &'static [u8] = match self.shared.state() {
+            _ if self.homing.is_some() => b"Home",
+            _ if self.alarm => return (b"Alarm", false),
+            _ if self.sleep => return (b"Sleep", false),
+            _ if self.check => return (b"Check", false),
+            _ if self.door_active() => self.door_state(),
+            _ if self.jog != Jogging::Off && (moving || self.shared.state() != State::Idle) => b"Jog",
+            State::Run => b"Run",
+            State::Holding => b"Hold:1",
+            State::Held => b"Hold:0",
+            State::Idle if moving => b"Run",
+            State::Idle => return (b"Idle", false),
+        };
+        (name, true)
     }
 
     /// `<State|MPos:…|FS:feed,0|WCO:…|Ov:…>`: feed from the master rate and the running move's

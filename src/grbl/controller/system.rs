@@ -2,7 +2,7 @@
 //! `$H`, `$J=`, `$SLP`, `$RST=$/#/*`, and `$N=value` settings. Long listings are written a line
 //! at a time as TX room appears.
 
-use super::{Controller, Job, Listing};
+use super::{Controller, Listing};
 use crate::grbl::chip;
 use crate::grbl::coords::Coords;
 use crate::grbl::gcode;
@@ -11,7 +11,7 @@ use crate::error::Error;
 use crate::grbl::reply::Out;
 use crate::grbl::report::{self, PARAM_LINES, SETTING_LEN};
 use crate::grbl::settings::{Change, Settings};
-use crate::grbl::store::{Text, STARTUP_LINES};
+use crate::grbl::store::{Text, STARTUP_LINES, TEXT_LEN};
 
 impl<const N: usize> Controller<'_, N> {
     /// A `$` line (without the `$`).
@@ -62,14 +62,15 @@ impl<const N: usize> Controller<'_, N> {
             }
             [b'I', b'=', text @ ..] => {
                 need_idle(idle)?;
-                self.stored.build_info = Text::new(text).ok_or(Error::LineLengthExceeded)?;
+                if !self.stored.build_info.set(text) {
+                    return Err(Error::LineLengthExceeded);
+                }
                 self.save_later(out);
             }
             b"N" => {
                 need_idle(idle)?;
                 for (i, t) in self.stored.startup.iter().enumerate() {
-                    out.put(b"$N");
-                    crate::grbl::reply::put_u32(out, i as u32);
+                    crate::grbl::reply::put_u32_after(out, b"$N", i as u32);
                     out.put(b"=");
                     out.put(t.as_bytes());
                     out.put(b"\r\n");
@@ -95,7 +96,7 @@ impl<const N: usize> Controller<'_, N> {
                 if what != b'#' {
                     let old = self.settings;
                     self.settings = Settings::DEFAULT;
-                    if old.pins::<N>() != self.settings.pins::<N>() || old.dma_burst != self.settings.dma_burst {
+                    if !old.same_pins::<N>(&self.settings) || old.dma_burst != self.settings.dma_burst {
                         self.settings_changed(Change::Pins, out);
                     }
                     self.settings_changed(Change::Profile, out);
@@ -127,9 +128,8 @@ impl<const N: usize> Controller<'_, N> {
 
     /// Starts a long listing (`$$`, `$#`, the end of `$I`).
     fn start_listing(&mut self, l: Listing, out: &mut impl Out) {
-        let mut job = Job::none();
-        job.listing = Some(l);
-        self.start(job, out);
+        self.new_job().listing = Some(l);
+        self.advance(false, out);
     }
 
     /// `$Nn=line`: the line runs (as Grbl checks it, by executing it) and is stored if valid.
@@ -147,10 +147,12 @@ impl<const N: usize> Controller<'_, N> {
         if !(0.0..STARTUP_LINES as f32).contains(&slot) {
             return Err(Error::InvalidStatement);
         }
-        let text = Text::new(line).ok_or(Error::LineLengthExceeded)?;
+        if line.len() > TEXT_LEN {
+            return Err(Error::LineLengthExceeded);
+        }
         self.gcode(line, out)?;
         if let Some(s) = self.stored.startup.get_mut(u32_of(slot) as usize) {
-            *s = text;
+            s.set(line);
         }
         self.save_later(out);
         Ok(())
@@ -173,7 +175,7 @@ impl<const N: usize> Controller<'_, N> {
                 self.axes = self.settings.axis_count(N);
                 self.limits = self.settings.planner_limits(self.ramped.cfg.vmax);
                 self.apply_profile();
-                self.planner.sync(self.shared.positions(), &self.limits);
+                self.sync_planner();
             }
         }
         // Any change re-zeroes the encoder check (settings change only at rest).

@@ -14,7 +14,13 @@ impl Settings {
     /// (`table.rs`) puts them), CRC-32.
     pub fn to_bytes(&self) -> [u8; SETTINGS_LEN] {
         let mut b = [0u8; SETTINGS_LEN];
-        copy_bytes(&mut b, &[MAGIC, VERSION, SETTINGS_LEN as u8, (SETTINGS_LEN >> 8) as u8]);
+        self.write_image(&mut b);
+        b
+    }
+
+    /// [`Self::to_bytes`] written into `b` (zeroed; the store's image holds it in place).
+    pub(crate) fn write_image(&self, b: &mut [u8; SETTINGS_LEN]) {
+        copy_bytes(b, &[MAGIC, VERSION, SETTINGS_LEN as u8, (SETTINGS_LEN >> 8) as u8]);
         let mut s = *self;
         for id in Self::ids(MAX_AXES) {
             let (Some(spec), Some(slot)) = (Self::spec(id, MAX_AXES), s.slot(id)) else { continue };
@@ -33,31 +39,37 @@ impl Settings {
             }
         }
         for (k, v) in self.encoder.0.into_iter().enumerate() {
-            put4(&mut b, TAIL + 20 + 4 * k, v.to_le_bytes());
+            put4(b, TAIL + 20 + 4 * k, v.to_le_bytes());
         }
         let crc = crc32(&b[..SETTINGS_LEN - 4]);
-        put4(&mut b, SETTINGS_LEN - 4, crc.to_le_bytes());
-        b
+        put4(b, SETTINGS_LEN - 4, crc.to_le_bytes());
     }
 
     /// Settings from a flash image, or `None` if it is not one (erased, other version, bad
     /// checksum, a value out of range).
     pub fn decode(b: &[u8]) -> Option<Settings> {
-        let b: &[u8; SETTINGS_LEN] = b.get(..SETTINGS_LEN)?.try_into().ok()?;
+        let mut s = Settings::DEFAULT;
+        s.read_image(b).then_some(s)
+    }
+
+    /// [`Self::decode`] into `self` (the store's image decodes in place): true for a valid
+    /// image; false leaves `self` partly written.
+    pub(crate) fn read_image(&mut self, b: &[u8]) -> bool {
+        let Some(b) = b.get(..SETTINGS_LEN).and_then(|b| <&[u8; SETTINGS_LEN]>::try_from(b).ok()) else { return false };
         let word = |at: usize| u32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]]);
         if word(0) != u32::from_le_bytes([MAGIC, VERSION, SETTINGS_LEN as u8, (SETTINGS_LEN >> 8) as u8]) {
-            return None;
+            return false;
         }
         if crc32(&b[..SETTINGS_LEN - 4]) != word(SETTINGS_LEN - 4) {
-            return None;
+            return false;
         }
-        let mut s = Settings::DEFAULT;
+        *self = Settings::DEFAULT;
         for id in Self::ids(MAX_AXES) {
-            let (Some(spec), Some(slot)) = (Self::spec(id, MAX_AXES), s.slot(id)) else { continue };
+            let (Some(spec), Some(slot)) = (Self::spec(id, MAX_AXES), self.slot(id)) else { continue };
             let at = (spec.at as usize).min(SETTINGS_LEN - 8);
             let byte = b[at];
             let flag = match spec.bit {
-                WHOLE if byte > 1 => return None,
+                WHOLE if byte > 1 => return false,
                 WHOLE => byte != 0,
                 bit => byte >> (bit & 7) & 1 != 0,
             };
@@ -69,12 +81,12 @@ impl Settings {
                 Slot::Shape(v) => *v = if flag { Shape::SCurve } else { Shape::Trapezoid },
             }
         }
-        s.encoder = EncoderSettings::from_bytes(&b[TAIL + 20..]);
+        self.encoder = EncoderSettings::from_bytes(&b[TAIL + 20..]);
         // An image from before `$582` has its byte clear: the default.
-        if s.flexible == 0 {
-            s.flexible = crate::motion::ramp::FLEX_DEFAULT;
+        if self.flexible == 0 {
+            self.flexible = crate::motion::ramp::FLEX_DEFAULT;
         }
-        s.is_valid().then_some(s)
+        self.is_valid()
     }
 
     /// Settings from a flash image, or the defaults if it is not a valid one.

@@ -58,6 +58,17 @@ impl Settings {
         }
     }
 
+    /// `other` asks for the same pin map as `self` on `N` axes (`pins` compared without
+    /// building both maps): the same `$580`, and `$3`, and `$2` unless dual-edge (its maps
+    /// toggle, whatever the level), on the first `N` axes' bits.
+    pub fn same_pins<const N: usize>(&self, other: &Settings) -> bool {
+        let axes = (1u32 << N) - 1;
+        let differ = |a: u8, b: u8| (a ^ b) as u32 & axes != 0;
+        self.dual_edge == other.dual_edge
+            && !differ(self.dir_invert, other.dir_invert)
+            && (self.dual_edge || !differ(self.step_invert, other.step_invert))
+    }
+
     /// Step timing in timer ticks.
     pub fn timing(&self) -> Timing {
         // f32 like the rest of the settings math.
@@ -222,5 +233,38 @@ impl Settings {
             }
         }
         Ramped::of(cfg, &timing, table_limited)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `same_pins` says what comparing the two pin maps says, for every `$2`, `$3` and `$580`.
+    #[test]
+    fn same_pins_is_pin_map_equality() {
+        fn check<const N: usize>() {
+            let base = Settings::DEFAULT;
+            for dual in [false, true] {
+                let mut a = base;
+                a.dual_edge = dual;
+                a.step_invert = 0x15;
+                a.dir_invert = 0x2A;
+                for other_dual in [false, true] {
+                    for m in 0..=255u8 {
+                        for (step, dir) in [(m, a.dir_invert), (a.step_invert, m), (m, m)] {
+                            let mut b = base;
+                            b.dual_edge = other_dual;
+                            b.step_invert = step;
+                            b.dir_invert = dir;
+                            assert_eq!(a.same_pins::<N>(&b), a.pins::<N>() == b.pins::<N>(), "N {N} {dual} {other_dual} {step:#x} {dir:#x}");
+                        }
+                    }
+                }
+            }
+        }
+        check::<1>();
+        check::<3>();
+        check::<7>();
     }
 }
