@@ -47,11 +47,18 @@ impl Symbols {
         let Ok(file) = object::File::parse(elf) else { return Self::default() };
         let mut v: Vec<(u32, u32, String)> = file
             .symbols()
-            .filter(|s| s.kind() == SymbolKind::Text && s.size() > 0)
+            .filter(|s| s.kind() == SymbolKind::Text)
             .filter_map(|s| Some(((s.address() & !1) as u32, s.size() as u32, demangle(s.name().ok()?))))
             .collect();
-        v.sort();
+        // sized symbols first at an address; an unsized one (hand-written assembly such as
+        // compiler-builtins' `memcpy`) reaches to the next symbol
+        v.sort_by(|a, b| a.0.cmp(&b.0).then(b.1.cmp(&a.1)).then(a.2.cmp(&b.2)));
         v.dedup_by_key(|s| s.0);
+        for i in 0..v.len() {
+            if v[i].1 == 0 {
+                v[i].1 = v.get(i + 1).map_or(0, |n| n.0 - v[i].0);
+            }
+        }
         Self(v)
     }
 
@@ -184,6 +191,11 @@ pub struct FnTimer {
     pub open: Vec<(u32, u32, usize, u64)>,
     /// Finished calls: (target index, inclusive thread-mode cycles, machine cycle at return).
     pub done: Vec<(usize, u64, u64)>,
+    /// Finished calls by call site: (target index, return address) → (calls, inclusive cycles).
+    pub sites: HashMap<(usize, u32), (u64, u64)>,
+    /// Thread-mode blocks run while a timed call was open (exception 0): where the timed
+    /// calls' cycles go, per function with `by_function`.
+    pub inside: Histogram,
 }
 
 /// Where the engine's moves end: every entry of the step half's `finish` (the running move
