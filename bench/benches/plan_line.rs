@@ -49,7 +49,7 @@ fn main() -> anyhow::Result<()> {
     let per_line = |c: u64| c as f64 / p.lines.max(1) as f64;
     for (i, (name, calls, cycles)) in why.inclusive.iter().enumerate() {
         println!("inclusive: {:>8.0} cycles per line ({:>5.1} %), {calls} calls: {name}", per_line(*cycles), per_line(*cycles) / p.mean * 100.0);
-        for (_, caller, n, c) in why.callers.iter().filter(|c| c.0 == i).take(8) {
+        for (_, caller, n, c) in why.callers.iter().filter(|c| c.0 == i).take(12) {
             println!("    {:>8.0} per line, {n} calls, from {caller}", per_line(*c));
         }
     }

@@ -147,7 +147,7 @@ impl<const N: usize> Planner<N> {
             let spm = lim.steps_per_mm[i];
             to[i] = match exact[i] {
                 Some(d) => d.steps(spm)?,
-                None if target[i] == self.mm[i] => self.steps[i],
+                None if same(target[i], self.mm[i]) => self.steps[i],
                 None => to_steps(target[i], spm)?,
             };
         }
@@ -161,7 +161,7 @@ impl<const N: usize> Planner<N> {
         // (Axes that do not move are skipped: soft float costs ~50–200 cycles an operation on
         // the M3 even for zeros. One division for the unit vector.)
         let d: [f32; N] = core::array::from_fn(|i| if delta[i] == 0 { 0.0 } else { f32_of_i64(delta[i]) / lim.steps_per_mm[i] });
-        let len = sqrt(d.iter().filter(|v| **v != 0.0).map(|v| v * v).sum());
+        let len = sqrt(d.iter().filter(|v| nonzero(**v)).map(|v| v * v).sum());
         let inv_len = 1.0 / len;
         let unit: [f32; N] = core::array::from_fn(|i| if delta[i] == 0 { 0.0 } else { d[i] * inv_len });
         // The path speed and acceleration every moving axis allows (Grbl's limit by axis).
@@ -169,7 +169,7 @@ impl<const N: usize> Planner<N> {
         let mut accel = f32::MAX;
         for i in 0..N {
             let u = libm::fabsf(unit[i]);
-            if delta[i] != 0 && u > 0.0 {
+            if delta[i] != 0 && above(u, 0.0) {
                 vmax = vmax.min(lim.max_rate[i] / (60.0 * u));
                 accel = accel.min(lim.accel[i] / u);
             }
@@ -225,27 +225,48 @@ pub fn junction_speed<const N: usize>(a: &[f32; N], b: &[f32; N], axis_accel: &[
     let mut cos = 0.0f32;
     let mut ju = [0.0f32; N];
     for i in 0..N {
-        if a[i] != 0.0 || b[i] != 0.0 {
+        if nonzero(a[i]) || nonzero(b[i]) {
             cos -= a[i] * b[i];
             ju[i] = b[i] - a[i];
         }
     }
-    if cos > 0.999_999 {
+    if above(cos, 0.999_999) {
         return 0.0;
     }
-    if cos < -0.999_999 {
+    if above(-cos, 0.999_999) {
         return f32::MAX;
     }
-    let inv_n = 1.0 / sqrt(ju.iter().filter(|v| **v != 0.0).map(|v| v * v).sum::<f32>());
+    let inv_n = 1.0 / sqrt(ju.iter().filter(|v| nonzero(**v)).map(|v| v * v).sum::<f32>());
     let mut acc = f32::MAX;
     for i in 0..N {
         let u = libm::fabsf(ju[i]) * inv_n;
-        if u > 1e-9 {
+        if above(u, 1e-9) {
             acc = acc.min(axis_accel[i] / u);
         }
     }
     let sin_d2 = sqrt(0.5 * (1.0 - cos));
     sqrt(acc * dev * sin_d2 / (1.0 - sin_d2))
+}
+
+// The f32 compares of the per-line path on the bits: the same answers as the operators, for
+// every input (NaN included), without the soft-float compare calls (~40 cycles each on the M3).
+
+// `x != 0.0`
+#[inline(always)]
+fn nonzero(x: f32) -> bool {
+    x.to_bits() << 1 != 0
+}
+
+// `x > c`, for a constant `c` that is +0.0 or positive and finite
+#[inline(always)]
+fn above(x: f32, c: f32) -> bool {
+    (c.to_bits() + 1..=0x7F80_0000).contains(&x.to_bits())
+}
+
+// `a == b`: the same bits and not NaN, or both zeros
+#[inline(always)]
+fn same(a: f32, b: f32) -> bool {
+    (a.to_bits() == b.to_bits() && a.to_bits() << 1 <= 0xFF00_0000) || (a.to_bits() | b.to_bits()) << 1 == 0
 }
 
 /// Absolute steps of a position in mm: `round(mm × steps/mm)`, within ±(2^31 - 1).
@@ -257,5 +278,43 @@ pub fn to_steps(mm: f32, steps_per_mm: f32) -> Result<i64, Error> {
         Ok(crate::num::i32_of(s) as i64)
     } else {
         Err(Error::InvalidTarget)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    const EDGES: [u32; 12] = [0, 0x8000_0000, 1, 0x8000_0001, 0x7F80_0000, 0xFF80_0000, 0x7FC0_0000, 0xFFC0_0000, 0x7F80_0001, 0x3089_705F, 0x3089_7060, 0x3F7F_FFEF];
+
+    fn check(a: u32, b: u32) {
+        let (x, y) = (f32::from_bits(a), f32::from_bits(b));
+        assert_eq!(nonzero(x), x != 0.0, "{a:#x}");
+        for c in [0.0, 1e-9, 0.999_999] {
+            assert_eq!(above(x, c), x > c, "{a:#x} > {c}");
+            assert_eq!(above(-x, c), x < -c, "{a:#x} < -{c}");
+        }
+        assert_eq!(same(x, y), x == y, "{a:#x} == {b:#x}");
+        assert_eq!(same(x, x), x == x, "{a:#x}");
+    }
+
+    /// The bit compares answer as the f32 operators, zeros, infinities and NaNs included.
+    #[test]
+    fn bit_compares_match_the_operators_at_the_edges() {
+        for &a in &EDGES {
+            for &b in &EDGES {
+                for d in [0, 1, u32::MAX] {
+                    check(a.wrapping_add(d), b);
+                }
+            }
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn bit_compares_match_the_operators(a: u32, b: u32) {
+            check(a, b);
+        }
     }
 }

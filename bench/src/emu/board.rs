@@ -463,13 +463,13 @@ impl Board {
         self.cpu.get_data().fn_timer.as_ref().map_or_else(Vec::new, |t| profile::by_function(&t.inside, &self.image.symbols, 0))
     }
 
-    // the timed calls so far by caller: (index into the names, calling function, calls,
-    // inclusive cycles), most cycles first
+    // the timed calls so far by call site: (index into the names, `function+offset` of the
+    // return address, calls, inclusive cycles), most cycles first
     pub fn timed_callers(&self) -> Vec<(usize, String, u64, u64)> {
         let Some(t) = self.cpu.get_data().fn_timer.as_ref() else { return Vec::new() };
         let mut m: std::collections::HashMap<(usize, String), (u64, u64)> = Default::default();
         for (&(k, ret), &(n, c)) in &t.sites {
-            let name = self.image.symbols.lookup(ret).map_or_else(|| format!("{ret:#010x}"), |(f, _)| f.to_string());
+            let name = self.image.symbols.lookup(ret).map_or_else(|| format!("{ret:#010x}"), |(f, o)| format!("{f}+{o:#x}"));
             let e = m.entry((k, name)).or_default();
             e.0 += n;
             e.1 += c;

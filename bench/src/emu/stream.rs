@@ -70,7 +70,7 @@ pub struct PlanBreakdown {
     pub functions: Vec<FnCost>,
     /// Per extra function asked for: (name, calls, inclusive cycles of all calls).
     pub inclusive: Vec<(String, usize, u64)>,
-    /// The extra functions' calls by calling function: (index into `inclusive`, caller,
+    /// The extra functions' calls by call site: (index into `inclusive`, `caller+offset`,
     /// calls, inclusive cycles), most cycles first.
     pub callers: Vec<(usize, String, u64, u64)>,
 }
