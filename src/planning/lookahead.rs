@@ -192,9 +192,12 @@ pub fn replan<const N: usize, const L: usize>(
     };
     let mut it = front.iter_mut().chain(back.iter_mut()).peekable();
     while let Some(b) = it.next() {
-        b.entry_q = b.rev_entry_q.min(entry);
-        let next_rev = it.peek().map_or(0, |n| n.rev_entry_q);
-        b.exit_q = next_rev.min(reach(table, b.entry_q, b.budget)).min(b.ramp.cruise_q);
+        let e = b.rev_entry_q.min(entry);
+        let bound = it.peek().map_or(0, |n| n.rev_entry_q).min(b.ramp.cruise_q);
+        // The reach from an unchanged entry is at least the exit it gave before (0 for a new
+        // block): a bound at or below that exit is the exit, without the search.
+        b.exit_q = if e == b.entry_q && bound <= b.exit_q { bound } else { bound.min(reach(table, e, b.budget)) };
+        b.entry_q = e;
         entry = b.exit_q;
     }
 }
@@ -203,6 +206,100 @@ pub fn replan<const N: usize, const L: usize>(
 mod tests {
     use super::*;
     use crate::motion::ramp::{period_of_hz, RampConfig, Shape};
+
+    /// The passes as they were before the forward pass reused exits: every reach searched.
+    fn replan_ref<const N: usize, const L: usize>(blocks: &mut [Block<N>], tail: Option<&Tail>, table: &RampTable<L>) {
+        let mut next_entry = 0;
+        for b in blocks.iter_mut().rev() {
+            let e = b.max_entry_q.min(reach(table, next_entry, b.budget));
+            if e == b.rev_entry_q {
+                break;
+            }
+            b.rev_entry_q = e;
+            next_entry = e;
+        }
+        let mut entry = tail.map_or(0, |t| reach(table, t.entry_q, t.budget).min(t.cruise_q));
+        for k in 0..blocks.len() {
+            let next_rev = blocks.get(k + 1).map_or(0, |n| n.rev_entry_q);
+            let b = &mut blocks[k];
+            b.entry_q = b.rev_entry_q.min(entry);
+            b.exit_q = next_rev.min(reach(table, b.entry_q, b.budget)).min(b.ramp.cruise_q);
+            entry = b.exit_q;
+        }
+    }
+
+    /// Pushes, hand-overs (the front block becomes the tail, or the engine runs dry) and
+    /// re-pricings in random order, the buffer as a ring (two slices): every entry and exit
+    /// equal to the reference passes' on the same sequence.
+    #[test]
+    fn replan_matches_the_full_passes() {
+        let mut r = 0x2545_F491_4F6C_DD1Du64;
+        let mut next = |n: u64| {
+            r ^= r << 13;
+            r ^= r >> 7;
+            r ^= r << 17;
+            r % n
+        };
+        let mut table = RampTable::<512>::new();
+        table.build(RampConfig { v0: 100, vmax: 60_000, accel: 200_000, shape: Shape::Trapezoid }).unwrap();
+        let top = table.top_q() as u64;
+        let mv = Move::<2>::new([100, 30], 5_000).unwrap();
+        for _ in 0..200 {
+            let mut ring: heapless::Deque<Block<2>, LOOKAHEAD> = heapless::Deque::new();
+            let mut flat: heapless::Vec<Block<2>, LOOKAHEAD> = heapless::Vec::new();
+            let (mut tail, mut tail_ref): (Option<Tail>, Option<Tail>) = (None, None);
+            for _ in 0..300 {
+                match next(10) {
+                    0..=5 if !ring.is_full() => {
+                        let cruise_q = next(top + 1) as u32;
+                        let junction_q = if next(4) == 0 { 0 } else { next(top + 1) as u32 };
+                        let bits = 8 + next(20);
+                        let mut ramp = RampPlan::lone(0, mv.cruise);
+                        ramp.cruise_q = cruise_q;
+                        let b = Block {
+                            mv,
+                            ramp,
+                            budget: next(1 << bits) as u32,
+                            junction_q,
+                            max_entry_q: junction_q.min(cruise_q),
+                            rev_entry_q: u32::MAX,
+                            entry_q: 0,
+                            exit_q: 0,
+                        };
+                        ring.push_back(b).unwrap();
+                        flat.push(b).unwrap();
+                    }
+                    6..=7 => {
+                        if let Some(b) = ring.pop_front() {
+                            tail = Some(b.tail());
+                            tail_ref = Some(flat.remove(0).tail());
+                        }
+                        continue; // (a hand-over replans nothing)
+                    }
+                    8 => {
+                        (tail, tail_ref) = (None, None);
+                    }
+                    _ => {
+                        for (b, f) in ring.iter_mut().zip(flat.iter_mut()) {
+                            let c = next(top + 1) as u32;
+                            for x in [b, f] {
+                                x.ramp.cruise_q = c;
+                                x.max_entry_q = x.junction_q.min(c);
+                                x.rev_entry_q = u32::MAX;
+                            }
+                        }
+                    }
+                }
+                let (front, back) = ring.as_mut_slices();
+                replan(front, back, tail.as_ref(), &table);
+                replan_ref(&mut flat, tail_ref.as_ref(), &table);
+                assert_eq!(ring.len(), flat.len());
+                for (b, f) in ring.iter().zip(&flat) {
+                    assert_eq!((b.rev_entry_q, b.entry_q, b.exit_q), (f.rev_entry_q, f.entry_q, f.exit_q));
+                }
+            }
+        }
+    }
 
     /// The cruise index is the lowest one at which the scaled table is at least as fast as
     /// the cruise, for random tables, scales and rates (also between entries, where rounding
