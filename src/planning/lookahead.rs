@@ -21,7 +21,7 @@
 use crate::num::u32_of;
 use crate::motion::prepared::RampPlan;
 use crate::motion::moves::{Move, Overrides, Rates};
-use crate::motion::ramp::{Period, Profile, RampTable, IDX_ONE};
+use crate::motion::ramp::{Period, Profile, RampTable, IDX_FRAC, IDX_ONE};
 use crate::motion::timing::Timing;
 use crate::motion::walk::DECEL_MARGIN;
 
@@ -134,16 +134,31 @@ pub fn walk_of(share: f32, accel: f32, per_mm: f32, t_accel: f32) -> (f32, u32) 
 /// period of `cruise_bits` (1/16 tick); the top when it never is. So the table never holds a
 /// move below its own cruise: a rate's index rounded down (`index_of_hz`) and the
 /// interpolation's truncation would leave it slower by a 1/16 tick or more (59 996 Hz for a
-/// 60 kHz G0). Integer binary search (the interpolated period never rises with the index).
+/// 60 kHz G0). Integer binary searches (the interpolated period never rises with the index):
+/// over the entries (array reads), then over the fraction within the entry found.
 fn cruise_index<const L: usize>(table: &RampTable<L>, scale: u32, cruise_bits: u32) -> u32 {
-    let fast = |q: u32| (table.period_at(q).to_bits() as u64 * scale as u64) >> 16 <= cruise_bits as u64;
-    let (mut lo, mut hi) = (0u32, table.top_q());
-    if table.is_empty() || fast(lo) {
+    let fast_bits = |p: u32| (p as u64 * scale as u64) >> 16 <= cruise_bits as u64;
+    let fast = |q: u32| fast_bits(table.period_at(q).to_bits());
+    let periods = table.periods();
+    let entry = |i: usize| fast_bits(periods.get(i).map_or(0, |p| p.to_bits()));
+    let top = periods.len().saturating_sub(1);
+    if periods.is_empty() || entry(0) {
         return 0;
     }
-    if !fast(hi) {
-        return hi;
+    if !entry(top) {
+        return table.top_q();
     }
+    // The first fast entry `hi` (entry `i` is `period_at(i << 20)`); invariant: !entry(lo), entry(hi).
+    let (mut lo, mut hi) = (0usize, top);
+    while hi - lo > 1 {
+        let mid = lo + (hi - lo) / 2;
+        if entry(mid) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    let (mut lo, mut hi) = ((lo as u32) << IDX_FRAC, (hi as u32) << IDX_FRAC);
     // Invariant: !fast(lo), fast(hi).
     while hi - lo > 1 {
         let mid = lo + (hi - lo) / 2;
@@ -206,6 +221,27 @@ pub fn replan<const N: usize, const L: usize>(
 mod tests {
     use super::*;
     use crate::motion::ramp::{period_of_hz, RampConfig, Shape};
+
+    /// The search as it was: one bisection over every Q20 index.
+    fn cruise_index_ref<const L: usize>(table: &RampTable<L>, scale: u32, cruise_bits: u32) -> u32 {
+        let fast = |q: u32| (table.period_at(q).to_bits() as u64 * scale as u64) >> 16 <= cruise_bits as u64;
+        let (mut lo, mut hi) = (0u32, table.top_q());
+        if table.is_empty() || fast(lo) {
+            return 0;
+        }
+        if !fast(hi) {
+            return hi;
+        }
+        while hi - lo > 1 {
+            let mid = lo + (hi - lo) / 2;
+            if fast(mid) {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        hi
+    }
 
     /// The passes as they were before the forward pass reused exits: every reach searched.
     fn replan_ref<const N: usize, const L: usize>(blocks: &mut [Block<N>], tail: Option<&Tail>, table: &RampTable<L>) {
@@ -302,8 +338,9 @@ mod tests {
     }
 
     /// The cruise index is the lowest one at which the scaled table is at least as fast as
-    /// the cruise, for random tables, scales and rates (also between entries, where rounding
-    /// the index down would leave the table up to a 1/16 tick slow).
+    /// the cruise, for random tables (leads), scales and rates (also between entries, where
+    /// rounding the index down would leave the table up to a 1/16 tick slow); the same index
+    /// as one bisection over every Q20 index.
     #[test]
     fn cruise_index_is_the_first_index_fast_enough() {
         let mut r = 0x9E37_79B9_7F4A_7C15u64;
@@ -319,7 +356,8 @@ mod tests {
             let vmax = v0 + next(300_000) as u32;
             let accel = 1_000 + next(20_000_000) as u32;
             let shape = if next(2) == 0 { Shape::Trapezoid } else { Shape::SCurve };
-            if table.build(RampConfig { v0, vmax, accel, shape }).is_err() {
+            let lead = next(IDX_ONE as u64 / 2 + 1) as u32;
+            if table.build_led(RampConfig { v0, vmax, accel, shape }, lead).is_err() {
                 continue;
             }
             for _ in 0..50 {
@@ -328,6 +366,7 @@ mod tests {
                 let cruise = period_of_hz(hz).to_bits();
                 let fast = |q: u32| (table.period_at(q).to_bits() as u64 * scale as u64) >> 16 <= cruise as u64;
                 let q = cruise_index(&table, scale, cruise);
+                assert_eq!(q, cruise_index_ref(&table, scale, cruise), "{hz} Hz, scale {scale}");
                 assert!(q <= table.top_q());
                 if q > 0 {
                     assert!(!fast(q - 1), "{hz} Hz: {q} is not the first");
