@@ -137,32 +137,21 @@ pub fn walk_of(share: f32, accel: f32, per_mm: f32, t_accel: f32) -> (f32, u32) 
 /// 60 kHz G0). Integer binary searches (the interpolated period never rises with the index):
 /// over the entries (array reads), then over the fraction within the entry found.
 fn cruise_index<const L: usize>(table: &RampTable<L>, scale: u32, cruise_bits: u32) -> u32 {
-    let fast_bits = |p: u32| (p as u64 * scale as u64) >> 16 <= cruise_bits as u64;
-    let fast = |q: u32| fast_bits(table.period_at(q).to_bits());
+    let fast = |p: Period| (p.to_bits() as u64 * scale as u64) >> 16 <= cruise_bits as u64;
+    // The first fast entry (entry `k` is `period_at(k << 20)`), `len` when none is.
     let periods = table.periods();
-    let entry = |i: usize| fast_bits(periods.get(i).map_or(0, |p| p.to_bits()));
-    let top = periods.len().saturating_sub(1);
-    if periods.is_empty() || entry(0) {
+    let k = periods.partition_point(|p| !fast(*p)) as u32;
+    if k == 0 {
         return 0;
     }
-    if !entry(top) {
+    if k as usize == periods.len() {
         return table.top_q();
     }
-    // The first fast entry `hi` (entry `i` is `period_at(i << 20)`); invariant: !entry(lo), entry(hi).
-    let (mut lo, mut hi) = (0usize, top);
+    // Then the first fast fraction before it; invariant: !fast(lo), fast(hi).
+    let (mut lo, mut hi) = ((k - 1) << IDX_FRAC, k << IDX_FRAC);
     while hi - lo > 1 {
         let mid = lo + (hi - lo) / 2;
-        if entry(mid) {
-            hi = mid;
-        } else {
-            lo = mid;
-        }
-    }
-    let (mut lo, mut hi) = ((lo as u32) << IDX_FRAC, (hi as u32) << IDX_FRAC);
-    // Invariant: !fast(lo), fast(hi).
-    while hi - lo > 1 {
-        let mid = lo + (hi - lo) / 2;
-        if fast(mid) {
+        if fast(table.period_at(mid)) {
             hi = mid;
         } else {
             lo = mid;
