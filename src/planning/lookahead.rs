@@ -181,8 +181,11 @@ pub fn replan<const N: usize, const L: usize>(
     tail: Option<&Tail>,
     table: &RampTable<L>,
 ) {
+    // (The two slices by index, as one sequence: smaller and faster than chained iterators.)
+    let n = front.len() + back.len();
     let mut next_entry = 0;
-    for b in back.iter_mut().rev().chain(front.iter_mut().rev()) {
+    for k in (0..n).rev() {
+        let Some(b) = at(front, back, k) else { break };
         let e = b.max_entry_q.min(reach(table, next_entry, b.budget));
         if e == b.rev_entry_q {
             break;
@@ -194,15 +197,24 @@ pub fn replan<const N: usize, const L: usize>(
         Some(t) => reach(table, t.entry_q, t.budget).min(t.cruise_q),
         None => 0,
     };
-    let mut it = front.iter_mut().chain(back.iter_mut()).peekable();
-    while let Some(b) = it.next() {
+    for k in 0..n {
+        let next_rev = at(front, back, k + 1).map_or(0, |n| n.rev_entry_q);
+        let Some(b) = at(front, back, k) else { break };
         let e = b.rev_entry_q.min(entry);
-        let bound = it.peek().map_or(0, |n| n.rev_entry_q).min(b.ramp.cruise_q);
+        let bound = next_rev.min(b.ramp.cruise_q);
         // The reach from an unchanged entry is at least the exit it gave before (0 for a new
         // block): a bound at or below that exit is the exit, without the search.
         b.exit_q = if e == b.entry_q && bound <= b.exit_q { bound } else { bound.min(reach(table, e, b.budget)) };
         b.entry_q = e;
         entry = b.exit_q;
+    }
+}
+
+// block `k` of the sequence `front` then `back`
+fn at<'a, const N: usize>(front: &'a mut [Block<N>], back: &'a mut [Block<N>], k: usize) -> Option<&'a mut Block<N>> {
+    match k.checked_sub(front.len()) {
+        None => front.get_mut(k),
+        Some(j) => back.get_mut(j),
     }
 }
 
