@@ -134,24 +134,29 @@ pub fn walk_of(share: f32, accel: f32, per_mm: f32, t_accel: f32) -> (f32, u32) 
 /// period of `cruise_bits` (1/16 tick); the top when it never is. So the table never holds a
 /// move below its own cruise: a rate's index rounded down (`index_of_hz`) and the
 /// interpolation's truncation would leave it slower by a 1/16 tick or more (59 996 Hz for a
-/// 60 kHz G0). Integer binary searches (the interpolated period never rises with the index):
-/// over the entries (array reads), then over the fraction within the entry found.
+/// 60 kHz G0). Integer binary search (the interpolated period never rises with the index).
 fn cruise_index<const L: usize>(table: &RampTable<L>, scale: u32, cruise_bits: u32) -> u32 {
     let fast = |p: Period| (p.to_bits() as u64 * scale as u64) >> 16 <= cruise_bits as u64;
-    // The first fast entry (entry `k` is `period_at(k << 20)`), `len` when none is.
     let periods = table.periods();
-    let k = periods.partition_point(|p| !fast(*p)) as u32;
-    if k == 0 {
+    let (Some(&first), Some(&last)) = (periods.first(), periods.last()) else { return 0 };
+    let (mut lo, mut hi) = (0u32, table.top_q());
+    if fast(first) {
         return 0;
     }
-    if k as usize == periods.len() {
-        return table.top_q();
+    if !fast(last) {
+        return hi;
     }
-    // Then the first fast fraction before it; invariant: !fast(lo), fast(hi).
-    let (mut lo, mut hi) = ((k - 1) << IDX_FRAC, k << IDX_FRAC);
+    // Invariant: !fast(lo), fast(hi). Whole entries first (entry `i` is `period_at(i << 20)`)
+    // while they are more than one apart, then the fraction.
     while hi - lo > 1 {
-        let mid = lo + (hi - lo) / 2;
-        if fast(table.period_at(mid)) {
+        let (mid, p) = if hi - lo > IDX_ONE {
+            let i = ((lo >> IDX_FRAC) + (hi >> IDX_FRAC)) / 2;
+            (i << IDX_FRAC, periods.get(i as usize).copied().unwrap_or(first))
+        } else {
+            let mid = lo + (hi - lo) / 2;
+            (mid, table.period_at(mid))
+        };
+        if fast(p) {
             hi = mid;
         } else {
             lo = mid;
