@@ -18,7 +18,7 @@
 pub mod block;
 pub mod number;
 
-pub use block::{group, parse, Block, Motion, NonModal, Stop};
+pub use block::{group, parse, parse_into, Block, Motion, NonModal, Stop};
 pub use number::parse_number;
 
 use crate::planning::arc::{Arc, Center};
