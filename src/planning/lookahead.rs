@@ -151,7 +151,7 @@ fn cruise_index<const L: usize>(table: &RampTable<L>, scale: u32, cruise_bits: u
     while hi - lo > 1 {
         let (mid, p) = if hi - lo > IDX_ONE {
             let i = ((lo >> IDX_FRAC) + (hi >> IDX_FRAC)) / 2;
-            (i << IDX_FRAC, periods.get(i as usize).copied().unwrap_or(first))
+            (i << IDX_FRAC, table.period(i as usize))
         } else {
             let mid = lo + (hi - lo) / 2;
             (mid, table.period_at(mid))
