@@ -179,7 +179,6 @@ impl<'a, const N: usize> Feeder<'a, N> {
 
     /// Prepares the oldest buffered move and publishes it.
     /// (No replan here: handing over the front block leaves the plan of the rest as it was.)
-    #[inline(never)]
     fn commit(&mut self) {
         // (Read in place and dropped at the end: no copy of the block.)
         let Some(b) = self.blocks.front() else { return };

@@ -234,7 +234,6 @@ impl<const N: usize> Planner<N> {
 /// acceleration the axes allow along the change of direction,
 /// `v² = acc·dev·sin(θ/2)/(1 − sin(θ/2))`; 0 for a reversal, unlimited straight on.
 /// In f32 like the rest of the planner (and Grbl).
-#[inline(never)]
 pub fn junction_speed<const N: usize>(a: &[f32; N], b: &[f32; N], axis_accel: &[f32; N], dev: f32) -> f32 {
     let mut cos = 0.0f32;
     let mut ju = [0.0f32; N];
