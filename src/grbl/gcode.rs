@@ -18,7 +18,7 @@
 pub mod block;
 pub mod number;
 
-pub use block::{group, parse, Block, Motion, NonModal, Stop};
+pub use block::{group, parse, parse_into, Block, Motion, NonModal, Stop};
 pub use number::parse_number;
 
 use crate::planning::arc::{Arc, Center};
@@ -220,7 +220,8 @@ impl Modal {
         let in_range = |v: f32| if libm::fabsf(v) <= MAX_MM { Ok(v) } else { Err(Error::InvalidTarget) };
         let mut words = [None; N];
         for (w, a) in words.iter_mut().zip(&b.axes) {
-            *w = a.map(|v| in_range(v * unit)).transpose()?;
+            // (× 1.0 in mm is the same value: skipped.)
+            *w = a.map(|v| in_range(if m.inches { v * unit } else { v })).transpose()?;
         }
         if let Some(on) = b.tool_length {
             // G43.1 takes exactly the tool length axis.

@@ -7,7 +7,7 @@
 //! `!` while jogging) cancels them (see the controller).
 
 use crate::grbl::coords::Offsets;
-use crate::grbl::gcode::{group, parse, Block, Modal, Motion, NonModal};
+use crate::grbl::gcode::{group, parse_into, Block, Modal, Motion, NonModal};
 use crate::error::Error;
 use crate::planning::exact::Decimal;
 
@@ -31,7 +31,8 @@ pub fn plan<const N: usize>(
     pos: &[f32; N],
     off: &Offsets<N>,
 ) -> Result<Jog<N>, Error> {
-    let b: Block<N> = parse(line)?;
+    let mut b = Block::<N>::empty();
+    parse_into(line, &mut b)?;
     if b.axes.get(axes..).is_some_and(|a| a.iter().any(Option::is_some)) {
         return Err(Error::UnsupportedCommand);
     }

@@ -179,9 +179,9 @@ impl<'a, const N: usize> Feeder<'a, N> {
 
     /// Prepares the oldest buffered move and publishes it.
     /// (No replan here: handing over the front block leaves the plan of the rest as it was.)
-    #[inline(never)]
     fn commit(&mut self) {
-        let Some(b) = self.blocks.pop_front() else { return };
+        // (Read in place and dropped at the end: no copy of the block.)
+        let Some(b) = self.blocks.front() else { return };
         let profile = self.slot.producer_view();
         let mut ramp = b.ramp;
         ramp.exit_q = b.exit_q;
@@ -190,13 +190,15 @@ impl<'a, const N: usize> Feeder<'a, N> {
         let p = Prepared::new(steps, b.mv.master as usize, start, ramp, b.mv.rates(), &profile.timing, &self.pins, &mut self.dir, self.shared.epoch());
         // The last prepared move may now run through into this one.
         self.ring.set_last_exit(b.entry_q);
+        let tail = b.tail();
+        self.blocks.pop_front();
         if self.ring.push(p).is_err() {
             return; // unreachable: the caller checked for room
         }
         for (q, s) in self.pos.iter_mut().zip(steps) {
             *q = q.wrapping_add(s);
         }
-        self.tail = Some(b.tail());
+        self.tail = Some(tail);
     }
 
     /// An override changed: prices every queued move again (see the module docs).

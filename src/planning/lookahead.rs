@@ -21,7 +21,7 @@
 use crate::num::u32_of;
 use crate::motion::prepared::RampPlan;
 use crate::motion::moves::{Move, Overrides, Rates};
-use crate::motion::ramp::{Period, Profile, RampTable, IDX_ONE};
+use crate::motion::ramp::{Period, Profile, RampTable, IDX_FRAC, IDX_ONE};
 use crate::motion::timing::Timing;
 use crate::motion::walk::DECEL_MARGIN;
 
@@ -136,18 +136,27 @@ pub fn walk_of(share: f32, accel: f32, per_mm: f32, t_accel: f32) -> (f32, u32) 
 /// interpolation's truncation would leave it slower by a 1/16 tick or more (59 996 Hz for a
 /// 60 kHz G0). Integer binary search (the interpolated period never rises with the index).
 fn cruise_index<const L: usize>(table: &RampTable<L>, scale: u32, cruise_bits: u32) -> u32 {
-    let fast = |q: u32| (table.period_at(q).to_bits() as u64 * scale as u64) >> 16 <= cruise_bits as u64;
+    let fast = |p: Period| (p.to_bits() as u64 * scale as u64) >> 16 <= cruise_bits as u64;
+    let periods = table.periods();
+    let (Some(&first), Some(&last)) = (periods.first(), periods.last()) else { return 0 };
     let (mut lo, mut hi) = (0u32, table.top_q());
-    if table.is_empty() || fast(lo) {
+    if fast(first) {
         return 0;
     }
-    if !fast(hi) {
+    if !fast(last) {
         return hi;
     }
-    // Invariant: !fast(lo), fast(hi).
+    // Invariant: !fast(lo), fast(hi). Whole entries first (entry `i` is `period_at(i << 20)`)
+    // while they are more than one apart, then the fraction.
     while hi - lo > 1 {
-        let mid = lo + (hi - lo) / 2;
-        if fast(mid) {
+        let (mid, p) = if hi - lo > IDX_ONE {
+            let i = ((lo >> IDX_FRAC) + (hi >> IDX_FRAC)) / 2;
+            (i << IDX_FRAC, table.period(i as usize))
+        } else {
+            let mid = lo + (hi - lo) / 2;
+            (mid, table.period_at(mid))
+        };
+        if fast(p) {
             hi = mid;
         } else {
             lo = mid;
@@ -177,8 +186,11 @@ pub fn replan<const N: usize, const L: usize>(
     tail: Option<&Tail>,
     table: &RampTable<L>,
 ) {
+    // (The two slices by index, as one sequence: smaller and faster than chained iterators.)
+    let n = front.len() + back.len();
     let mut next_entry = 0;
-    for b in back.iter_mut().rev().chain(front.iter_mut().rev()) {
+    for k in (0..n).rev() {
+        let Some(b) = at(front, back, k) else { break };
         let e = b.max_entry_q.min(reach(table, next_entry, b.budget));
         if e == b.rev_entry_q {
             break;
@@ -190,12 +202,24 @@ pub fn replan<const N: usize, const L: usize>(
         Some(t) => reach(table, t.entry_q, t.budget).min(t.cruise_q),
         None => 0,
     };
-    let mut it = front.iter_mut().chain(back.iter_mut()).peekable();
-    while let Some(b) = it.next() {
-        b.entry_q = b.rev_entry_q.min(entry);
-        let next_rev = it.peek().map_or(0, |n| n.rev_entry_q);
-        b.exit_q = next_rev.min(reach(table, b.entry_q, b.budget)).min(b.ramp.cruise_q);
+    for k in 0..n {
+        let next_rev = at(front, back, k + 1).map_or(0, |n| n.rev_entry_q);
+        let Some(b) = at(front, back, k) else { break };
+        let e = b.rev_entry_q.min(entry);
+        let bound = next_rev.min(b.ramp.cruise_q);
+        // The reach from an unchanged entry is at least the exit it gave before (0 for a new
+        // block): a bound at or below that exit is the exit, without the search.
+        b.exit_q = if e == b.entry_q && bound <= b.exit_q { bound } else { bound.min(reach(table, e, b.budget)) };
+        b.entry_q = e;
         entry = b.exit_q;
+    }
+}
+
+// block `k` of the sequence `front` then `back`
+fn at<'a, const N: usize>(front: &'a mut [Block<N>], back: &'a mut [Block<N>], k: usize) -> Option<&'a mut Block<N>> {
+    match k.checked_sub(front.len()) {
+        None => front.get_mut(k),
+        Some(j) => back.get_mut(j),
     }
 }
 
@@ -204,9 +228,125 @@ mod tests {
     use super::*;
     use crate::motion::ramp::{period_of_hz, RampConfig, Shape};
 
+    /// The search as it was: one bisection over every Q20 index.
+    fn cruise_index_ref<const L: usize>(table: &RampTable<L>, scale: u32, cruise_bits: u32) -> u32 {
+        let fast = |q: u32| (table.period_at(q).to_bits() as u64 * scale as u64) >> 16 <= cruise_bits as u64;
+        let (mut lo, mut hi) = (0u32, table.top_q());
+        if table.is_empty() || fast(lo) {
+            return 0;
+        }
+        if !fast(hi) {
+            return hi;
+        }
+        while hi - lo > 1 {
+            let mid = lo + (hi - lo) / 2;
+            if fast(mid) {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        hi
+    }
+
+    /// The passes as they were before the forward pass reused exits: every reach searched.
+    fn replan_ref<const N: usize, const L: usize>(blocks: &mut [Block<N>], tail: Option<&Tail>, table: &RampTable<L>) {
+        let mut next_entry = 0;
+        for b in blocks.iter_mut().rev() {
+            let e = b.max_entry_q.min(reach(table, next_entry, b.budget));
+            if e == b.rev_entry_q {
+                break;
+            }
+            b.rev_entry_q = e;
+            next_entry = e;
+        }
+        let mut entry = tail.map_or(0, |t| reach(table, t.entry_q, t.budget).min(t.cruise_q));
+        for k in 0..blocks.len() {
+            let next_rev = blocks.get(k + 1).map_or(0, |n| n.rev_entry_q);
+            let b = &mut blocks[k];
+            b.entry_q = b.rev_entry_q.min(entry);
+            b.exit_q = next_rev.min(reach(table, b.entry_q, b.budget)).min(b.ramp.cruise_q);
+            entry = b.exit_q;
+        }
+    }
+
+    /// Pushes, hand-overs (the front block becomes the tail, or the engine runs dry) and
+    /// re-pricings in random order, the buffer as a ring (two slices): every entry and exit
+    /// equal to the reference passes' on the same sequence.
+    #[test]
+    fn replan_matches_the_full_passes() {
+        let mut r = 0x2545_F491_4F6C_DD1Du64;
+        let mut next = |n: u64| {
+            r ^= r << 13;
+            r ^= r >> 7;
+            r ^= r << 17;
+            r % n
+        };
+        let mut table = RampTable::<512>::new();
+        table.build(RampConfig { v0: 100, vmax: 60_000, accel: 200_000, shape: Shape::Trapezoid }).unwrap();
+        let top = table.top_q() as u64;
+        let mv = Move::<2>::new([100, 30], 5_000).unwrap();
+        for _ in 0..200 {
+            let mut ring: heapless::Deque<Block<2>, LOOKAHEAD> = heapless::Deque::new();
+            let mut flat: heapless::Vec<Block<2>, LOOKAHEAD> = heapless::Vec::new();
+            let (mut tail, mut tail_ref): (Option<Tail>, Option<Tail>) = (None, None);
+            for _ in 0..300 {
+                match next(10) {
+                    0..=5 if !ring.is_full() => {
+                        let cruise_q = next(top + 1) as u32;
+                        let junction_q = if next(4) == 0 { 0 } else { next(top + 1) as u32 };
+                        let bits = 8 + next(20);
+                        let mut ramp = RampPlan::lone(0, mv.cruise);
+                        ramp.cruise_q = cruise_q;
+                        let b = Block {
+                            mv,
+                            ramp,
+                            budget: next(1 << bits) as u32,
+                            junction_q,
+                            max_entry_q: junction_q.min(cruise_q),
+                            rev_entry_q: u32::MAX,
+                            entry_q: 0,
+                            exit_q: 0,
+                        };
+                        ring.push_back(b).unwrap();
+                        flat.push(b).unwrap();
+                    }
+                    6..=7 => {
+                        if let Some(b) = ring.pop_front() {
+                            tail = Some(b.tail());
+                            tail_ref = Some(flat.remove(0).tail());
+                        }
+                        continue; // (a hand-over replans nothing)
+                    }
+                    8 => {
+                        (tail, tail_ref) = (None, None);
+                    }
+                    _ => {
+                        for (b, f) in ring.iter_mut().zip(flat.iter_mut()) {
+                            let c = next(top + 1) as u32;
+                            for x in [b, f] {
+                                x.ramp.cruise_q = c;
+                                x.max_entry_q = x.junction_q.min(c);
+                                x.rev_entry_q = u32::MAX;
+                            }
+                        }
+                    }
+                }
+                let (front, back) = ring.as_mut_slices();
+                replan(front, back, tail.as_ref(), &table);
+                replan_ref(&mut flat, tail_ref.as_ref(), &table);
+                assert_eq!(ring.len(), flat.len());
+                for (b, f) in ring.iter().zip(&flat) {
+                    assert_eq!((b.rev_entry_q, b.entry_q, b.exit_q), (f.rev_entry_q, f.entry_q, f.exit_q));
+                }
+            }
+        }
+    }
+
     /// The cruise index is the lowest one at which the scaled table is at least as fast as
-    /// the cruise, for random tables, scales and rates (also between entries, where rounding
-    /// the index down would leave the table up to a 1/16 tick slow).
+    /// the cruise, for random tables (leads), scales and rates (also between entries, where
+    /// rounding the index down would leave the table up to a 1/16 tick slow); the same index
+    /// as one bisection over every Q20 index.
     #[test]
     fn cruise_index_is_the_first_index_fast_enough() {
         let mut r = 0x9E37_79B9_7F4A_7C15u64;
@@ -222,7 +362,8 @@ mod tests {
             let vmax = v0 + next(300_000) as u32;
             let accel = 1_000 + next(20_000_000) as u32;
             let shape = if next(2) == 0 { Shape::Trapezoid } else { Shape::SCurve };
-            if table.build(RampConfig { v0, vmax, accel, shape }).is_err() {
+            let lead = next(IDX_ONE as u64 / 2 + 1) as u32;
+            if table.build_led(RampConfig { v0, vmax, accel, shape }, lead).is_err() {
                 continue;
             }
             for _ in 0..50 {
@@ -231,6 +372,7 @@ mod tests {
                 let cruise = period_of_hz(hz).to_bits();
                 let fast = |q: u32| (table.period_at(q).to_bits() as u64 * scale as u64) >> 16 <= cruise as u64;
                 let q = cruise_index(&table, scale, cruise);
+                assert_eq!(q, cruise_index_ref(&table, scale, cruise), "{hz} Hz, scale {scale}");
                 assert!(q <= table.top_q());
                 if q > 0 {
                     assert!(!fast(q - 1), "{hz} Hz: {q} is not the first");

@@ -458,6 +458,27 @@ impl Board {
         Ok(())
     }
 
+    // cycles per function (exclusive) of the thread-mode blocks run inside the timed calls so far
+    pub fn timed_profile(&self) -> Vec<FnCost> {
+        self.cpu.get_data().fn_timer.as_ref().map_or_else(Vec::new, |t| profile::by_function(&t.inside, &self.image.symbols, 0))
+    }
+
+    // the timed calls so far by call site: (index into the names, `function+offset` of the
+    // return address, calls, inclusive cycles), most cycles first
+    pub fn timed_callers(&self) -> Vec<(usize, String, u64, u64)> {
+        let Some(t) = self.cpu.get_data().fn_timer.as_ref() else { return Vec::new() };
+        let mut m: std::collections::HashMap<(usize, String), (u64, u64)> = Default::default();
+        for (&(k, ret), &(n, c)) in &t.sites {
+            let name = self.image.symbols.lookup(ret).map_or_else(|| format!("{ret:#010x}"), |(f, o)| format!("{f}+{o:#x}"));
+            let e = m.entry((k, name)).or_default();
+            e.0 += n;
+            e.1 += c;
+        }
+        let mut v: Vec<_> = m.into_iter().map(|((k, f), (n, c))| (k, f, n, c)).collect();
+        v.sort_by(|a, b| b.3.cmp(&a.3).then(a.1.cmp(&b.1)));
+        v
+    }
+
     // the timed calls so far: (index into the names, inclusive thread-mode cycles, machine
     // cycle at return); timing stops
     pub fn timed_calls(&mut self) -> Vec<(usize, u64, u64)> {

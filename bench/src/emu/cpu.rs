@@ -259,12 +259,21 @@ fn time_calls(uc: &mut Unicorn<Mcu>, addr: u32) {
     let m = uc.get_data_mut();
     let (now, thread) = (m.now, m.thread_cycles);
     let Some(t) = m.fn_timer.as_mut() else { return };
-    if let Some(&(ret, at_sp, k, start)) = t.open.last() {
-        if ret == addr && sp >= at_sp {
-            t.open.pop();
-            t.done.push((k, thread - start, now));
-            return;
+    // a tail call returns to its caller's return address: every call that ends here closes
+    let mut closed = false;
+    while let Some(&(ret, at_sp, k, start)) = t.open.last() {
+        if ret != addr || sp < at_sp {
+            break;
         }
+        t.open.pop();
+        t.done.push((k, thread - start, now));
+        let site = t.sites.entry((k, ret)).or_default();
+        site.0 += 1;
+        site.1 += thread - start;
+        closed = true;
+    }
+    if closed {
+        return;
     }
     if let Some(&(_, k)) = t.targets.iter().find(|(a, _)| *a == addr) {
         t.open.push((lr & !1, sp, k, thread));

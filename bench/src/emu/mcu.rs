@@ -222,6 +222,9 @@ impl Mcu {
         }
         if self.nvic.ipsr() == 0 {
             self.thread_cycles += cycles;
+            if let Some(t) = self.fn_timer.as_mut().filter(|t| !t.open.is_empty()) {
+                t.inside.add(0, start, cycles, insns);
+            }
         }
         if let Some(b) = &mut self.isr_blocks {
             if self.nvic.ipsr() == super::nvic::IRQ0 + TIM2_IRQ {

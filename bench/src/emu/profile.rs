@@ -47,11 +47,18 @@ impl Symbols {
         let Ok(file) = object::File::parse(elf) else { return Self::default() };
         let mut v: Vec<(u32, u32, String)> = file
             .symbols()
-            .filter(|s| s.kind() == SymbolKind::Text && s.size() > 0)
+            .filter(|s| s.kind() == SymbolKind::Text)
             .filter_map(|s| Some(((s.address() & !1) as u32, s.size() as u32, demangle(s.name().ok()?))))
             .collect();
-        v.sort();
+        // sized symbols first at an address; an unsized one (hand-written assembly such as
+        // compiler-builtins' `memcpy`) reaches to the next symbol
+        v.sort_by(|a, b| a.0.cmp(&b.0).then(b.1.cmp(&a.1)).then(a.2.cmp(&b.2)));
         v.dedup_by_key(|s| s.0);
+        for i in 0..v.len() {
+            if v[i].1 == 0 {
+                v[i].1 = v.get(i + 1).map_or(0, |n| n.0 - v[i].0);
+            }
+        }
         Self(v)
     }
 
@@ -130,8 +137,12 @@ pub fn by_block(h: &Histogram, syms: &Symbols, exc: u32) -> Vec<(String, Count)>
         .collect()
 }
 
-// legacy Rust symbol demangling (`_ZN...E`, hash dropped); other names pass through
+// legacy Rust symbol demangling (`_ZN...E`, hash dropped); a v0 name (`_R...`, e.g.
+// compiler-builtins' soft float) as its crate and last identifier; other names pass through
 pub fn demangle(sym: &str) -> String {
+    if sym.starts_with("_R") {
+        return demangle_v0_last(sym).unwrap_or_else(|| sym.to_string());
+    }
     let Some(mut rest) = sym.strip_prefix("_ZN") else { return sym.to_string() };
     let mut parts = Vec::new();
     while let Some(len_end) = rest.find(|c: char| !c.is_ascii_digit()).filter(|&i| i > 0) {
@@ -145,6 +156,29 @@ pub fn demangle(sym: &str) -> String {
     }
     let parts: Vec<String> = parts.iter().map(|p| unescape(p.strip_prefix("_$").map_or(p, |_| &p[1..]))).collect();
     parts.join("::")
+}
+
+// `crate::ident` of a v0 symbol: the crate named after the hash (`Cs<hash>_<len><name>`) and the
+// identifier that ends the symbol (`<len>[_]<ident>`)
+fn demangle_v0_last(sym: &str) -> Option<String> {
+    let b = sym.as_bytes();
+    let ident = (2..b.len()).find_map(|i| {
+        if i > 0 && b[i - 1].is_ascii_digit() || !b[i].is_ascii_digit() {
+            return None;
+        }
+        let end = (i..b.len()).find(|&j| !b[j].is_ascii_digit())?;
+        let len: usize = sym[i..end].parse().ok()?;
+        let start = end + (b.get(end) == Some(&b'_')) as usize;
+        (start + len == b.len() && len > 0).then(|| &sym[start..])
+    })?;
+    let krate = sym.find("Cs").and_then(|c| {
+        let r = &sym[c + 2..];
+        let r = &r[r.find('_')? + 1..];
+        let end = r.find(|ch: char| !ch.is_ascii_digit())?;
+        let len: usize = r[..end].parse().ok()?;
+        r.get(end..end + len)
+    });
+    Some(krate.map_or_else(|| ident.to_string(), |k| format!("{k}::{ident}")))
 }
 
 fn unescape(p: &str) -> String {
@@ -169,6 +203,8 @@ mod tests {
         assert_eq!(demangle("_ZN7ddastep6motion6engine19Engine$LT$_$C$_$GT$4tick17h2546dee6a00bc47dE"), "ddastep::motion::engine::Engine<_,_>::tick");
         assert_eq!(demangle("TIM2"), "TIM2");
         assert_eq!(demangle("_ZN4core3ptr13drop_in_place17h0123456789abcdefE"), "core::ptr::drop_in_place");
+        assert_eq!(demangle("_RNvNtNtCseL1MqMlhvy0_17compiler_builtins5float3div8___divsf3"), "compiler_builtins::__divsf3");
+        assert_eq!(demangle("_RNvNtNtCseL1MqMlhvy0_17compiler_builtins5float3mul8___mulsf3"), "compiler_builtins::__mulsf3");
     }
 }
 
@@ -184,6 +220,11 @@ pub struct FnTimer {
     pub open: Vec<(u32, u32, usize, u64)>,
     /// Finished calls: (target index, inclusive thread-mode cycles, machine cycle at return).
     pub done: Vec<(usize, u64, u64)>,
+    /// Finished calls by call site: (target index, return address) → (calls, inclusive cycles).
+    pub sites: HashMap<(usize, u32), (u64, u64)>,
+    /// Thread-mode blocks run while a timed call was open (exception 0): where the timed
+    /// calls' cycles go, per function with `by_function`.
+    pub inside: Histogram,
 }
 
 /// Where the engine's moves end: every entry of the step half's `finish` (the running move

@@ -5,6 +5,7 @@
 
 use anyhow::{ensure, Result};
 
+use super::profile::FnCost;
 use super::{Board, StepIsr, HZ};
 
 /// What one stream measured.
@@ -62,8 +63,27 @@ pub fn segments(n: usize, feed: f64, seed: u64) -> Vec<String> {
     out
 }
 
+/// Where the parse + plan cycles of [`StreamResult::plan`] go.
+#[derive(Clone, Debug, Default)]
+pub struct PlanBreakdown {
+    /// Exclusive cycles per function inside the timed `gcode` and `push` calls, most first.
+    pub functions: Vec<FnCost>,
+    /// Per extra function asked for: (name, calls, inclusive cycles of all calls).
+    pub inclusive: Vec<(String, usize, u64)>,
+    /// The extra functions' calls by call site: (index into `inclusive`, `caller+offset`,
+    /// calls, inclusive cycles), most cycles first.
+    pub callers: Vec<(usize, String, u64, u64)>,
+}
+
 /// Streams `segments(n, 3000, seed)` into a booted `board` and measures.
 pub fn stream_segments(board: &mut Board, n: usize, seed: u64) -> Result<StreamResult> {
+    Ok(stream_segments_profiled(board, n, seed, &[])?.0)
+}
+
+/// [`stream_segments`], with where the parse + plan cycles go: exclusive per function, and
+/// inclusive for the functions named in `extra` (demangled, generics as `<_>`; calls within
+/// the measured lines).
+pub fn stream_segments_profiled(board: &mut Board, n: usize, seed: u64, extra: &[&str]) -> Result<(StreamResult, PlanBreakdown)> {
     let lines = segments(n, 3000.0, seed);
     board.set_profile(true);
     let mut first_step = None;
@@ -71,10 +91,12 @@ pub fn stream_segments(board: &mut Board, n: usize, seed: u64) -> Result<StreamR
     for (i, l) in lines.iter().enumerate() {
         if i == 40 {
             board.reset_step_isr_stats();
-            board.time_functions(&[
+            let mut names = vec![
                 "ddastep::grbl::controller::lines::<impl ddastep::grbl::controller::Controller<_>>::gcode",
                 "ddastep::grbl::controller::poll::<impl ddastep::grbl::controller::Controller<_>>::push",
-            ])?;
+            ];
+            names.extend_from_slice(extra);
+            board.time_functions(&names)?;
         }
         let r = board.send_line_wait_ok(l)?;
         ensure!(r.contains("ok"), "{l}: {r}");
@@ -84,12 +106,22 @@ pub fn stream_segments(board: &mut Board, n: usize, seed: u64) -> Result<StreamR
         last_ok = board.cycles();
     }
     let isr = board.step_isr();
+    let functions = board.timed_profile();
+    let callers = board.timed_callers().into_iter().filter(|c| c.0 >= 2).map(|(k, f, n, c)| (k - 2, f, n, c)).collect();
     let calls = board.timed_calls();
+    let inclusive = extra
+        .iter()
+        .enumerate()
+        .map(|(i, n)| {
+            let c: Vec<u64> = calls.iter().filter(|c| c.0 == i + 2).map(|c| c.1).collect();
+            (n.to_string(), c.len(), c.iter().sum())
+        })
+        .collect();
     let measured = lines.len() - 40;
     let max_of = |k: usize| calls.iter().filter(|c| c.0 == k).map(|c| c.1).max().unwrap_or(0);
     let plan = PlanCost {
         lines: measured,
-        mean: calls.iter().map(|c| c.1).sum::<u64>() as f64 / measured as f64,
+        mean: calls.iter().filter(|c| c.0 < 2).map(|c| c.1).sum::<u64>() as f64 / measured as f64,
         max_parse: max_of(0),
         max_push: max_of(1),
     };
@@ -115,12 +147,13 @@ pub fn stream_segments(board: &mut Board, n: usize, seed: u64) -> Result<StreamR
         busy[((e.cycle - first) / w) as usize] = true;
     }
     let starved = busy.iter().take(busy.len().saturating_sub(1)).filter(|b| !**b).count();
-    Ok(StreamResult {
+    let r = StreamResult {
         lines: n,
         thread_cycles_per_line: thread as f64 / lines.len() as f64,
         plan,
         isr,
         starved_windows: starved,
         seconds: (last_step - first) as f64 / HZ as f64,
-    })
+    };
+    Ok((r, PlanBreakdown { functions, inclusive, callers }))
 }

@@ -105,7 +105,8 @@ impl<const N: usize> Controller<'_, N> {
     /// A G-code line: checked in full, then committed and started. In check mode (`$C`) the
     /// state and position follow the line, but nothing moves, waits or is stored.
     pub(super) fn gcode(&mut self, line: &[u8], out: &mut impl Out) -> Result<(), Error> {
-        let block = gcode::parse::<N>(line)?;
+        let mut block = gcode::Block::<N>::empty();
+        gcode::parse_into(line, &mut block)?;
         if block.axes.get(self.axes..).unwrap_or_default().iter().any(Option::is_some) {
             return Err(Error::UnsupportedCommand);
         }

@@ -116,7 +116,8 @@ pub struct Block<const N: usize> {
 
 impl<const N: usize> Block<N> {
     /// No words. (A function, not a constant: see `Job::none` in the controller.)
-    fn empty() -> Self {
+    #[inline(never)]
+    pub fn empty() -> Self {
         Block {
             groups: 0,
             axis_cmd: false,
@@ -176,6 +177,13 @@ impl<const N: usize> Block<N> {
 /// Parses a cleaned line (upper case, no whitespace or comments) into a block.
 pub fn parse<const N: usize>(line: &[u8]) -> Result<Block<N>, Error> {
     let mut b = Block::<N>::empty();
+    parse_into(line, &mut b)?;
+    Ok(b)
+}
+
+/// [`parse`] into `b`, an empty block ([`Block::empty`]): the controller's form, where the
+/// block is not moved out of a `Result` (a ~270-byte copy a line).
+pub fn parse_into<const N: usize>(line: &[u8], b: &mut Block<N>) -> Result<(), Error> {
     let mut i = 0;
     while i < line.len() {
         let letter = line[i];
@@ -185,12 +193,12 @@ pub fn parse<const N: usize>(line: &[u8]) -> Result<Block<N>, Error> {
         i += 1;
         let (v, d) = parse_word(line, &mut i)?;
         match letter {
-            b'G' => g_word(&mut b, v)?,
-            b'M' => m_word(&mut b, v)?,
-            _ => value_word(&mut b, letter, v, d)?,
+            b'G' => g_word(b, v)?,
+            b'M' => m_word(b, v)?,
+            _ => value_word(b, letter, v, d)?,
         }
     }
-    Ok(b)
+    Ok(())
 }
 
 /// Splits a command number into its integer part and Grbl's two-digit mantissa (G91.1 → 91, 10).

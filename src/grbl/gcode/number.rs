@@ -72,18 +72,14 @@ pub fn parse_word(s: &[u8], i: &mut usize) -> Result<(f32, Decimal), Error> {
 
 /// The nearest `f32` to `sig / 10^frac` (`sig` < 2^50, `frac` ≤ 22), as `str::parse` gives.
 ///
-/// A significand of 24 bits over 10^frac ≤ 10^10 (both exact in `f32`) is one correctly rounded
+/// A significand of 24 bits over 10^frac ≤ 10^9 (both exact in `f32`) is one correctly rounded
 /// division. Otherwise in integers: 10^frac = 5^frac · 2^frac (5^22 < 2^52), so the quotient
 /// by 5^frac is taken to 26 bits with a sticky bit (which the one rounding of the `u32`
 /// conversion then rounds correctly), and the powers of two are exact.
 fn decimal_f32(sig: u64, frac: u32) -> f32 {
-    if sig < 1 << 24 && frac <= 10 {
-        // 10^frac by repeated ×10: every product up to 10^10 is exact in f32.
-        let mut pow10 = 1.0f32;
-        for _ in 0..frac {
-            pow10 *= 10.0;
-        }
-        return sig as u32 as f32 / pow10;
+    if sig < 1 << 24 && frac <= 9 {
+        // 10^frac in integers (no soft-float products), exact in f32 up to 10^9 (5^9 < 2^24).
+        return sig as u32 as f32 / 10u32.pow(frac) as f32;
     }
     if sig == 0 {
         return 0.0;

@@ -98,7 +98,7 @@ pub fn results_markdown(s: &Sweep, others: &[Sweep], command: &str, firmware: &s
     {
         let mut b = Board::load(elf)?;
         b.run_until(HZ / 2, |b| b.serial_output().contains("Grbl"))?;
-        let r = crate::emu::stream::stream_segments(&mut b, 300, 0x2545_F491_4F6C_DD1D)?;
+        let (r, why) = crate::emu::stream::stream_segments_profiled(&mut b, 300, 0x2545_F491_4F6C_DD1D, &[])?;
         writeln!(m, "300 G1 segments of 0.1–0.5 mm at F3000 (turning up to ±30° each, default settings), sent")?;
         writeln!(m, "like a sender (line, wait for `ok`) at 115200 baud; `cargo bench -p ddastep-bench --target")?;
         writeln!(m, "host-tuple --bench plan_line` prints the same.\n")?;
@@ -120,6 +120,17 @@ pub fn results_markdown(s: &Sweep, others: &[Sweep], command: &str, firmware: &s
         writeln!(m, "| motion time | {:.3} s |\n", r.seconds)?;
         writeln!(m, "At this feed (5 kHz master) most step ticks are far apart; the max is a start from rest or")?;
         writeln!(m, "the end of a chain. Moves changing at the rate cap are measured below.\n")?;
+        writeln!(m, "Parse + plan per line was 55 586 modeled cycles before issue 27's cuts (firmware `4499139`:")?;
+        writeln!(m, "f32 compares on the bits, per-axis loops over the moving axes only, the look-ahead's forward")?;
+        writeln!(m, "pass searching only where an exit can change, the cruise index over whole entries first, the")?;
+        writeln!(m, "parsed block filled in place). Where it goes now (`-- --profile` on the same bench: exclusive")?;
+        writeln!(m, "cycles inside `gcode` and `push`; `-- --time NAME` gives a function's inclusive cycles and callers):\n")?;
+        writeln!(m, "| function | cycles per line | share |")?;
+        writeln!(m, "|---|---:|---:|")?;
+        for f in why.functions.iter().take(10) {
+            writeln!(m, "| `{}` | {:.0} | {:.1} % |", f.function, f.cycles as f64 / p.lines.max(1) as f64, f.share * 100.0)?;
+        }
+        writeln!(m)?;
     }
     writeln!(m, "### Ramp half: trapezoid and S-curve\n")?;
     {
