@@ -1,8 +1,8 @@
 //! The device's descriptors as the host reads them (USB 2.0 chapter 9, CDC 1.1 §5): one
 //! device, one configuration with a CDC ACM communication interface (its notification
 //! endpoint) and a data interface (bulk OUT and IN), device class 0x02 with no interface
-//! association descriptor, as usbd-serial's `CdcAcmClass` described itself (Linux's cdc-acm
-//! and Windows' usbser bind to it).
+//! association descriptor: byte for byte what usb-device's builder and usbd-serial's
+//! `CdcAcmClass` wrote for ddastep before (Linux's cdc-acm and Windows' usbser bind to it).
 
 /// Endpoint 0's packet size (bMaxPacketSize0).
 pub const EP0_LEN: usize = 64;
@@ -48,19 +48,20 @@ pub static CONFIG: [u8; 67] = [
     9, 4, 0, 0, 1, 0x02, 0x02, 0x00, 0,
     // Header functional descriptor: CDC 1.10 (CDC 1.1 §5.2.3.1).
     5, 0x24, 0x00, 0x10, 0x01,
-    // Call management: no call management, data interface 1 (§5.2.3.2).
-    5, 0x24, 0x01, 0x00, 1,
-    // ACM: SET/GET_LINE_CODING, SET_CONTROL_LINE_STATE, SERIAL_STATE (PSTN 1.2 §5.3.2).
-    4, 0x24, 0x02, 0x02,
+    // ACM, bmCapabilities 0 (PSTN 1.2 §5.3.2; as usbd-serial: Linux and Windows send the line
+    // requests regardless).
+    4, 0x24, 0x02, 0x00,
     // Union: master interface 0, slave interface 1 (§5.2.3.8).
     5, 0x24, 0x06, 0, 1,
+    // Call management: no call management, data interface 1 (§5.2.3.2).
+    5, 0x24, 0x01, 0x00, 1,
     // Notification endpoint: interrupt IN, 8 bytes, every 255 ms.
     7, 5, NOTIFY_EP, 0x03, NOTIFY_LEN as u8, 0, 255,
     // Interface 1: data class, two endpoints.
     9, 4, 1, 0, 2, 0x0A, 0x00, 0x00, 0,
-    // Bulk OUT and bulk IN, 64 bytes.
-    7, 5, BULK_OUT_EP, 0x02, BULK_LEN as u8, 0, 0,
+    // Bulk IN and bulk OUT, 64 bytes.
     7, 5, BULK_IN_EP, 0x02, BULK_LEN as u8, 0, 0,
+    7, 5, BULK_OUT_EP, 0x02, BULK_LEN as u8, 0, 0,
 ];
 
 /// String 0: the languages (US English only).
