@@ -1,7 +1,7 @@
-//! The bulk IN packet rule (`ddastep::usb::bulk_in`) over random replies and endpoint
-//! refusals: every byte once and in order, packets of at most 64 bytes, a refused packet
-//! offered again unchanged, and a transfer that ends on a full packet closed by a zero-length
-//! one (a zero-length packet only there).
+//! The bulk IN packet rule (`ddastep::usb::bulk_in`) over random replies and host reads: every
+//! byte once and in order, packets of at most 64 bytes, one packet in flight at a time, and a
+//! transfer that ends on a full packet closed by a zero-length one (a zero-length packet only
+//! there).
 
 use ddastep::usb::bulk_in::InPacket;
 use ddastep::usb::descriptors::BULK_LEN;
@@ -12,16 +12,45 @@ use proptest::prelude::*;
 enum Step {
     /// The firmware queues a reply of this many bytes (as room allows).
     Reply(usize),
-    /// The USB task runs: the endpoint takes the packet or is still busy.
-    Usb { free: bool },
+    /// The USB task runs (and loads a packet if it may).
+    Usb,
+    /// The host's IN token takes the packet in flight; the device sees the completion.
+    HostReads,
 }
 
 fn steps() -> impl Strategy<Value = Vec<Step>> {
     let step = prop_oneof![
         (prop_oneof![1usize..8, Just(63), Just(64), Just(65), Just(128), 1usize..300]).prop_map(Step::Reply),
-        any::<bool>().prop_map(|free| Step::Usb { free }),
+        Just(Step::Usb),
+        Just(Step::HostReads),
     ];
     prop::collection::vec(step, 0..300)
+}
+
+/// The endpoint: the packet loaded, if any.
+struct Endpoint(Option<Vec<u8>>);
+
+impl Endpoint {
+    // the USB task: load the next packet if there is one
+    fn usb(&mut self, p: &mut InPacket, tx: &mut heapless::spsc::Consumer<'_, u8>) -> bool {
+        let mut buf = [0u8; BULK_LEN];
+        match p.next(tx, &mut buf) {
+            Some(n) => {
+                assert!(self.0.is_none(), "a packet loaded over one in flight");
+                self.0 = Some(buf[..n].to_vec());
+                true
+            }
+            None => false,
+        }
+    }
+
+    // the host takes the packet in flight
+    fn read(&mut self, p: &mut InPacket, packets: &mut Vec<Vec<u8>>) {
+        if let Some(d) = self.0.take() {
+            packets.push(d);
+            p.complete();
+        }
+    }
 }
 
 proptest! {
@@ -30,26 +59,10 @@ proptest! {
         let mut q: Queue<u8, 512> = Queue::new();
         let (mut tx_in, mut tx) = q.split();
         let mut p = InPacket::new();
+        let mut ep = Endpoint(None);
         let mut queued = Vec::new();
         let mut packets: Vec<Vec<u8>> = Vec::new();
-        let mut offered: Option<Vec<u8>> = None;
         let mut next = 0u8;
-        let run = |free: bool, p: &mut InPacket, tx: &mut heapless::spsc::Consumer<'_, u8>,
-                       packets: &mut Vec<Vec<u8>>, offered: &mut Option<Vec<u8>>| -> bool {
-            let Some(pkt) = p.next(tx) else { return false };
-            let pkt = pkt.to_vec();
-            assert!(pkt.len() <= BULK_LEN);
-            if let Some(o) = offered.take() {
-                assert_eq!(&o, &pkt, "a refused packet changed");
-            }
-            if free {
-                p.taken();
-                packets.push(pkt);
-            } else {
-                *offered = Some(pkt);
-            }
-            true
-        };
         for s in &steps {
             match *s {
                 Step::Reply(n) => {
@@ -61,18 +74,22 @@ proptest! {
                         next = next.wrapping_add(1);
                     }
                 }
-                Step::Usb { free } => {
-                    run(free, &mut p, &mut tx, &mut packets, &mut offered);
+                Step::Usb => {
+                    ep.usb(&mut p, &mut tx);
                 }
+                Step::HostReads => ep.read(&mut p, &mut packets),
             }
         }
         // The host reads until the device has nothing more.
         let mut rounds = 0;
-        while run(true, &mut p, &mut tx, &mut packets, &mut offered) {
+        ep.read(&mut p, &mut packets);
+        while ep.usb(&mut p, &mut tx) {
+            ep.read(&mut p, &mut packets);
             rounds += 1;
             prop_assert!(rounds < 100);
         }
         prop_assert_eq!(packets.concat(), queued);
+        prop_assert!(packets.iter().all(|d| d.len() <= BULK_LEN));
         if let Some(last) = packets.last() {
             prop_assert!(last.len() < BULK_LEN, "the last transfer ends on a full packet");
         }

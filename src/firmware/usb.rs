@@ -14,7 +14,8 @@
 //!   until then the USB interrupt is masked (a CTR_RX that is not read stays set and would
 //!   re-enter the handler forever) and `idle` unmasks it after each pass, while the hardware
 //!   NAKs the host's next packet. No byte is dropped.
-//! - Transmit: at most one IN packet in flight, filled from the TX ring when the port is open.
+//! - Transmit: at most one IN packet in flight, filled from the TX ring when the port is open
+//!   and the last one completed (`ddastep::usb::bulk_in`).
 
 use core::mem::MaybeUninit;
 use core::sync::atomic::{AtomicBool, Ordering::Relaxed};
@@ -117,6 +118,7 @@ impl Usb {
             PollResult::Reset => {
                 self.bus.reset();
                 self.ctl.reset();
+                self.tx = InPacket::new();
                 self.suspended = false;
             }
             PollResult::Suspend => {
@@ -128,6 +130,9 @@ impl Usb {
                 self.suspended = false;
             }
             PollResult::Data { ep_out, ep_in_complete, ep_setup } => {
+                if ep_in_complete & 1 << (BULK_IN_EP & 0x7F) != 0 {
+                    self.tx.complete();
+                }
                 let port = &mut Port(&self.bus);
                 // The last IN's completion first: a SETUP in the same poll starts a new transfer.
                 if ep_in_complete & 1 != 0 {
@@ -151,10 +156,6 @@ impl Usb {
         let opened = dtr && !self.dtr;
         let gone = !configured || (self.dtr && !dtr);
         self.dtr = dtr;
-        if !configured {
-            // A bus reset or suspend: nothing in flight any more.
-            self.tx.clear();
-        }
         Event { opened, gone }
     }
 
@@ -185,10 +186,10 @@ impl Usb {
         if !self.ctl.configured() || self.suspended {
             return;
         }
-        if let Some(packet) = self.tx.next(tx) {
-            if self.bus.write(EndpointAddress::from(BULK_IN_EP), packet).is_ok() {
-                self.tx.taken();
-            }
+        let mut packet = [0u8; BULK_LEN];
+        if let Some(n) = self.tx.next(tx, &mut packet) {
+            // (The endpoint is free: its last IN completed or it was reset. Never refused.)
+            let _ = self.bus.write(EndpointAddress::from(BULK_IN_EP), packet.get(..n).unwrap_or(&[]));
         }
     }
 }
