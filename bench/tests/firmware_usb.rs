@@ -233,14 +233,9 @@ fn random_write_splits_lose_or_double_nothing() {
     assert!(s.errors.is_empty(), "{:?}", s.errors);
 }
 
-/// The `usb` build's stack must stay 256 B clear of the statics through a stream (the rig's
-/// rule for the default build). It does not yet: the USB device, its bus and packets take
-/// 1 136 B of static RAM. With the S-curve table's and the led ramp's statics (main at
-/// 97214f8) the stack ran into the statics and the `usb` image crashed (WRITE_PROT); its ramp
-/// table is now 448 entries (512 B less), and this stream peaks at 4 768 of 4 796 B: clear,
-/// but not by 256 B. Not run until that RAM is found; run it with `--ignored`.
+/// The `usb` build's stack stays 256 B clear of the statics through a stream (the rig's rule
+/// for the default build), with the full 512-entry ramp table.
 #[test]
-#[ignore = "the usb build's stack comes within 28 B of the statics (the rig asks 256): static RAM to find first"]
 fn usb_build_stack_stays_clear_of_the_statics() {
     let mut b = Board::load(firmware_usb_elf().expect("USB firmware builds")).expect("ELF loads");
     b.write_mem(USB_STORE_ADDR, &Stored::from(Settings::BENCH).to_bytes()).unwrap();
