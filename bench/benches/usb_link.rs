@@ -7,18 +7,16 @@
 //!
 //! Then the LaserGRBL-style raster of issue 27 (`M4`, one `X… S…` line per 0.1 mm pixel at
 //! F6000, rows alternating: 1 000 lines/s of motion), streamed with character counting over
-//! each port on the bench settings (100 steps/mm; preloaded in flash, at 126 K in the `usb`
-//! build), against the same path sent as one line per row: lines/s, the time ratio, and the
+//! each port on the bench settings (100 steps/mm; preloaded in flash), against the same path sent as one line per row: lines/s, the time ratio, and the
 //! 1 ms windows without a step while the raster runs.
 //!
-//! `cargo bench -p ddastep-bench --target host-tuple --bench usb_link` (a few minutes; the
-//! first run builds the USB firmware in target/usb).
+//! `cargo bench -p ddastep-bench --target host-tuple --bench usb_link` (a few minutes).
 
 use ddastep_bench::emu::nvic::IRQ0;
 use ddastep_bench::emu::sender::{stream_char_count, Link};
 use ddastep::grbl::settings::Settings;
 use ddastep::grbl::store::Stored;
-use ddastep_bench::emu::{firmware_elf, firmware_usb_elf, Board, HZ, STEP_PINS, TIM2_IRQ, USART1_IRQ, USB_STORE_ADDR};
+use ddastep_bench::emu::{firmware_elf, Board, HZ, STEP_PINS, TIM2_IRQ, USART1_IRQ};
 
 /// USB_LP_CAN1_RX0.
 const USB_IRQ: u32 = 20;
@@ -30,9 +28,10 @@ fn lines() -> Vec<String> {
 }
 
 fn run(link: Link) -> anyhow::Result<()> {
-    let (mut b, irq) = match link {
-        Link::Usart => (Board::load(firmware_elf()?)?, USART1_IRQ),
-        Link::Usb => (Board::load(firmware_usb_elf()?)?, USB_IRQ),
+    let mut b = Board::load(firmware_elf()?)?;
+    let irq = match link {
+        Link::Usart => USART1_IRQ,
+        Link::Usb => USB_IRQ,
     };
     b.run_until(HZ / 2, |b| b.serial_output().contains("Grbl"))?;
     if link == Link::Usb {
@@ -100,18 +99,8 @@ fn rows_only(rows: usize, pixels: usize) -> Vec<String> {
 /// windows without a step between them).
 fn stream_job(link: Link, lines: &[String]) -> anyhow::Result<(f64, f64, usize)> {
     let settings = Settings { laser_mode: true, ..Settings::BENCH };
-    let mut b = match link {
-        Link::Usart => {
-            let mut b = Board::load(firmware_elf()?)?;
-            b.write_mem(0x0800_0000 + 62 * 1024, &Stored::from(settings).to_bytes())?;
-            b
-        }
-        Link::Usb => {
-            let mut b = Board::load(firmware_usb_elf()?)?;
-            b.write_mem(USB_STORE_ADDR, &Stored::from(settings).to_bytes())?;
-            b
-        }
-    };
+    let mut b = Board::load(firmware_elf()?)?;
+    b.write_mem(0x0800_0000 + 62 * 1024, &Stored::from(settings).to_bytes())?;
     b.run_until(HZ / 2, |b| b.serial_output().contains("Grbl"))?;
     if link == Link::Usb {
         b.usb_connect(2 * HZ)?;
