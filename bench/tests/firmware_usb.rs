@@ -244,3 +244,14 @@ fn usb_build_stack_stays_clear_of_the_statics() {
     stream_char_count(&mut b, Link::Usb, &lines, 2 * HZ).unwrap();
     firmware_rig::assert_stack_fits(&b);
 }
+
+/// The D+ detach at boot lasts its 10 ms, no more: the banner on USART1 within 25 ms of reset
+/// (the bench's `cargo sim` sends its first line at 50 ms; with `asm::delay` the detach took
+/// 50 ms on the model's flash wait states and that line was lost).
+#[test]
+fn the_boot_detach_costs_10_ms() {
+    let mut b = Board::load(firmware_elf().expect("firmware builds")).expect("ELF loads");
+    assert!(b.run_until(HZ / 2, |b| b.serial_output().contains("Grbl 1.1")).unwrap());
+    let ms = b.cycles() as f64 * 1000.0 / HZ as f64;
+    assert!((10.0..25.0).contains(&ms), "banner at {ms:.2} ms");
+}

@@ -21,6 +21,7 @@ use core::mem::MaybeUninit;
 use core::sync::atomic::{AtomicBool, Ordering::Relaxed};
 
 use ddastep::grbl::packet::Held;
+use ddastep::num::wrapping_diff;
 use ddastep::usb::bulk_in::InPacket;
 use ddastep::usb::control::{Control, Ep0};
 use ddastep::usb::descriptors::{BULK_IN_EP, BULK_LEN, BULK_OUT_EP, EP0_LEN, NOTIFY_EP, NOTIFY_LEN};
@@ -35,9 +36,11 @@ use usb_device::UsbDirection;
 /// The vector of the USB low-priority interrupt (RM0008 Table 63: CTR, RESET, SUSP, WKUP).
 pub const IRQ: pac::Interrupt = pac::Interrupt::USB_LP_CAN_RX0;
 
-/// D+ held low at boot: 10 ms at 72 MHz (a host sees a detach after 2.5 µs of SE0, USB 2.0
-/// §7.1.7.3; 10 ms is what the Blue Pill examples use).
-const DETACH_CYCLES: u32 = 72_000_000 / 100;
+/// D+ held low at boot: 10 ms at 72 MHz on the DWT cycle counter (a host sees a detach after
+/// 2.5 µs of SE0, USB 2.0 §7.1.7.3; 10 ms is what the Blue Pill examples use). Counted, not
+/// `asm::delay`: with the flash wait states its loop takes several times its nominal cycles
+/// (50 ms on the bench's model), which delayed the banner as much.
+const DETACH_CYCLES: i32 = 72_000_000 / 100;
 
 /// Endpoint 0's two directions (as `EndpointAddress::from` takes them).
 const EP0_OUT: u8 = 0x00;
@@ -46,10 +49,12 @@ const EP0_IN: u8 = 0x80;
 /// An OUT packet's line bytes wait for room: the USB interrupt is masked until `idle` retries.
 pub static HELD: AtomicBool = AtomicBool::new(false);
 
-/// Pulls D+ low for 10 ms (the host sees the device leave), then lets the pull-up take it.
+/// Pulls D+ low for 10 ms (the host sees the device leave), then lets the pull-up take it
+/// (after `dwt::start_cycle_counter`).
 pub fn detach(pa12: PA12<Input<Floating>>, crh: &mut Cr<'A', true>) -> PA12<Input<Floating>> {
     let dp = pa12.into_push_pull_output(crh);
-    cortex_m::asm::delay(DETACH_CYCLES);
+    let start = super::dwt::cycles();
+    while wrapping_diff(super::dwt::cycles(), start) < DETACH_CYCLES {}
     dp.into_floating_input(crh)
 }
 
