@@ -14,6 +14,8 @@
 //! - [`encoder`]: encoder feedback — TIM3 count extension, speed, step-loss detection.
 //! - [`error`]: Grbl's numbered errors, the one error type (a leaf: every layer returns it).
 //! - [`steptime`]: the step interrupt's self-measurement (DWT cycles), reported by `$I`.
+//! - [`usb`]: the USB CDC ACM device side (descriptors, control requests, bulk IN packets),
+//!   HAL-free; the firmware glue moves its packets through stm32-usbd.
 //!
 //! Nothing is re-exported at the crate root: a path names its layer (`ddastep::motion::engine`).
 //!
@@ -66,6 +68,7 @@ pub mod motion;
 pub mod num;
 pub mod planning;
 pub mod steptime;
+pub mod usb;
 pub mod watchdog;
 
 

@@ -8,20 +8,19 @@
 //! Then the LaserGRBL-style raster of issue 27 (`emu::raster`; `M4`, one `X… S…` line per pixel at F6000,
 //! rows alternating: 0.1 mm pixels are 1 000 lines/s of motion, 0.05 mm pixels 2 000), streamed
 //! with character counting over each port on the bench settings (100 steps/mm; preloaded in
-//! flash, at 126 K in the `usb` build), against the same path sent as one line per row:
+//! flash), against the same path sent as one line per row:
 //! lines/s, the time ratio, the 1 ms windows without a step between the first and the last
 //! step (step-less ms, for the raster and for one line per row), and the planner fill while
 //! lines are still being sent. The fill comes from a third run that polls `?` every 10 ms
 //! with `Bf:` on (`$10=3`), as senders poll; the other two do not poll, so the poll does not
 //! touch their figures (its own line rate is printed beside the fill).
 //!
-//! `cargo bench -p ddastep-bench --target host-tuple --bench usb_link` (a few minutes; the
-//! first run builds the USB firmware in target/usb).
+//! `cargo bench -p ddastep-bench --target host-tuple --bench usb_link` (a few minutes).
 
 use ddastep_bench::emu::nvic::IRQ0;
 use ddastep_bench::emu::raster;
 use ddastep_bench::emu::sender::{stream_char_count, Link};
-use ddastep_bench::emu::{firmware_elf, firmware_usb_elf, Board, HZ, TIM2_IRQ, USART1_IRQ};
+use ddastep_bench::emu::{firmware_elf, Board, HZ, TIM2_IRQ, USART1_IRQ};
 
 /// USB_LP_CAN1_RX0.
 const USB_IRQ: u32 = 20;
@@ -33,9 +32,10 @@ fn lines() -> Vec<String> {
 }
 
 fn run(link: Link) -> anyhow::Result<()> {
-    let (mut b, irq) = match link {
-        Link::Usart => (Board::load(firmware_elf()?)?, USART1_IRQ),
-        Link::Usb => (Board::load(firmware_usb_elf()?)?, USB_IRQ),
+    let mut b = Board::load(firmware_elf()?)?;
+    let irq = match link {
+        Link::Usart => USART1_IRQ,
+        Link::Usb => USB_IRQ,
     };
     b.run_until(HZ / 2, |b| b.serial_output().contains("Grbl"))?;
     if link == Link::Usb {

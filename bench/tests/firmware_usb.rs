@@ -1,4 +1,4 @@
-//! The firmware over the modeled USB (the `usb` feature's build, `firmware_usb_elf`): a host
+//! The firmware over the modeled USB (the release build, `usb` on by default): a host
 //! that enumerates it as Linux does (bench/src/emu/usb_host.rs), then a sender on the CDC ACM
 //! port.
 
@@ -7,13 +7,13 @@ mod firmware_rig;
 use ddastep_bench::emu::sender::{stream_char_count, Link};
 use ddastep::grbl::settings::Settings;
 use ddastep::grbl::store::Stored;
-use ddastep_bench::emu::{firmware_usb_elf, Board, Port, HZ, USB_STORE_ADDR};
+use ddastep_bench::emu::{firmware_elf, Board, Port, HZ};
 use firmware_rig::{net, steps};
 
 /// The USB build on blank flash (the defaults: 250 steps/mm, 500 mm/min), enumerated, port
 /// open, banner seen on USB.
 fn boot_usb() -> Board {
-    let mut b = Board::load(firmware_usb_elf().expect("USB firmware builds")).expect("ELF loads");
+    let mut b = Board::load(firmware_elf().expect("firmware builds")).expect("ELF loads");
     b.usb_connect(2 * HZ).unwrap();
     assert!(b.run_until(HZ / 10, |b| b.usb_output().contains("Grbl 1.1")).unwrap(), "banner: {:?}", b.usb_output());
     b
@@ -34,7 +34,7 @@ fn usart_status(b: &mut Board) -> String {
 /// rises) without a reset.
 #[test]
 fn enumerates_as_cdc_acm_and_sends_the_banner_on_open() {
-    let mut b = Board::load(firmware_usb_elf().expect("USB firmware builds")).expect("ELF loads");
+    let mut b = Board::load(firmware_elf().expect("firmware builds")).expect("ELF loads");
     b.usb_connect(2 * HZ).unwrap();
     let s = b.usb_stats();
     assert_eq!(s.enumerations, 1, "{s:?}");
@@ -174,9 +174,9 @@ fn scheduled_unplug_and_replug() {
 /// never restarts.
 #[test]
 fn settings_rebuilds_and_ctrl_x_after_a_hard_limit_keep_the_link() {
-    let mut b = Board::load(firmware_usb_elf().expect("USB firmware builds")).expect("ELF loads");
+    let mut b = Board::load(firmware_elf().expect("firmware builds")).expect("ELF loads");
     let settings = Settings { hard_limits: true, ..Settings::BENCH };
-    b.write_mem(USB_STORE_ADDR, &Stored::from(settings).to_bytes()).unwrap();
+    b.write_mem(firmware_rig::STORE_ADDR, &Stored::from(settings).to_bytes()).unwrap();
     b.usb_connect(2 * HZ).unwrap();
     assert!(b.run_until(HZ / 10, |b| b.usb_output().contains("Grbl 1.1")).unwrap());
     for line in ["$2=1", "$580=1", "$581=1", "$581=0", "$580=0", "$2=0", "G91 G1 X5 F600"] {
@@ -205,8 +205,8 @@ fn settings_rebuilds_and_ctrl_x_after_a_hard_limit_keep_the_link() {
 /// is made.
 #[test]
 fn random_write_splits_lose_or_double_nothing() {
-    let mut b = Board::load(firmware_usb_elf().expect("USB firmware builds")).expect("ELF loads");
-    b.write_mem(USB_STORE_ADDR, &Stored::from(Settings::BENCH).to_bytes()).unwrap();
+    let mut b = Board::load(firmware_elf().expect("firmware builds")).expect("ELF loads");
+    b.write_mem(firmware_rig::STORE_ADDR, &Stored::from(Settings::BENCH).to_bytes()).unwrap();
     b.usb_connect(2 * HZ).unwrap();
     assert!(b.run_until(HZ / 10, |b| b.usb_output().contains("Grbl 1.1")).unwrap());
     assert!(b.usb_send_line_wait_ok("G91").unwrap().contains("ok"));
@@ -233,20 +233,25 @@ fn random_write_splits_lose_or_double_nothing() {
     assert!(s.errors.is_empty(), "{:?}", s.errors);
 }
 
-/// The `usb` build's stack must stay 256 B clear of the statics through a stream (the rig's
-/// rule for the default build). It does not yet: the USB device, its bus and packets take
-/// 1 136 B of static RAM. With the S-curve table's and the led ramp's statics (main at
-/// 97214f8) the stack ran into the statics and the `usb` image crashed (WRITE_PROT); its ramp
-/// table is now 448 entries (512 B less), and this stream peaks at 4 768 of 4 796 B: clear,
-/// but not by 256 B. Not run until that RAM is found; run it with `--ignored`.
+/// The stack stays 256 B clear of the statics through a stream over USB (the rig's rule).
 #[test]
-#[ignore = "the usb build's stack comes within 28 B of the statics (the rig asks 256): static RAM to find first"]
 fn usb_build_stack_stays_clear_of_the_statics() {
-    let mut b = Board::load(firmware_usb_elf().expect("USB firmware builds")).expect("ELF loads");
-    b.write_mem(USB_STORE_ADDR, &Stored::from(Settings::BENCH).to_bytes()).unwrap();
+    let mut b = Board::load(firmware_elf().expect("firmware builds")).expect("ELF loads");
+    b.write_mem(firmware_rig::STORE_ADDR, &Stored::from(Settings::BENCH).to_bytes()).unwrap();
     b.usb_connect(2 * HZ).unwrap();
     let mut lines = vec!["G91".to_string()];
     lines.extend((0..500).map(|i| format!("G1 X{} Y0.01 F6000", if i % 3 == 0 { "-0.01" } else { "0.01" })));
     stream_char_count(&mut b, Link::Usb, &lines, 2 * HZ).unwrap();
     firmware_rig::assert_stack_fits(&b);
+}
+
+/// The D+ detach at boot lasts its 10 ms, no more: the banner on USART1 within 25 ms of reset
+/// (the bench's `cargo sim` sends its first line at 50 ms; with `asm::delay` the detach took
+/// 50 ms on the model's flash wait states and that line was lost).
+#[test]
+fn the_boot_detach_costs_10_ms() {
+    let mut b = Board::load(firmware_elf().expect("firmware builds")).expect("ELF loads");
+    assert!(b.run_until(HZ / 2, |b| b.serial_output().contains("Grbl 1.1")).unwrap());
+    let ms = b.cycles() as f64 * 1000.0 / HZ as f64;
+    assert!((10.0..25.0).contains(&ms), "banner at {ms:.2} ms");
 }

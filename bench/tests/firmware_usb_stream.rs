@@ -18,7 +18,7 @@ use ddastep::grbl::settings::Settings;
 use ddastep::grbl::store::Stored;
 use ddastep_bench::emu::sender::RX_BUFFER;
 use ddastep_bench::emu::usb_splits::Splits;
-use ddastep_bench::emu::{firmware_usb_elf, Board, Port, HZ, USB_STORE_ADDR};
+use ddastep_bench::emu::{firmware_elf, Board, Port, HZ};
 
 const AXES: [char; 7] = ['X', 'Y', 'Z', 'A', 'B', 'C', 'U'];
 
@@ -113,8 +113,8 @@ impl NetSteps {
 /// The USB build with `stream_settings`, enumerated, port open, banner seen, packets split at
 /// random from `seed`, relative feed moves set up.
 fn boot(seed: u64) -> Board {
-    let mut b = Board::load(firmware_usb_elf().expect("USB firmware builds")).expect("ELF loads");
-    b.write_mem(USB_STORE_ADDR, &Stored::from(stream_settings()).to_bytes()).unwrap();
+    let mut b = Board::load(firmware_elf().expect("firmware builds")).expect("ELF loads");
+    b.write_mem(0x0800_0000 + 62 * 1024, &Stored::from(stream_settings()).to_bytes()).unwrap();
     b.usb_connect(2 * HZ).unwrap();
     assert!(b.run_until(HZ / 10, |b| b.usb_output().contains("Grbl 1.1")).unwrap(), "banner: {:?}", b.usb_output());
     b.usb_random_splits(seed);

@@ -331,11 +331,11 @@ fn bad_use_is_a_clear_error() {
 }
 
 /// `cargo sim -- --serve --usb --pty-link …`: UGS connects and stream.py runs a job over the
-/// board's USB port (the `usb` build; a modeled host enumerates it and holds it open).
+/// board's USB port (a modeled host enumerates it and holds it open).
 #[test]
 fn ugs_then_stream_py_over_usb() {
     let link = std::env::temp_dir().join(format!("ttyBLUEPILL-usb-{}", std::process::id()));
-    let elf = ddastep_bench::emu::firmware_usb_elf().expect("USB firmware builds");
+    let elf = ddastep_bench::emu::firmware_elf().expect("firmware builds");
     let server = Server::start_elf(&elf, &["--usb", "--pty-link", link.to_str().unwrap()]);
     assert!(server.stdout_head.contains("USB port"), "{}", server.stdout_head);
     let mut c = Client::pty(link.to_str().unwrap());
@@ -350,7 +350,7 @@ fn ugs_then_stream_py_over_usb() {
 /// CNCjs (TCP) and bCNC (pty) connect to the board's USB port through `--serve --usb`.
 #[test]
 fn cncjs_and_bcnc_over_usb() {
-    let elf = ddastep_bench::emu::firmware_usb_elf().expect("USB firmware builds");
+    let elf = ddastep_bench::emu::firmware_elf().expect("firmware builds");
     let server = Server::start_elf(&elf, &["--usb", "--tcp", "127.0.0.1:0"]);
     let addr = server.tcp.clone().expect("tcp: line");
     let mut tcp = Client::tcp(&addr);

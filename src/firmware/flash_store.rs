@@ -1,19 +1,11 @@
 //! The persistent image (settings, offsets) in the last two 1 KiB flash pages, A/B
 //! (`ddastep::grbl::store` says which page is newest); memory.x keeps the program out of them.
 
-#[cfg(not(feature = "store-at-126k"))]
 use ddastep::grbl::store::PAGE_OFFSETS as STORE_OFFSETS;
 use ddastep::grbl::store::{Stored, IMAGE_LEN, PAGE_LEN};
 use stm32f1xx_hal::flash;
 
-/// Bench only (`store-at-126k`): the last two pages of the C8 die's 128 KiB, above an image
-/// over the 62 KiB budget (the `usb` build's, until it fits).
-#[cfg(feature = "store-at-126k")]
-const STORE_OFFSETS: [u32; 2] = [126 * 1024, 127 * 1024];
-#[cfg(not(feature = "store-at-126k"))]
 const FLASH_SIZE: flash::FlashSize = flash::FlashSize::Sz64K;
-#[cfg(feature = "store-at-126k")]
-const FLASH_SIZE: flash::FlashSize = flash::FlashSize::Sz128K;
 
 /// Page `i` of the store, as mapped flash.
 fn store_page(i: usize) -> &'static [u8] {

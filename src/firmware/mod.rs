@@ -7,7 +7,7 @@
 //! - `tim1_pwm`: the spindle PWM; `encoder`: TIM3 as the encoder counter;
 //! - `limits`: the limit and probe EXTIs; `watchdog`: the IWDG and the reset cause;
 //! - `usb`: USB CDC ACM on PA11/PA12, the second port to the same protocol (cargo feature
-//!   `usb`, off until the image fits 62 KiB with it);
+//!   `usb`, on by default; without it a USART1-only image);
 //! - `flash_store`: the settings pages; `chip`: the flash size, unique ID and CPUID;
 //! - `dwt`: the cycle counter; `panic`, `mem`;
 //! - `axes`: the axis count (a leaf, so the app and the handlers do not import each other).

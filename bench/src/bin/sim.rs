@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use anyhow::{bail, Context, Result};
 use clap::Parser;
 use ddastep_bench::emu::sender::{stream_char_count, stream_wait_ok, Link};
-use ddastep_bench::emu::{firmware_elf, firmware_usb_elf, gcode_lines, isr_profile, sweep, Board, InputFlip, Port, HZ};
+use ddastep_bench::emu::{firmware_elf, gcode_lines, isr_profile, sweep, Board, InputFlip, Port, HZ};
 use ddastep_bench::machine::{MachineSpec, VirtualMachine};
 use ddastep_bench::serve;
 
@@ -30,7 +30,7 @@ struct Args {
     #[arg(long)]
     max_seconds: Option<f64>,
     /// Stream --gcode over the board's own USB port: the modeled host enumerates it as Linux
-    /// does and opens the port first (firmware: the `usb` feature's build unless --elf). With
+    /// does and opens the port first (the firmware needs the `usb` feature, on by default). With
     /// --serve: the pty/TCP clients talk to the USB port instead of USART1.
     #[arg(long, conflicts_with_all = ["sweep", "point"])]
     usb: bool,
@@ -162,7 +162,6 @@ fn run(args: Args) -> Result<()> {
     }
     let elf = match args.elf.clone() {
         Some(p) => p,
-        None if args.usb => firmware_usb_elf()?,
         None => firmware_elf()?,
     };
     if args.sweep {

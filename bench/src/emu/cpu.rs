@@ -18,9 +18,7 @@ use super::mcu::{Mcu, Stop};
 use super::profile::Symbols;
 
 pub const FLASH_BASE: u32 = 0x0800_0000;
-/// Flash mapped: 128 KiB, what the C8 die holds (ST guarantees 64 and F_SIZE reads 64), so an
-/// image over the 62 KiB budget (the `usb` feature's, before it fits) still loads, with its
-/// settings pages at 126/127 K (feature `store-at-126k`).
+/// Flash mapped: 128 KiB, what the C8 die holds (ST guarantees 64 and F_SIZE reads 64).
 pub const FLASH_SIZE: u32 = 128 * 1024;
 pub const RAM_BASE: u32 = 0x2000_0000;
 pub const RAM_SIZE: u32 = 20 * 1024;

@@ -21,43 +21,6 @@ pub fn firmware_elf() -> Result<PathBuf> {
     ELF.get_or_init(|| build().map_err(|e| format!("{e:#}"))).clone().map_err(anyhow::Error::msg)
 }
 
-// build the release firmware with the `usb` feature once (its own target dir, linked against
-// bench/usb_link/memory.x while it is over the 62 KiB budget, the settings at 126 K:
-// `USB_STORE_ADDR`) and return its ELF path
-pub fn firmware_usb_elf() -> Result<PathBuf> {
-    static ELF: OnceLock<Result<PathBuf, String>> = OnceLock::new();
-    ELF.get_or_init(|| build_usb().map_err(|e| format!("{e:#}"))).clone().map_err(anyhow::Error::msg)
-}
-
-/// Flash address of the `usb` build's settings store (feature `store-at-126k`).
-pub const USB_STORE_ADDR: u32 = 0x0800_0000 + 126 * 1024;
-
-fn build_usb() -> Result<PathBuf> {
-    let root = repo_root();
-    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-    let target = std::env::var_os("CARGO_TARGET_DIR").map(PathBuf::from).unwrap_or_else(|| root.join("target")).join("usb");
-    let linker = root.join("bench/usb_link/ld.sh");
-    let status = Command::new(cargo)
-        .current_dir(&root)
-        .args(["build", "--release", "--target", "thumbv7m-none-eabi", "--bin", "ddastep", "--features", "usb,store-at-126k"])
-        .arg("--target-dir")
-        .arg(&target)
-        .arg("--config")
-        .arg(format!("target.thumbv7m-none-eabi.linker={:?}", linker.display().to_string()))
-        .env_remove("CARGO_ENCODED_RUSTFLAGS")
-        .env_remove("RUSTFLAGS")
-        .status()
-        .context("running cargo build for the USB firmware")?;
-    if !status.success() {
-        bail!("USB firmware build failed ({status})");
-    }
-    let elf = target.join("thumbv7m-none-eabi/release/ddastep");
-    if !elf.exists() {
-        bail!("USB firmware ELF not found at {}", elf.display());
-    }
-    Ok(elf)
-}
-
 fn build() -> Result<PathBuf> {
     let root = repo_root();
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());

@@ -60,7 +60,7 @@ pub use clock::HZ;
 pub use input::{InputFlip, Port};
 pub use stats::IsrRun;
 pub use mcu::{TIM2_IRQ, USART1_IRQ};
-pub use firmware::{firmware_elf, firmware_usb_elf, USB_STORE_ADDR, gcode_lines, repo_root, stream_gcode};
+pub use firmware::{firmware_elf, gcode_lines, repo_root, stream_gcode};
 pub use gpio::PinEdge;
 pub use report::{isr_profile, AxisReport, DmaReport, Report, UsbReport, SpindleReport, StepIsr, AXES, DIR_LOW_IS_POSITIVE, DIR_PINS, EN_PIN, STEP_PINS, TOOL_PINS};
 pub use unicorn_engine::RegisterARM;

@@ -6,7 +6,7 @@
 use anyhow::Result;
 
 use super::sender::{stream_char_count_polled, Link};
-use super::{firmware_elf, firmware_usb_elf, Board, HZ, STEP_PINS, USB_STORE_ADDR};
+use super::{firmware_elf, Board, HZ, STEP_PINS};
 use ddastep::grbl::settings::Settings;
 use ddastep::grbl::store::Stored;
 
@@ -80,18 +80,8 @@ impl Job {
 /// A fresh board with the bench settings, laser mode and `$10=status_mask`, on `link`.
 fn board(link: Link, status_mask: u8) -> Result<Board> {
     let settings = Settings { laser_mode: true, status_mask, ..Settings::BENCH };
-    let mut b = match link {
-        Link::Usart => {
-            let mut b = Board::load(firmware_elf()?)?;
-            b.write_mem(0x0800_0000 + 62 * 1024, &Stored::from(settings).to_bytes())?;
-            b
-        }
-        Link::Usb => {
-            let mut b = Board::load(firmware_usb_elf()?)?;
-            b.write_mem(USB_STORE_ADDR, &Stored::from(settings).to_bytes())?;
-            b
-        }
-    };
+    let mut b = Board::load(firmware_elf()?)?;
+    b.write_mem(0x0800_0000 + 62 * 1024, &Stored::from(settings).to_bytes())?;
     b.run_until(HZ / 2, |b| b.serial_output().contains("Grbl"))?;
     if link == Link::Usb {
         b.usb_connect(2 * HZ)?;

@@ -75,6 +75,11 @@ pub struct PlanBreakdown {
     pub callers: Vec<(usize, String, u64, u64)>,
 }
 
+// a step pulse's rising edge (GPIOB's step pins; not EN, PB8, which boot raises)
+fn is_step(e: &super::gpio::PinEdge) -> bool {
+    e.port == 1 && e.level && super::STEP_PINS.contains(&e.pin)
+}
+
 /// Streams `segments(n, 3000, seed)` into a booted `board` and measures.
 pub fn stream_segments(board: &mut Board, n: usize, seed: u64) -> Result<StreamResult> {
     Ok(stream_segments_profiled(board, n, seed, &[])?.0)
@@ -101,7 +106,7 @@ pub fn stream_segments_profiled(board: &mut Board, n: usize, seed: u64, extra: &
         let r = board.send_line_wait_ok(l)?;
         ensure!(r.contains("ok"), "{l}: {r}");
         if first_step.is_none() {
-            first_step = board.edges().iter().find(|e| e.port == 1 && e.level).map(|e| e.cycle);
+            first_step = board.edges().iter().find(|e| is_step(e)).map(|e| e.cycle);
         }
         last_ok = board.cycles();
     }
@@ -140,10 +145,10 @@ pub fn stream_segments_profiled(board: &mut Board, n: usize, seed: u64, extra: &
     board.set_profile(false);
     board.run_until_quiet(HZ / 10, 30 * HZ)?;
     let first = first_step.unwrap_or(last_ok);
-    let last_step = board.edges().iter().rev().find(|e| e.port == 1 && e.level).map_or(first, |e| e.cycle);
+    let last_step = board.edges().iter().rev().find(|e| is_step(e)).map_or(first, |e| e.cycle);
     let w = HZ / 100;
     let mut busy = vec![false; ((last_ok.saturating_sub(first)) / w) as usize + 1];
-    for e in board.edges().iter().filter(|e| e.port == 1 && e.level && e.cycle >= first && e.cycle < last_ok) {
+    for e in board.edges().iter().filter(|e| is_step(e) && e.cycle >= first && e.cycle < last_ok) {
         busy[((e.cycle - first) / w) as usize] = true;
     }
     let starved = busy.iter().take(busy.len().saturating_sub(1)).filter(|b| !**b).count();

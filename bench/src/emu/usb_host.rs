@@ -1,13 +1,16 @@
 //! The host on the other end of the USB cable, as Linux's hub and cdc-acm drivers drive it:
 //! attach debounce, bus reset, GET_DESCRIPTOR(device, 64) at address 0, a second reset,
-//! SET_ADDRESS, the device, configuration and string descriptors, SET_CONFIGURATION, the
-//! probe's SET_LINE_CODING, then SET_CONTROL_LINE_STATE (DTR, RTS) and SET_LINE_CODING when a
-//! program opens the port. Bulk IN/OUT in 1 ms frames of [`SLOTS`] transaction slots of
+//! SET_ADDRESS, the device descriptor, the device qualifier (which a full-speed device must
+//! STALL; Windows asks), the configuration and string descriptors, SET_CONFIGURATION, the
+//! probe's SET_LINE_CODING, then SET_CONTROL_LINE_STATE (DTR, RTS), SET_LINE_CODING and
+//! GET_LINE_CODING (Windows' usbser reads it back) when a program opens the port. Bulk IN/OUT in 1 ms frames of [`SLOTS`] transaction slots of
 //! [`SLOT_CYCLES`] (a 64-byte full-speed transaction with its token, handshake and gaps takes
 //! about 50 µs), 64-byte packets; a NAKed OUT is retried in a later slot.
 //!
 //! The descriptors are parsed as a host does and checked against the chapter 9 and CDC 1.1
-//! rules Linux's cdc-acm and Windows' usbser rely on; what fails goes to [`UsbStats::errors`].
+//! rules Linux's cdc-acm and Windows' usbser rely on, and so are the control transfers (no
+//! more than wLength, packets of at most bMaxPacketSize0, nothing left loaded after a data
+//! stage); what fails goes to [`UsbStats::errors`].
 //! For `mcu.rs` (which advances it with the clock) and `board.rs`.
 
 use std::collections::VecDeque;
@@ -67,6 +70,8 @@ struct Cdc {
 enum What {
     Device64,
     Device,
+    /// Windows asks a USB 2.0 device for its device qualifier; a full-speed-only one STALLs.
+    Qualifier,
     ConfigHead,
     Config,
     BosHead,
@@ -75,6 +80,8 @@ enum What {
     Str(u8),
     SetAddress(u8),
     SetConfig,
+    /// GET_LINE_CODING after SET_LINE_CODING (Windows' usbser reads it back): the bytes set.
+    LineCoding([u8; 7]),
     Plain,
 }
 
@@ -194,9 +201,17 @@ fn get_descriptor(kind: u8, index: u8, lang: u16, len: u16, what: What) -> Step 
 
 /// SET_LINE_CODING to interface 0: rate, 1 stop bit, no parity, 8 data bits.
 fn line_coding(rate: u32) -> Step {
-    let mut data = rate.to_le_bytes().to_vec();
-    data.extend([0, 0, 8]);
-    Step::Control(setup_packet(0x21, 0x20, 0, 0, 7), data, What::Plain)
+    Step::Control(setup_packet(0x21, 0x20, 0, 0, 7), coding_bytes(rate).to_vec(), What::Plain)
+}
+
+fn coding_bytes(rate: u32) -> [u8; 7] {
+    let [r0, r1, r2, r3] = rate.to_le_bytes();
+    [r0, r1, r2, r3, 0, 0, 8]
+}
+
+/// GET_LINE_CODING from interface 0, expecting `rate` 8N1.
+fn get_line_coding(rate: u32) -> Step {
+    Step::Control(setup_packet(0xA1, 0x21, 0, 0, 7), Vec::new(), What::LineCoding(coding_bytes(rate)))
 }
 
 fn control_line_state(dtr_rts: bool) -> Step {
@@ -381,6 +396,7 @@ impl UsbHost {
             self.plan.push_back(control_line_state(self.open));
             if self.open {
                 self.plan.push_back(line_coding(115_200));
+                self.plan.push_back(get_line_coding(115_200));
             }
             return;
         }
@@ -477,6 +493,10 @@ impl UsbHost {
         };
         match (c.stage, h) {
             (_, Handshake::Nak | Handshake::Timeout) => {}
+            (_, Handshake::Stall) if c.what == What::Qualifier && c.stage != Stage::Setup => {
+                // The answer a full-speed-only device owes (USB 2.0 §9.6.2).
+                self.ctl = None;
+            }
             (_, Handshake::Stall) => {
                 let e = format!("control {:02x?}: STALL in {:?}", c.setup, c.stage);
                 self.fail(e);
@@ -497,7 +517,13 @@ impl UsbHost {
                 c.toggle = !c.toggle;
                 c.since = at;
                 let short = d.len() < mps0;
+                if d.len() > mps0 {
+                    self.stats.errors.push(format!("control {:02x?}: IN packet of {} bytes (bMaxPacketSize0 {mps0})", c.setup, d.len()));
+                }
                 c.got.extend(d);
+                if c.got.len() > length {
+                    self.stats.errors.push(format!("control {:02x?}: {} bytes for wLength {length}", c.setup, c.got.len()));
+                }
                 if short || c.got.len() >= length {
                     c.got.truncate(length);
                     c.stage = Stage::StatusOut;
@@ -521,6 +547,11 @@ impl UsbHost {
             }
             (Stage::StatusOut, Handshake::Ack) => {
                 let c = self.ctl.take().unwrap();
+                // The data stage ended on the host's side: nothing more may be loaded (a
+                // zero-length packet where none was due).
+                if dev.ready(addr, 0, true) {
+                    self.stats.errors.push(format!("control {:02x?}: an IN packet still loaded after the data stage", c.setup));
+                }
                 self.done(c, at);
             }
             (stage, h) => {
@@ -567,6 +598,9 @@ impl UsbHost {
                     self.strings = [d[14], d[15], d[16]];
                 }
                 self.plan.push_front(get_descriptor(2, 0, 0, 9, What::ConfigHead));
+                if d.len() >= 4 && u16::from_le_bytes([d[2], d[3]]) >= 0x0200 {
+                    self.plan.push_front(get_descriptor(6, 0, 0, 10, What::Qualifier));
+                }
                 // USB 2.01 and later: Linux reads the BOS descriptor (hub.c, usb_get_bos_descriptor).
                 if d.len() >= 4 && u16::from_le_bytes([d[2], d[3]]) >= 0x0201 {
                     self.plan.push_front(get_descriptor(0x0F, 0, 0, 5, What::BosHead));
@@ -598,7 +632,7 @@ impl UsbHost {
                 if d.len() < 4 || d[1] != 3 || u16::from_le_bytes([d[2], d[3]]) != 0x0409 {
                     self.stats.errors.push(format!("string 0 (languages): {d:02x?}"));
                 }
-                let mut next = vec![Step::Control(setup_packet(0, 9, 1, 0, 0), Vec::new(), What::SetConfig), line_coding(9_600)];
+                let mut next = vec![Step::Control(setup_packet(0, 9, 1, 0, 0), Vec::new(), What::SetConfig), line_coding(9_600), get_line_coding(9_600)];
                 for &i in self.strings.iter().rev().filter(|&&i| i != 0) {
                     next.insert(0, get_descriptor(3, i, 0x0409, 255, What::Str(i)));
                 }
@@ -612,6 +646,12 @@ impl UsbHost {
                 } else {
                     let units: Vec<u16> = d[2..].chunks(2).map(|p| u16::from_le_bytes([p[0], p[1]])).collect();
                     self.stats.strings.push(String::from_utf16_lossy(&units));
+                }
+            }
+            What::Qualifier => self.stats.errors.push(format!("device qualifier answered ({d:02x?}) by a full-speed device")),
+            What::LineCoding(want) => {
+                if d[..] != want[..] {
+                    self.stats.errors.push(format!("GET_LINE_CODING {d:02x?} after SET_LINE_CODING {want:02x?}"));
                 }
             }
             What::SetConfig => {

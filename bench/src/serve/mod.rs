@@ -51,7 +51,7 @@ pub struct Options {
     /// A virtual machine wired to the pins (`--machine`).
     pub machine: Option<crate::machine::MachineSpec>,
     /// Serve the board's USB port instead of USART1 (`--usb`: a modeled host enumerates it
-    /// and holds the port open; the firmware must be the `usb` build).
+    /// and holds the port open; the firmware needs the `usb` feature, on by default).
     pub usb: bool,
     /// The emulated part's device registers (`--flash-kib`, `--uid`, `--cpuid`; default
     /// `emu::BLUE_PILL`).

@@ -26,7 +26,7 @@ impl Server {
         Server::start_elf(&firmware_elf().expect("firmware ELF"), extra)
     }
 
-    // the same with another firmware ELF (the `usb` build for `--usb`)
+    // the same with another firmware ELF
     pub fn start_elf(elf: &std::path::Path, extra: &[&str]) -> Server {
         let mut child = Command::new(env!("CARGO_BIN_EXE_sim"))
             .arg("--elf")

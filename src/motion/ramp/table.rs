@@ -15,12 +15,7 @@ use crate::TIMER_HZ;
 const THOUSAND: NonZeroU64 = NonZeroU64::new(1000).unwrap();
 
 /// Entries (milliseconds) in the firmware's table.
-#[cfg(not(feature = "usb"))]
 pub const RAMP_LEN: usize = 512;
-/// Entries in the `usb` build's table (bench only, until USB fits): 64 fewer (512 B of RAM)
-/// leave its stack the room the USB device's 1.1 KB of statics took.
-#[cfg(feature = "usb")]
-pub const RAMP_LEN: usize = 448;
 /// Fraction bits of a table index: the engine walks `walk_q / 2^20` entries per millisecond,
 /// so one table (built for the fastest acceleration) serves every slower one.
 pub const IDX_FRAC: u32 = 20;

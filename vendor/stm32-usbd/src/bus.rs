@@ -23,9 +23,16 @@ pub struct UsbBus<USB> {
 impl<USB: UsbPeripheral> UsbBus<USB> {
     /// Constructs a new USB peripheral driver.
     pub fn new(peripheral: USB) -> UsbBusAllocator<Self> {
+        UsbBusAllocator::new(Self::new_bare(peripheral))
+    }
+
+    /// ddastep's patch: the driver without usb-device's allocator, for a device stack that
+    /// calls the `usb_device::bus::UsbBus` methods itself (allocating its endpoints with
+    /// `alloc_ep`, then `enable`).
+    pub fn new_bare(peripheral: USB) -> Self {
         USB::enable();
 
-        let bus = UsbBus {
+        UsbBus {
             peripheral,
             regs: Mutex::new(UsbRegisters::new()),
             ep_allocator: EndpointMemoryAllocator::new(),
@@ -40,9 +47,7 @@ impl<USB: UsbPeripheral> UsbBus<USB> {
 
                 unsafe { mem::transmute::<_, [Endpoint<USB>; NUM_ENDPOINTS]>(endpoints) }
             },
-        };
-
-        UsbBusAllocator::new(bus)
+        }
     }
 
     pub fn free(self) -> USB {

@@ -1,10 +1,10 @@
-//! ddastep's patch of stm32-usbd 0.8.0 (the only change, with the `crate::cs::free` calls that
-//! replace `cortex_m::interrupt::free` in bus.rs and endpoint.rs): the driver's critical
-//! sections raise BASEPRI to the lowest interrupt priority instead of setting PRIMASK, so they
-//! never hold off an interrupt above it. On ddastep every use of the driver runs in `init` or
-//! in the USB interrupt at RTIC's lowest priority (1), so nothing that could preempt them
-//! touches it; the step interrupt (above RTIC) is no longer delayed by a packet copy
-//! (bench/benches/usb_link.rs measured up to 1 744 modeled cycles with PRIMASK).
+//! ddastep's patch of stm32-usbd 0.8.0 (with the `crate::cs::free` calls that replace
+//! `cortex_m::interrupt::free` in bus.rs and endpoint.rs; besides, `UsbBus::new_bare` and
+//! `NUM_ENDPOINTS` = 3): the driver's critical sections raise BASEPRI to the lowest interrupt
+//! priority instead of setting PRIMASK, so they never hold off an interrupt above it. On ddastep
+//! every use of the driver runs in `init` or in the USB interrupt at RTIC's lowest priority (1), so
+//! nothing that could preempt them touches it; the step interrupt (above RTIC) is no longer delayed
+//! by a packet copy (bench/benches/usb_link.rs measured up to 1 744 modeled cycles with PRIMASK).
 
 use cortex_m::interrupt::CriticalSection;
 

@@ -299,7 +299,7 @@ fn raster_section(m: &mut String) -> Result<()> {
     writeln!(m, "### Streaming a LaserGRBL raster: USART1 against USB\n")?;
     writeln!(m, "`ddastep_bench::emu::raster`: {} rows of 20 mm at F6000 (`M4`, one `G1 X… S…` line per pixel, rows", raster::ROWS)?;
     writeln!(m, "alternating), bench settings with laser mode, streamed with character counting over USART1 at")?;
-    writeln!(m, "115 200 baud and over the modeled USB (the `usb` build, `firmware_usb_elf`; the host of")?;
+    writeln!(m, "115 200 baud and over the modeled USB (the release image, USB on by default; the host of")?;
     writeln!(m, "`emu/usb_host.rs`), against the same path sent as one line per row. Lines/s: first line")?;
     writeln!(m, "written to the last reply. Steps: first to last step. Step-less ms: 1 ms windows without a")?;
     writeln!(m, "step between the first and the last step. Planner fill: blocks queued in `Bf:` while lines")?;
