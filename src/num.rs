@@ -110,6 +110,19 @@ pub fn div_rem_u64(n: u64, d: core::num::NonZeroU64) -> (u64, u64) {
     (q, r)
 }
 
+/// Tests' random numbers: Marsaglia's xorshift64 from `seed` (non-zero), one value per call
+/// (the same sequence on every run, so a failure repeats).
+#[cfg(test)]
+pub(crate) fn xorshift(seed: u64) -> impl FnMut() -> u64 {
+    let mut r = seed;
+    move || {
+        r ^= r << 13;
+        r ^= r >> 7;
+        r ^= r << 17;
+        r
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -127,13 +140,11 @@ mod tests {
             assert_eq!(round_i32(-x), libm::roundf(-x) as i32);
         }
         // Integers to f32: edges (ties to even above 2^24) and random bit patterns.
-        let mut r = 0x9E37_79B9_7F4A_7C15u64;
+        let mut rng = xorshift(0x9E37_79B9_7F4A_7C15);
         let edges = [0, 1, u32::MAX as u64, 1 << 32, (1 << 53) + 1, (1 << 54) + 2, (1 << 54) + 6, u64::MAX, 1 << 63, (1 << 63) - 1,
             (1 << 24) + 1, (1 << 25) + 2, (1 << 25) + 6, (1 << 40) + (1 << 16), (1 << 40) + (1 << 16) + 1, (1 << 40) + (3 << 16)];
         let random = (0..100_000).map(|_| {
-            r ^= r << 13;
-            r ^= r >> 7;
-            r ^= r << 17;
+            let r = rng();
             r >> (r % 64)
         });
         for x in edges.into_iter().chain(random) {

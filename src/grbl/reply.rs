@@ -176,11 +176,9 @@ mod tests {
             1_000_000_000.000_5, 999_999_999_999.999, 999_999_999_999_999.0, 1e15, -1e15, 3e38, 1e-40, 0.0005, -0.0125, 2.5e-4,
             f32::NAN, f32::INFINITY, f32::NEG_INFINITY,
         ];
-        let mut r = 0x9E37_79B9_7F4A_7C15u64;
+        let mut rng = crate::num::xorshift(0x9E37_79B9_7F4A_7C15);
         let random = (0..20_000).map(|_| {
-            r ^= r << 13;
-            r ^= r >> 7;
-            r ^= r << 17;
+            let r = rng();
             // Magnitudes from 10^-4 to 10^16, both signs.
             let m = (r >> 11) as f64 / (1u64 << 53) as f64;
             let v = libm::pow(10.0, -4.0 + 20.0 * m) as f32;

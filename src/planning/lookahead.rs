@@ -275,13 +275,8 @@ mod tests {
     /// equal to the reference passes' on the same sequence.
     #[test]
     fn replan_matches_the_full_passes() {
-        let mut r = 0x2545_F491_4F6C_DD1Du64;
-        let mut next = |n: u64| {
-            r ^= r << 13;
-            r ^= r >> 7;
-            r ^= r << 17;
-            r % n
-        };
+        let mut rng = crate::num::xorshift(0x2545_F491_4F6C_DD1Du64);
+        let mut next = |n: u64| rng() % n;
         let mut table = RampTable::<512>::new();
         table.build(RampConfig { v0: 100, vmax: 60_000, accel: 200_000, shape: Shape::Trapezoid }).unwrap();
         let top = table.top_q() as u64;
@@ -349,13 +344,8 @@ mod tests {
     /// as one bisection over every Q20 index.
     #[test]
     fn cruise_index_is_the_first_index_fast_enough() {
-        let mut r = 0x9E37_79B9_7F4A_7C15u64;
-        let mut next = |n: u64| {
-            r ^= r << 13;
-            r ^= r >> 7;
-            r ^= r << 17;
-            r % n
-        };
+        let mut rng = crate::num::xorshift(0x9E37_79B9_7F4A_7C15u64);
+        let mut next = |n: u64| rng() % n;
         let mut table = RampTable::<1024>::new();
         for _ in 0..300 {
             let v0 = 1 + next(5_000) as u32;

@@ -165,13 +165,8 @@ mod tests {
 
     #[test]
     fn parse_number_matches_the_former_reader() {
-        let mut r = 0x2545_F491_4F6C_DD1Du64;
-        let mut next = |n: u64| {
-            r ^= r << 13;
-            r ^= r >> 7;
-            r ^= r << 17;
-            r % n
-        };
+        let mut rng = crate::num::xorshift(0x2545_F491_4F6C_DD1Du64);
+        let mut next = |n: u64| rng() % n;
         // Mostly digits and zeros (long runs of zeros after the point), some signs and points.
         let alphabet = b"0000000123456789..-+X";
         let edges = ["1.00000000000000000001", "9.0000000000000000000001", "0.0000000000000000000009", "99999.0000000001",

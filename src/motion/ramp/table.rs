@@ -252,13 +252,8 @@ pub(super) mod tests {
 
     /// A fixed xorshift stream: `next(n)` is in `0..n`.
     pub(in crate::motion::ramp) fn xorshift() -> impl FnMut(u32) -> u32 {
-        let mut r = 0x2545_F491_4F6C_DD1Du64;
-        move |n| {
-            r ^= r << 13;
-            r ^= r >> 7;
-            r ^= r << 17;
-            (r % n as u64) as u32
-        }
+        let mut rng = crate::num::xorshift(0x2545_F491_4F6C_DD1D);
+        move |n| (rng() % n as u64) as u32
     }
 
     /// The rate is linear between entries (to the quotient's rounding, a 1/16-tick period step,
