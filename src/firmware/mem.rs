@@ -30,10 +30,10 @@ core::arch::global_asm!(
     "__aeabi_memcpy4:",
     ".thumb_func",
     "__aeabi_memcpy8:",
+    // Words whatever the alignment: the Cortex-M3 does unaligned LDR/STR in normal memory
+    // (CCR.UNALIGN_TRP stays clear), and the compiler's copies of `Option` payloads start one
+    // byte past a tag, so a byte loop would copy most of them.
     "    mov   r12, r0",
-    "    orr   r3, r0, r1",
-    "    lsls  r3, r3, #30",
-    "    bne   2f",
     "1:  subs  r2, r2, #4",
     "    itt   hs",
     "    ldrhs r3, [r1], #4",
