@@ -87,6 +87,7 @@ impl<const N: usize> Controller<'_, N> {
 
     /// A new job (`Job::none()`) in its slot, for the caller to fill in and start with
     /// [`Self::advance`] (built in place: a job built on the stack is copied in whole).
+    #[inline(never)]
     pub(super) fn new_job(&mut self) -> &mut Job<N> {
         self.job.insert(Job::none())
     }
