@@ -159,8 +159,9 @@ impl<const N: usize> Job<N> {
     }
 
     /// Nothing to do. (A function, not a constant: a constant of this size would be copied
-    /// from flash whole, payloads of its `None`s included.)
-    #[inline(never)]
+    /// from flash whole, payloads of its `None`s included. Inlined into `new_job`, which
+    /// writes its fields into the slot: called, it is built aside and copied in whole.)
+    #[inline(always)]
     fn none() -> Self {
         Job {
             listing: None,

@@ -138,7 +138,7 @@ impl<const N: usize> Offsets<N> {
 
     /// Machine position of program coordinate `w` on axis `i` in system `sel` (G90).
     pub fn to_machine(&self, sel: u8, i: usize, w: f32) -> f32 {
-        w + self.wcs(sel).get(i).copied().unwrap_or(0.0) + self.g92[i] + self.tlo_of(i)
+        w + self.wcs_of(sel, i) + self.g92[i] + self.tlo_of(i)
     }
 
     /// G92: the offset that makes the machine position `pos` read `words` in system `sel`

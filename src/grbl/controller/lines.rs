@@ -87,6 +87,7 @@ impl<const N: usize> Controller<'_, N> {
 
     /// A new job (`Job::none()`) in its slot, for the caller to fill in and start with
     /// [`Self::advance`] (built in place: a job built on the stack is copied in whole).
+    #[inline(never)]
     pub(super) fn new_job(&mut self) -> &mut Job<N> {
         self.job.insert(Job::none())
     }
@@ -112,22 +113,52 @@ impl<const N: usize> Controller<'_, N> {
         }
         let mut fx = gcode::Effects::none();
         let modal = self.modal.interpret_into(&block, self.planner.position_mm(), &self.offsets, &mut fx)?;
-        let mut planner = self.planner;
+        // Soft limits: every target this line moves to, arc chord ends included (a chord
+        // between two points in the box stays in it). Acted on once the line has no error.
+        let motion_out = fx.motion.as_ref().is_some_and(|(t, _)| self.beyond_travel(t));
+        // A rejected line leaves the planner as it was. `Planner::line_exact` changes nothing
+        // when it fails, so a lone G0/G1 plans in place; a line with more that can fail after
+        // it (G28/G30's second move, an arc's range check), a G93 move (`plan` rests the
+        // planner first) or a soft-limit trip plans from a copy kept to roll back to.
+        let lone = fx.home.is_none() && fx.arc.is_none() && !modal.inverse_time && !motion_out;
+        let undo = (!lone).then(|| self.planner);
         // G93: F is 1/minutes (checked positive where a motion needs it).
         let rate = if modal.inverse_time { Rate::Minutes(1.0 / modal.feed) } else { Rate::Feed(modal.feed) };
-        let cfg = self.ramped.cfg;
-        let lim = &self.limits;
+        // (Each step in place, not a closure returning the moves: those would be copied out.)
+        let roll_back = |planner: &mut Planner<N>| {
+            if let Some(p) = undo {
+                *planner = p;
+            }
+        };
         let mv = match &fx.motion {
-            Some((t, rapid)) => plan(&mut planner, t, &fx.exact, if *rapid { Rate::Rapid } else { rate }, lim, &cfg)?,
+            Some((t, rapid)) => {
+                let r = if *rapid { Rate::Rapid } else { rate };
+                match plan(&mut self.planner, t, &fx.exact, r, &self.limits, &self.ramped.cfg) {
+                    Ok(m) => m,
+                    Err(e) => {
+                        roll_back(&mut self.planner);
+                        return Err(e);
+                    }
+                }
+            }
             None => None,
         };
         let mv2 = match &fx.home {
-            Some(t) => planner.line(t, None, lim)?,
+            Some(t) => match self.planner.line(t, None, &self.limits) {
+                Ok(m) => m,
+                Err(e) => {
+                    roll_back(&mut self.planner);
+                    return Err(e);
+                }
+            },
             None => None,
         };
         let (arc, rate) = match &fx.arc {
             Some(a) => {
-                a.check_range(&self.limits.steps_per_mm)?;
+                if let Err(e) = a.check_range(&self.limits.steps_per_mm) {
+                    roll_back(&mut self.planner);
+                    return Err(e);
+                }
                 let seg = a.segments(self.settings.arc_tolerance);
                 // G93 over an arc: its time shared by the (equal) chords.
                 let per = match rate {
@@ -138,11 +169,10 @@ impl<const N: usize> Controller<'_, N> {
             }
             None => (None, Rate::Rapid),
         };
-        // Soft limits: every target this line moves to, arc chord ends included (a chord
-        // between two points in the box stays in it).
         let arc_out = arc.is_some_and(|mut seg| seg.any(|p| self.beyond_travel(&p)));
         let home_out = fx.home.as_ref().is_some_and(|t| self.beyond_travel(t));
-        if arc_out || home_out || fx.motion.as_ref().is_some_and(|(t, _)| self.beyond_travel(t)) {
+        if arc_out || home_out || motion_out {
+            roll_back(&mut self.planner);
             self.soft_limit_trip();
             return Ok(());
         }
@@ -167,7 +197,6 @@ impl<const N: usize> Controller<'_, N> {
             self.wco_count = 0;
         }
         self.modal = modal;
-        self.planner = planner;
         if self.check {
             if let Some(a) = &fx.arc {
                 // Check mode: only the position follows the arc.

@@ -235,7 +235,12 @@ impl<const N: usize> Controller<'_, N> {
             }
             true
         };
-        self.job = if done { None } else { Some(job) };
+        // (Two stores: one `Option` built first would be copied whole, `None` included.)
+        if done {
+            self.job = None;
+        } else {
+            self.job = Some(job);
+        }
         done
     }
 }
