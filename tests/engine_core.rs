@@ -227,3 +227,32 @@ fn positions_mid_move_equal_pulses_written_plus_the_pending_word() {
     rig.run_to_idle(1_000_000);
     assert_eq!(rig.shared.positions(), [-8_501, 0, 7_777, 0]);
 }
+
+/// A ramp pass preempted between its look at the ring and its store of the primed successor
+/// can store, after the step half entered that successor, the move now running. The step
+/// half takes only the slot after the running one: each move runs once, the queue ends
+/// (before, the running move was entered again, its slot freed twice, and the ring's head
+/// passed its tail: the engine replayed stale slots and the feeder saw a full ring for good,
+/// the 10^5-line USB stream's stall).
+#[test]
+fn a_stale_primed_successor_is_not_entered() {
+    let mut rig = Rig::<2>::trapezoid(1000, 60_000, 2_000_000);
+    let moves = [[3, 1], [1, 0], [2, 2], [1, 1], [4, -1], [1, 0], [-2, 1], [1, 0]];
+    for m in moves {
+        rig.push(m, 50_000);
+    }
+    let start = rig.updates;
+    loop {
+        // At every edge, as if each ramp pass had been preempted so.
+        rig.engine.stale_succ();
+        rig.update();
+        if rig.feeder.pending() == 0 && rig.shared.state() == State::Idle {
+            rig.update();
+            break;
+        }
+        assert!(rig.updates - start < 100_000, "engine did not finish");
+    }
+    let want = moves.iter().fold([0, 0], |a, m| [a[0] + m[0], a[1] + m[1]]);
+    assert_eq!(rig.net_steps(), want);
+    assert_eq!(rig.shared.positions(), [want[0] as i32, want[1] as i32]);
+}

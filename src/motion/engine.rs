@@ -145,6 +145,12 @@ impl<'a, const N: usize, const L: usize> Engine<'a, N, L> {
         self.step.filler_next()
     }
 
+    /// Stores the running move as its own primed successor, as a ramp pass preempted between
+    /// its look at the ring and its store of the successor can after a move change (tests).
+    pub fn stale_succ(&self) {
+        self.step.stale_succ();
+    }
+
     /// Ramp-walk state for tests: (index Q20, decelerating, decel trigger, master steps left).
     pub fn walk_state(&self) -> (u32, bool, u32, u32) {
         let (idx, decel, at) = self.ramp.walk_state();

@@ -19,7 +19,9 @@ pub struct Link {
     /// running move; 0 otherwise): the walk is on it from then on.
     pub(crate) next: AtomicUsize,
     /// The running move's successor once the ramp half has primed it (0 or 1: none; the step
-    /// half stores 1 when it enters the successor or goes idle).
+    /// half stores 1 when it enters the successor or goes idle). A ramp pass preempted across
+    /// a move change can leave a stale slot here: the step half takes it only when it is the
+    /// ring's slot after the running move.
     pub(crate) succ: AtomicUsize,
     /// Requests to prime the front move for a start from rest.
     pub(crate) primes: AtomicU32,

@@ -59,9 +59,12 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
     pub(super) fn finish(&mut self, gap: u32, period: u32) -> u32 {
         bump(&self.shared.moves_done);
         // The successor the ramp half primed (its period and trigger), else one queued since
-        // it last ran.
+        // it last ran. Primed means the slot after this move's: a ramp pass preempted between
+        // its look at the ring and its store of `succ` can store, after this half entered
+        // that move and cleared `succ`, the move now running (or a freed one); entering it
+        // would free a slot past the ring's tail and replay stale moves.
         let mut p = self.link().succ.load(Relaxed) as *mut Prepared<N>;
-        if (p as usize) <= CLEARED {
+        if self.ring.second() != Some(p) {
             p = self.unprimed(period);
             if p.is_null() {
                 return self.end_of_queue(gap);

@@ -137,6 +137,13 @@ impl<'a, const N: usize, const L: usize> Stepper<'a, N, L> {
         self.left
     }
 
+    /// The running move as the primed successor in the link: what a ramp pass preempted
+    /// between its look at the ring and its store of the successor leaves once this half has
+    /// entered that move (host tests).
+    pub(in crate::motion::engine) fn stale_succ(&self) {
+        self.link().succ.store(self.cur as usize, core::sync::atomic::Ordering::Relaxed);
+    }
+
     /// The BSRR word to store at this update event (precomputed by the previous tick).
     #[inline(always)]
     pub fn word(&self) -> u32 {
