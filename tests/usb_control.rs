@@ -7,7 +7,7 @@
 use std::collections::VecDeque;
 
 use ddastep::usb::control::{Control, Ep0, Split};
-use ddastep::usb::descriptors::{CONFIG, DEVICE, EP0_LEN, LANGIDS, MANUFACTURER, PRODUCT};
+use ddastep::usb::descriptors::{BULK_IN_EP, BULK_OUT_EP, CONFIG, DEVICE, EP0_LEN, LANGIDS, MANUFACTURER, NOTIFY_EP, PRODUCT};
 use proptest::prelude::*;
 
 /// Endpoint 0 as the test sees it: the IN packets loaded, STALL, the address set.
@@ -16,6 +16,8 @@ struct Rec {
     loaded: VecDeque<Vec<u8>>,
     stalled: bool,
     address: Option<u8>,
+    /// Endpoints whose data toggle was restarted at DATA0, in order.
+    toggles: Vec<u8>,
 }
 
 impl Ep0 for Rec {
@@ -28,6 +30,9 @@ impl Ep0 for Rec {
     }
     fn set_address(&mut self, addr: u8) {
         self.address = Some(addr);
+    }
+    fn clear_toggle(&mut self, addr: u8) {
+        self.toggles.push(addr);
     }
 }
 
@@ -223,6 +228,27 @@ fn set_address_applies_after_the_status_stage() {
     ep.address = None;
     ctl.in_complete(&mut ep);
     assert_eq!(ep.address, None);
+}
+
+/// SET_CONFIGURATION (the first one and one mid-session, as macOS sends) restarts every
+/// non-control endpoint's toggle at DATA0 (§9.1.1.5); CLEAR_FEATURE(ENDPOINT_HALT) restarts
+/// the one it names (§9.4.5), never endpoint 0's (its toggles follow the SETUP).
+#[test]
+fn set_configuration_and_clear_halt_restart_the_toggles() {
+    let mut ctl = Control::new();
+    let mut ep = Rec::default();
+    for _ in 0..2 {
+        assert!(write(&mut ctl, &mut ep, setup(0x00, 9, 1, 0, 0), None));
+        assert_eq!(std::mem::take(&mut ep.toggles), [NOTIFY_EP, BULK_OUT_EP, BULK_IN_EP]);
+    }
+    for e in [BULK_OUT_EP, BULK_IN_EP] {
+        assert!(write(&mut ctl, &mut ep, setup(0x02, 1, 0, e as u16, 0), None));
+        assert_eq!(std::mem::take(&mut ep.toggles), [e]);
+    }
+    for e in [0x00, 0x80] {
+        assert!(write(&mut ctl, &mut ep, setup(0x02, 1, 0, e, 0), None));
+    }
+    assert!(ep.toggles.is_empty(), "{:?}", ep.toggles);
 }
 
 /// Configuration, DTR and the line coding; a bus reset forgets them.

@@ -255,3 +255,38 @@ fn the_boot_detach_costs_10_ms() {
     let ms = b.cycles() as f64 * 1000.0 / HZ as f64;
     assert!((10.0..25.0).contains(&ms), "banner at {ms:.2} ms");
 }
+
+/// A host that sends SET_CONFIGURATION(1) again (macOS) and CLEAR_FEATURE(ENDPOINT_HALT) on
+/// the bulk endpoints (libusb's `clear_halt`) mid-session restarts its toggles at DATA0, as
+/// USB 2.0 §9.1.1.5 and §9.4.5 say the device must: after an odd number of packets each way,
+/// and again in the middle of a flood, no OUT packet is dropped as a repeat and no IN packet
+/// is refused; every line gets its one `ok` and every step is made.
+#[test]
+fn set_configuration_and_clear_halt_mid_session_restart_the_toggles() {
+    let mut b = boot_usb();
+    assert!(b.usb_send_line_wait_ok("G91").unwrap().contains("ok"));
+    b.usb_resync();
+    b.run_seconds(0.02).unwrap();
+    let lines: Vec<String> = (0..21).map(|_| "G1 X0.04 F500".to_string()).collect();
+    let replies = stream_char_count(&mut b, Link::Usb, &lines, 2 * HZ).unwrap();
+    assert_eq!(replies.len(), lines.len());
+    assert!(replies.iter().all(|r| r == "ok"), "{replies:?}");
+    // Again while OUT packets wait behind NAKs and replies are on their way.
+    let mark = b.usb_output().len();
+    b.usb_send("G1 X0.04 F500\n".repeat(40).as_bytes());
+    b.run_seconds(0.005).unwrap();
+    b.usb_resync();
+    let oks = |b: &Board| b.usb_output()[mark..].matches("ok\r\n").count();
+    assert!(b.run_until(10 * HZ, |b| oks(b) >= 40 && b.usb_pending() == 0).unwrap(), "{} replies of 40", oks(&b));
+    let mut seen = 0;
+    while steps(&b).len() != seen {
+        seen = steps(&b).len();
+        b.run_seconds(0.1).unwrap();
+    }
+    assert_eq!(oks(&b), 40);
+    assert_eq!(net(&steps(&b))[0], 61 * 10);
+    let s = b.usb_stats();
+    assert_eq!((s.enumerations, s.in_toggle_errors, b.usb_toggle_mismatches()), (3, 0, 0), "{s:?}");
+    assert!(s.errors.is_empty(), "{:?}", s.errors);
+    assert!(b.fault().is_none(), "{:?}", b.fault());
+}

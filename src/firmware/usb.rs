@@ -83,6 +83,10 @@ impl Ep0 for Port<'_> {
     fn set_address(&mut self, addr: u8) {
         self.0.set_device_address(addr);
     }
+
+    fn clear_toggle(&mut self, addr: u8) {
+        self.0.clear_toggle(EndpointAddress::from(addr));
+    }
 }
 
 /// The CDC ACM device and its packet state.

@@ -7,7 +7,8 @@
 //!
 //! Answered: GET_DESCRIPTOR (device, configuration, strings 0..2), SET_ADDRESS (applied after
 //! the status stage, §9.4.6), SET/GET_CONFIGURATION, GET_STATUS, GET/SET_INTERFACE (alternate
-//! setting 0), CLEAR_FEATURE(ENDPOINT_HALT) (no endpoint is ever halted), and the CDC requests
+//! setting 0), CLEAR_FEATURE(ENDPOINT_HALT) (no endpoint is ever halted; SET_CONFIGURATION and
+//! it restart the endpoints' data toggles at DATA0, §9.1.1.5, §9.4.5), and the CDC requests
 //! SET/GET_LINE_CODING (kept and read back, not used: a virtual port has no baud rate),
 //! SET_CONTROL_LINE_STATE (DTR) and SEND_BREAK. Anything else (device qualifier, BOS, other
 //! strings, SET_FEATURE, unknown requests, a request with a wLength it cannot have) STALLs
@@ -16,7 +17,7 @@
 
 use core::ops::Range;
 
-use super::descriptors::{CONFIG, DEVICE, EP0_LEN, LANGIDS, MANUFACTURER, PRODUCT};
+use super::descriptors::{BULK_IN_EP, BULK_OUT_EP, CONFIG, DEVICE, EP0_LEN, LANGIDS, MANUFACTURER, NOTIFY_EP, PRODUCT};
 
 /// Endpoint 0 as the control pipe sees it (the firmware's bus, a test's recorder).
 pub trait Ep0 {
@@ -26,6 +27,8 @@ pub trait Ep0 {
     fn stall(&mut self);
     /// Sets the device address.
     fn set_address(&mut self, addr: u8);
+    /// Restarts the data toggle of endpoint `addr` (number and direction bit) at DATA0.
+    fn clear_toggle(&mut self, addr: u8);
 }
 
 /// The data stage of a control read: which bytes of the reply each IN packet carries. The
@@ -148,7 +151,7 @@ impl Control {
 
     /// A SETUP packet: starts a new transfer (whatever the last one was doing).
     pub fn setup(&mut self, ep: &mut impl Ep0, s: &[u8; 8]) {
-        let [request_type, request, v0, v1, _, _, l0, l1] = *s;
+        let [request_type, request, v0, v1, i0, _, l0, l1] = *s;
         let length = u16::from_le_bytes([l0, l1]);
         self.stage = Stage::Idle;
         self.address = None;
@@ -173,8 +176,12 @@ impl Control {
                 self.address = Some(v0);
                 Answer::Ack
             }
-            // SET_CONFIGURATION 0 or 1.
+            // SET_CONFIGURATION 0 or 1: the endpoints' toggles restart at DATA0 (§9.1.1.5),
+            // also when the host sends it again mid-session (macOS does).
             (0x00, 9) if v0 < 2 && v1 == 0 => {
+                ep.clear_toggle(NOTIFY_EP);
+                ep.clear_toggle(BULK_OUT_EP);
+                ep.clear_toggle(BULK_IN_EP);
                 self.configured = v0 == 1;
                 self.dtr &= self.configured;
                 Answer::Ack
@@ -182,8 +189,14 @@ impl Control {
             // GET_INTERFACE, SET_INTERFACE: alternate setting 0 only.
             (0x81, 10) => Answer::In(&[0]),
             (0x01, 11) if v0 == 0 && v1 == 0 => Answer::Ack,
-            // CLEAR_FEATURE(ENDPOINT_HALT).
-            (0x02, 1) if v0 == 0 && v1 == 0 => Answer::Ack,
+            // CLEAR_FEATURE(ENDPOINT_HALT): the endpoint's toggle restarts at DATA0 (§9.4.5;
+            // libusb's clear_halt). Not endpoint 0: its toggles follow the SETUP just taken.
+            (0x02, 1) if v0 == 0 && v1 == 0 => {
+                if i0 & 0x7F != 0 {
+                    ep.clear_toggle(i0);
+                }
+                Answer::Ack
+            }
             // CDC: SET_LINE_CODING, GET_LINE_CODING, SET_CONTROL_LINE_STATE, SEND_BREAK.
             (0x21, 0x20) if length == 7 => Answer::Out,
             (0xA1, 0x21) => Answer::Coding,

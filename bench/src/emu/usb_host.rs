@@ -80,6 +80,8 @@ enum What {
     Str(u8),
     SetAddress(u8),
     SetConfig,
+    /// CLEAR_FEATURE(ENDPOINT_HALT) on this endpoint: its toggle restarts at DATA0 (§9.4.5).
+    ClearHalt(u8),
     /// GET_LINE_CODING after SET_LINE_CODING (Windows' usbser reads it back): the bytes set.
     LineCoding([u8; 7]),
     Plain,
@@ -228,6 +230,17 @@ impl UsbHost {
     pub fn write(&mut self, bytes: &[u8]) {
         if !bytes.is_empty() {
             self.writes.push_back(bytes.to_vec());
+        }
+    }
+
+    /// Mid-session, as macOS (SET_CONFIGURATION again) and libusb's `clear_halt` (bulk OUT,
+    /// then bulk IN) do: each resets the endpoints' toggles to DATA0 on both sides (USB 2.0
+    /// §9.1.1.5, §9.4.5). The bulk streams go on after them.
+    pub fn resync(&mut self) {
+        let Some(cdc) = self.cdc.filter(|_| self.configured) else { return };
+        self.plan.push_back(Step::Control(setup_packet(0, 9, 1, 0, 0), Vec::new(), What::SetConfig));
+        for ep in [cdc.bulk_out, cdc.bulk_in | 0x80] {
+            self.plan.push_back(Step::Control(setup_packet(0x02, 1, 0, ep as u16, 0), Vec::new(), What::ClearHalt(ep)));
         }
     }
 
@@ -660,6 +673,11 @@ impl UsbHost {
                 self.out_toggle = false;
                 self.in_toggle = false;
             }
+            What::ClearHalt(ep) => match self.cdc {
+                Some(cdc) if ep == cdc.bulk_out => self.out_toggle = false,
+                Some(cdc) if ep == cdc.bulk_in | 0x80 => self.in_toggle = false,
+                _ => {}
+            },
             What::Plain => {}
         }
     }

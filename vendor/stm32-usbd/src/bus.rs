@@ -50,6 +50,15 @@ impl<USB: UsbPeripheral> UsbBus<USB> {
         }
     }
 
+    /// ddastep's patch: restarts an endpoint's data toggle at DATA0 (after SET_CONFIGURATION or
+    /// CLEAR_FEATURE(ENDPOINT_HALT)); an address past the endpoints is ignored.
+    #[inline(never)]
+    pub fn clear_toggle(&self, ep_addr: EndpointAddress) {
+        if let Some(ep) = self.endpoints.get(ep_addr.index()) {
+            crate::cs::free(|cs| ep.clear_dtog(cs, ep_addr.is_in()));
+        }
+    }
+
     pub fn free(self) -> USB {
         self.peripheral
     }

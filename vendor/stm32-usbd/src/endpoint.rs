@@ -215,6 +215,16 @@ impl<USB: UsbPeripheral> Endpoint<USB> {
             .modify(|_, w| Self::set_invariant_values(w).ctr_tx().clear_bit());
     }
 
+    /// ddastep's patch: the data toggle of one direction back to DATA0 (USB 2.0 §9.4.5,
+    /// §9.1.1.5). DTOG bits flip when written 1, so the bit is written as read; the other
+    /// fields get their no-change values (CTR 1, STAT and the other DTOG 0, the rest as read).
+    pub fn clear_dtog(&self, _cs: &CriticalSection, tx: bool) {
+        let dtog = if tx { 1 << 6 } else { 1 << 14 };
+        // SAFETY: every bit written is a field of USB_EPnR with its no-change value except the
+        // one DTOG bit, written as read so that it returns to 0 (RM0008 §23.5.2).
+        self.reg().modify(|r, w| unsafe { w.bits(0x8080 | r.bits() & (0x070F | dtog)) });
+    }
+
     pub fn set_stat_rx(&self, _cs: &CriticalSection, status: EndpointStatus) {
         self.reg().modify(|r, w| {
             Self::set_invariant_values(w)

@@ -30,6 +30,12 @@ impl Board {
         self.cpu.get_data_mut().usb_host.open = open;
     }
 
+    // the host sends SET_CONFIGURATION(1) again, then CLEAR_FEATURE(ENDPOINT_HALT) on the bulk
+    // OUT and IN endpoints, each resetting its toggles to DATA0 (as macOS and libusb do)
+    pub fn usb_resync(&mut self) {
+        self.cpu.get_data_mut().usb_host.resync();
+    }
+
     // the host enumerated and configured the board
     pub fn usb_configured(&self) -> bool {
         self.cpu.get_data().usb_host.configured()
