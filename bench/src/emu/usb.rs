@@ -59,6 +59,16 @@ impl Stat {
     fn of(bits: u16) -> Stat {
         [Stat::Disabled, Stat::Stall, Stat::Nak, Stat::Valid][bits as usize & 3]
     }
+
+    /// The handshake of an endpoint direction that does not take the token (None: it does).
+    fn refusal(self) -> Option<Handshake> {
+        match self {
+            Stat::Disabled => Some(Handshake::Timeout),
+            Stat::Stall => Some(Handshake::Stall),
+            Stat::Nak => Some(Handshake::Nak),
+            Stat::Valid => None,
+        }
+    }
 }
 
 /// The device's answer to a token.
@@ -282,11 +292,8 @@ impl UsbPeripheral {
     pub fn out(&mut self, addr: u8, ep: u8, data1: bool, data: &[u8]) -> Handshake {
         let Some(n) = self.endpoint(addr, ep) else { return Handshake::Timeout };
         let e = self.ep[n];
-        match Stat::of(e >> 12) {
-            Stat::Disabled => return Handshake::Timeout,
-            Stat::Stall => return Handshake::Stall,
-            Stat::Nak => return Handshake::Nak,
-            Stat::Valid => {}
+        if let Some(h) = Stat::of(e >> 12).refusal() {
+            return h;
         }
         let [_, _, addr_rx, count_rx] = self.descriptor(n);
         if data.len() > Self::rx_size(count_rx) {
@@ -310,11 +317,8 @@ impl UsbPeripheral {
     pub fn in_(&mut self, addr: u8, ep: u8) -> Handshake {
         let Some(n) = self.endpoint(addr, ep) else { return Handshake::Timeout };
         let e = self.ep[n];
-        match Stat::of(e >> 4) {
-            Stat::Disabled => return Handshake::Timeout,
-            Stat::Stall => return Handshake::Stall,
-            Stat::Nak => return Handshake::Nak,
-            Stat::Valid => {}
+        if let Some(h) = Stat::of(e >> 4).refusal() {
+            return h;
         }
         let [addr_tx, count_tx, _, _] = self.descriptor(n);
         let len = (count_tx & 0x3FF) as usize;
