@@ -214,10 +214,24 @@ impl Board {
 
     // like `send_line_wait_ok` with a timeout in modeled cycles
     pub fn send_line_wait_ok_within(&mut self, line: &str, max_cycles: u64) -> Result<String> {
-        let mark = self.cpu.get_data().usart1.transcript.len();
-        self.serial_send(format!("{}\n", line.trim_end()).as_bytes());
+        self.line_wait_reply(line, max_cycles, "", |b| &b.cpu.get_data().usart1.transcript, Board::serial_send)
+    }
+
+    // the port's half of `send_line_wait_ok`: `line` (plus '\n') goes out through `send`, and
+    // the board runs until a complete line of `received` (what the port got back since) starts
+    // with "ok" or "error"; that text if "ok"
+    pub(super) fn line_wait_reply(
+        &mut self,
+        line: &str,
+        max_cycles: u64,
+        port: &str,
+        received: fn(&Board) -> &[u8],
+        send: fn(&mut Board, &[u8]),
+    ) -> Result<String> {
+        let mark = received(self).len();
+        send(self, format!("{}\n", line.trim_end()).as_bytes());
         let reply = |b: &Board| {
-            let text = String::from_utf8_lossy(&b.cpu.get_data().usart1.transcript[mark..]).into_owned();
+            let text = String::from_utf8_lossy(&received(b)[mark..]).into_owned();
             let complete = &text[..text.rfind('\n').map_or(0, |i| i + 1)];
             let last = complete.lines().find(|l| l.starts_with("ok") || l.starts_with("error"));
             last.map(|l| (text.clone(), l.starts_with("ok")))
@@ -226,9 +240,11 @@ impl Board {
         match reply(self) {
             Some((text, true)) if got => Ok(text),
             Some((text, _)) => bail!("{line:?} -> {}", text.trim_end()),
-            None => bail!("no ok/error for {line:?} within {:.3} s (simulated); got {:?}", max_cycles as f64 / HZ as f64, {
-                String::from_utf8_lossy(&self.cpu.get_data().usart1.transcript[mark..]).into_owned()
-            }),
+            None => bail!(
+                "no ok/error for {line:?}{port} within {:.3} s (simulated); got {:?}",
+                max_cycles as f64 / HZ as f64,
+                String::from_utf8_lossy(&received(self)[mark..])
+            ),
         }
     }
 

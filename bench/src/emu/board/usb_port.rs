@@ -111,19 +111,6 @@ impl Board {
 
     // send one line over USB (adds '\n') and run until a reply line starts with "ok" or "error"
     pub fn usb_send_line_wait_ok(&mut self, line: &str) -> Result<String> {
-        let mark = self.cpu.get_data().usb_host.received.len();
-        self.usb_send(format!("{}\n", line.trim_end()).as_bytes());
-        let reply = |b: &Board| {
-            let text = String::from_utf8_lossy(&b.cpu.get_data().usb_host.received[mark..]).into_owned();
-            let complete = &text[..text.rfind('\n').map_or(0, |i| i + 1)];
-            let last = complete.lines().find(|l| l.starts_with("ok") || l.starts_with("error"));
-            last.map(|l| (text.clone(), l.starts_with("ok")))
-        };
-        let got = self.run_until(10 * HZ, |b| reply(b).is_some())?;
-        match reply(self) {
-            Some((text, true)) if got => Ok(text),
-            Some((text, _)) => bail!("{line:?} -> {}", text.trim_end()),
-            None => bail!("no ok/error for {line:?} over USB; got {:?}", String::from_utf8_lossy(&self.cpu.get_data().usb_host.received[mark..])),
-        }
+        self.line_wait_reply(line, 10 * HZ, " over USB", |b| &b.cpu.get_data().usb_host.received, Board::usb_send)
     }
 }
