@@ -165,6 +165,12 @@ fn ugs_then_stream_py_over_the_pty_symlink() {
     let server = Server::start(&["--pty-link", link.to_str().unwrap()]);
     assert!(server.stdout_head.contains(&format!("serial link: {}", link.display())));
     assert!(server.pty.starts_with("/dev/pts/"), "{}", server.pty);
+    ugs_then_stream_py(server, &link);
+}
+
+// UGS connects through the `--pty-link` symlink, stream.py runs the short job, and the server
+// stops on Ctrl-C and removes the symlink
+fn ugs_then_stream_py(server: Server, link: &std::path::Path) {
     let mut c = Client::pty(link.to_str().unwrap());
     ugs_connect(&mut c);
     bench_settings(&mut c);
@@ -177,17 +183,22 @@ fn ugs_then_stream_py_over_the_pty_symlink() {
 
 #[test]
 fn cncjs_and_bcnc_over_tcp_and_pty_at_once() {
-    let server = Server::start(&["--tcp", "127.0.0.1:0"]);
+    let err = cncjs_over_tcp_and_bcnc_over_pty(Server::start(&["--tcp", "127.0.0.1:0"]));
+    assert!(err.contains(&format!("tcp: 127.0.0.1:")) && err.contains("connected"), "{err}");
+    // the status line: simulated time, position, step rate, CPU load
+    assert!(err.lines().any(|l| l.contains(" s | X0 steps | 0 Hz | CPU")), "{err}");
+}
+
+// CNCjs connects over the server's TCP port and bCNC over its pty at once, with no error;
+// the server's stderr once stopped
+fn cncjs_over_tcp_and_bcnc_over_pty(server: Server) -> String {
     let addr = server.tcp.clone().expect("tcp: line");
     let mut tcp = Client::tcp(&addr);
     let mut pty = Client::pty(&server.pty);
     cncjs_connect(&mut tcp);
     bcnc_connect(&mut pty);
     assert!(tcp.errors().is_empty() && pty.errors().is_empty(), "{:?} {:?}", tcp.errors(), pty.errors());
-    let err = server.stop();
-    assert!(err.contains(&format!("tcp: 127.0.0.1:")) && err.contains("connected"), "{err}");
-    // the status line: simulated time, position, step rate, CPU load
-    assert!(err.lines().any(|l| l.contains(" s | X0 steps | 0 Hz | CPU")), "{err}");
+    server.stop()
 }
 
 #[test]
@@ -335,28 +346,13 @@ fn bad_use_is_a_clear_error() {
 #[test]
 fn ugs_then_stream_py_over_usb() {
     let link = std::env::temp_dir().join(format!("ttyBLUEPILL-usb-{}", std::process::id()));
-    let elf = ddastep_bench::emu::firmware_elf().expect("firmware builds");
-    let server = Server::start_elf(&elf, &["--usb", "--pty-link", link.to_str().unwrap()]);
+    let server = Server::start(&["--usb", "--pty-link", link.to_str().unwrap()]);
     assert!(server.stdout_head.contains("USB port"), "{}", server.stdout_head);
-    let mut c = Client::pty(link.to_str().unwrap());
-    ugs_connect(&mut c);
-    bench_settings(&mut c);
-    short_job_ends_where_it_should(&mut c);
-    drop(c);
-    let err = server.stop();
-    assert!(err.contains("stopped (Ctrl-C)"), "{err}");
+    ugs_then_stream_py(server, &link);
 }
 
 /// CNCjs (TCP) and bCNC (pty) connect to the board's USB port through `--serve --usb`.
 #[test]
 fn cncjs_and_bcnc_over_usb() {
-    let elf = ddastep_bench::emu::firmware_elf().expect("firmware builds");
-    let server = Server::start_elf(&elf, &["--usb", "--tcp", "127.0.0.1:0"]);
-    let addr = server.tcp.clone().expect("tcp: line");
-    let mut tcp = Client::tcp(&addr);
-    let mut pty = Client::pty(&server.pty);
-    cncjs_connect(&mut tcp);
-    bcnc_connect(&mut pty);
-    assert!(tcp.errors().is_empty() && pty.errors().is_empty(), "{:?} {:?}", tcp.errors(), pty.errors());
-    server.stop();
+    cncjs_over_tcp_and_bcnc_over_pty(Server::start(&["--usb", "--tcp", "127.0.0.1:0"]));
 }

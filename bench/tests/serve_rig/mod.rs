@@ -23,14 +23,9 @@ pub struct Server {
 impl Server {
     // start the server with extra arguments; waits for its banner lines
     pub fn start(extra: &[&str]) -> Server {
-        Server::start_elf(&firmware_elf().expect("firmware ELF"), extra)
-    }
-
-    // the same with another firmware ELF
-    pub fn start_elf(elf: &std::path::Path, extra: &[&str]) -> Server {
         let mut child = Command::new(env!("CARGO_BIN_EXE_sim"))
             .arg("--elf")
-            .arg(&elf)
+            .arg(firmware_elf().expect("firmware ELF"))
             .arg("--serve")
             .args(extra)
             .stdin(Stdio::null())
