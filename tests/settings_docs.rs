@@ -9,7 +9,7 @@ mod protocol_rig;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
-use ddastep::grbl::settings::docs::{docs, Doc};
+use ddastep::grbl::settings::docs::{docs, grouped, Doc};
 use ddastep::grbl::settings::{Settings, AXIS_COUNT};
 use protocol_rig::Bench;
 
@@ -88,15 +88,7 @@ fn defaults() -> BTreeMap<u16, String> {
 // 100000 -> "100 000"; 0.2 -> "0.2"
 fn number(v: f32) -> String {
     if v == v.trunc() && v.abs() < 1e9 {
-        let d = (v as i64).to_string();
-        let mut out = String::new();
-        for (i, c) in d.chars().enumerate() {
-            if i > 0 && (d.len() - i) % 3 == 0 {
-                out.push(' ');
-            }
-            out.push(c);
-        }
-        out
+        grouped(&(v as i64).to_string())
     } else {
         let s = format!("{v:.7}");
         s.trim_end_matches('0').to_string()

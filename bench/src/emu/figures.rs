@@ -22,15 +22,7 @@ const SIZE_ROW: &str = "release flash / static RAM";
 
 // 63280 -> "63 280", as the docs write numbers
 fn grouped(n: u64) -> String {
-    let d = n.to_string();
-    let mut out = String::new();
-    for (i, c) in d.chars().enumerate() {
-        if i > 0 && (d.len() - i) % 3 == 0 {
-            out.push(' ');
-        }
-        out.push(c);
-    }
-    out
+    ddastep::grbl::settings::docs::grouped(&n.to_string())
 }
 
 // the figures rows (first cell, whole row) this sweep measures

@@ -160,6 +160,19 @@ const FAMILIES: [(u16, &str, &str, (f32, f32), &str); 4] = [
          most 1.5 × this."),
 ];
 
+/// A number's digits in groups of three from the right, as the docs write numbers:
+/// `"63280"` → `"63 280"` (the settings pages, and the figures `bench/figures` writes).
+pub fn grouped(digits: &str) -> String {
+    let mut out = String::new();
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i) % 3 == 0 {
+            out.push(' ');
+        }
+        out.push(c);
+    }
+    out
+}
+
 /// Every setting's documentation, in numeric order (axis settings for all 7 axes).
 pub fn docs() -> impl Iterator<Item = Doc> {
     let low = |hi: bool| {
