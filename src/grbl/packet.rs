@@ -15,8 +15,8 @@
 
 use heapless::spsc::Producer;
 
-/// Largest bulk packet at full speed (USB 2.0 §5.8.3), the CDC data endpoints' size.
-pub const PACKET_LEN: usize = 64;
+/// The largest packet read: the CDC data endpoints' size (full speed's largest bulk packet).
+pub const PACKET_LEN: usize = crate::usb::descriptors::BULK_LEN;
 
 /// Line bytes of the last packet read, waiting for room in the RX ring.
 pub struct Held {
